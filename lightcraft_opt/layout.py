@@ -1,0 +1,344 @@
+"""The one owner of state, input and parameter indices.
+
+Physics code reads ``STATE.get("w_B", x)``, never ``x[10:13]``. Every slot has a
+unit and a frame, and :meth:`VectorLayout.labels` turns them into plot and CSV
+labels. Slicing works alike on numpy arrays and casadi SX/MX column vectors.
+
+Frames: docs/frames.md. The state vector x (16 entries):
+
+=============  ====  =======  ===================================================
+slot           size  unit     meaning
+=============  ====  =======  ===================================================
+r_L            3     m        system mass centre relative to the pad, L frame
+v_L            3     m/s      its velocity relative to the Earth (E), L frame
+q_LB           4     -        attitude of B in L, unit quaternion (w, x, y, z)
+w_B            3     rad/s    angular velocity of B relative to N, B frame
+spin           1     rad/s    rotor spin rate relative to B, about b1
+liner_mass     1     kg       Delrin liner left (0 for an air-mode craft)
+rcs_mass       1     kg       RCS propellant left (0 without an RCS)
+=============  ====  =======  ===================================================
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+import numpy as np
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.params import Model
+
+__all__ = [
+    "PARAMETERS",
+    "STATE",
+    "Slot",
+    "VectorLayout",
+    "initial_state",
+    "input_layout",
+    "parameter_values",
+    "quaternion_from_tilt",
+]
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A named block of a vector: ``size`` entries from ``start``, with unit and frame."""
+
+    name: str
+    start: int
+    size: int
+    unit: str
+    frame: str = ""
+    components: tuple[str, ...] = ()
+
+    @property
+    def stop(self) -> int:
+        return self.start + self.size
+
+
+class VectorLayout:
+    """Named contiguous slots of a flat vector.
+
+    Parameters
+    ----------
+    name : what the vector is ("state", "input", "parameters").
+    spec : (name, size, unit, frame, component names) per slot, in order.
+    """
+
+    def __init__(
+        self, name: str, spec: Sequence[tuple[str, int, str, str, tuple[str, ...]]]
+    ) -> None:
+        slots: list[Slot] = []
+        start = 0
+        for slot_name, size, unit, frame, comps in spec:
+            if comps and len(comps) != size:
+                raise ValueError(f"{name}.{slot_name}: {len(comps)} component names for {size}")
+            slots.append(Slot(slot_name, start, size, unit, frame, comps))
+            start += size
+        self.name = name
+        self.slots: tuple[Slot, ...] = tuple(slots)
+        self.size = start
+        self._by_name = {s.name: s for s in slots}
+        if len(self._by_name) != len(slots):
+            raise ValueError(f"{name}: duplicate slot names")
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._by_name
+
+    def __repr__(self) -> str:
+        return f"VectorLayout({self.name!r}, {[s.name for s in self.slots]}, size={self.size})"
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.slots)
+
+    def slot(self, name: str) -> Slot:
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise ParameterError(
+                f"{self.name}.{name}", f"no such slot; the {self.name} holds {list(self.names)}"
+            ) from None
+
+    def index(self, name: str) -> slice:
+        """The slice of slot ``name``."""
+        s = self.slot(name)
+        return slice(s.start, s.stop)
+
+    def get(self, name: str, vector: T) -> T:
+        """Slot ``name`` of ``vector`` (numpy array or casadi column); scalars come as 1-vectors
+        for casadi and as floats for 1-D numpy."""
+        s = self.slot(name)
+        if s.size == 1:
+            return vector[s.start]  # type: ignore[index,no-any-return]
+        return vector[s.start : s.stop]  # type: ignore[index,no-any-return]
+
+    def pack(self, values: Mapping[str, Any], default: Mapping[str, Any] | None = None) -> np.ndarray:
+        """Flat float vector from ``{slot: value}``; every slot must be given (or in ``default``)."""
+        out = np.empty(self.size)
+        merged = dict(default or {})
+        merged.update(values)
+        unknown = set(merged) - set(self._by_name)
+        if unknown:
+            raise ParameterError(
+                f"{self.name}.{sorted(unknown)[0]}",
+                f"no such slot; the {self.name} holds {list(self.names)}",
+            )
+        for s in self.slots:
+            if s.name not in merged:
+                raise ParameterError(f"{self.name}.{s.name}", "missing")
+            v = np.asarray(merged[s.name], dtype=float).reshape(-1)
+            if v.size != s.size:
+                raise ParameterError(
+                    f"{self.name}.{s.name}", f"needs {s.size} values, got {v.size}"
+                )
+            if not np.all(np.isfinite(v)):
+                raise ParameterError(f"{self.name}.{s.name}", "must be finite (got NaN or inf)")
+            out[s.start : s.stop] = v
+        return out
+
+    def unpack(self, vector: Sequence[float] | np.ndarray) -> dict[str, np.ndarray | float]:
+        """``{slot: value}`` from a flat numeric vector (floats for size-1 slots)."""
+        v = np.asarray(vector, dtype=float).reshape(-1)
+        if v.size != self.size:
+            raise ParameterError(self.name, f"needs {self.size} values, got {v.size}")
+        return {
+            s.name: float(v[s.start]) if s.size == 1 else v[s.start : s.stop].copy()
+            for s in self.slots
+        }
+
+    def labels(self) -> list[str]:
+        """One label per entry, with unit: ``"r_L[east] [m]"``; for plots and CSV headers."""
+        out: list[str] = []
+        for s in self.slots:
+            unit = f" [{s.unit}]" if s.unit else ""
+            if s.size == 1:
+                out.append(f"{s.name}{unit}")
+            else:
+                comps = s.components or tuple(str(i) for i in range(s.size))
+                out.extend(f"{s.name}[{c}]{unit}" for c in comps)
+        return out
+
+
+ENU = ("east", "north", "up")
+B123 = ("b1", "b2", "b3")
+
+STATE = VectorLayout(
+    "state",
+    [
+        ("r_L", 3, "m", "L", ENU),
+        ("v_L", 3, "m/s", "L", ENU),
+        ("q_LB", 4, "-", "L<-B", ("w", "x", "y", "z")),
+        ("w_B", 3, "rad/s", "B", B123),
+        ("spin", 1, "rad/s", "B", ()),
+        ("liner_mass", 1, "kg", "", ()),
+        ("rcs_mass", 1, "kg", "", ()),
+    ],
+)
+
+
+def input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:
+    """Continuous inputs u: RCS thrust levels [N] and, for a gyrostat, the motor torque
+    on the rotor about b1 [N m]."""
+    spec: list[tuple[str, int, str, str, tuple[str, ...]]] = []
+    if n_thrusters:
+        spec.append(("rcs_thrust", n_thrusters, "N", "", ()))
+    if has_carrier:
+        spec.append(("motor_torque", 1, "N m", "B", ()))
+    return VectorLayout("input", spec)
+
+
+PARAMETERS = VectorLayout(
+    "parameters",
+    [
+        ("rotor_mass_dry", 1, "kg", "", ()),
+        ("rotor_axial_inertia_dry", 1, "kg m^2", "B", ()),
+        ("rotor_transverse_inertia_dry", 1, "kg m^2", "B", ()),
+        ("liner_radius", 1, "m", "", ()),
+        ("liner_offset", 1, "m", "B", ()),
+        ("carrier_mass", 1, "kg", "", ()),
+        ("carrier_inertia", 6, "kg m^2", "B", ("xx", "yy", "zz", "xy", "xz", "yz")),
+        ("carrier_position_B", 3, "m", "B", B123),
+        ("rcs_isp", 1, "s", "", ()),
+        ("rcs_tank_B", 3, "m", "B", B123),
+        ("diameter", 1, "m", "", ()),
+        ("reference_length", 1, "m", "", ()),
+        ("cd_scale", 1, "-", "", ()),
+        ("cl_scale", 1, "-", "", ()),
+        ("cm_scale", 1, "-", "", ()),
+        ("magnus_force_coefficient", 1, "-", "", ()),
+        ("magnus_moment_coefficient", 1, "-", "", ()),
+        ("spin_time_constant", 1, "s", "", ()),
+        ("disk_faces", 1, "-", "", ()),
+        ("site_latitude", 1, "rad", "", ()),
+        ("site_longitude", 1, "rad", "", ()),
+        ("site_height", 1, "m", "", ()),
+        ("wind_speed_ref", 1, "m/s", "L", ()),
+        ("wind_height_ref", 1, "m", "L", ()),
+        ("wind_roughness_height", 1, "m", "L", ()),
+        ("wind_shear_exponent", 1, "-", "", ()),
+        ("wind_direction_from", 1, "rad", "L", ()),
+        ("wind_veer", 1, "rad/m", "L", ()),
+        ("gust_L", 3, "m/s", "L", ENU),
+        ("gust_start", 1, "s", "", ()),
+        ("gust_duration", 1, "s", "", ()),
+    ],
+)
+
+
+def parameter_values(model: Model) -> np.ndarray:
+    """The numeric parameter vector p of ``model`` (SI, order of :data:`PARAMETERS`)."""
+    craft = model.craft
+    j_dry, i_dry = craft.dry_rotor_inertia()
+    liner = craft.liner
+    carrier = craft.carrier
+    rcs = craft.rcs
+    wind = model.environment.wind
+    return PARAMETERS.pack(
+        {
+            "rotor_mass_dry": craft.mass - (liner.mass if liner else 0.0),
+            "rotor_axial_inertia_dry": j_dry,
+            "rotor_transverse_inertia_dry": i_dry,
+            "liner_radius": liner.radius if liner else 0.0,
+            "liner_offset": liner.axial_offset if liner else 0.0,
+            "carrier_mass": carrier.mass if carrier else 0.0,
+            "carrier_inertia": carrier.inertia if carrier else (0.0,) * 6,
+            "carrier_position_B": carrier.position_B if carrier else (0.0,) * 3,
+            "rcs_isp": rcs.isp if rcs else 1.0,
+            "rcs_tank_B": rcs.tank_position_B if rcs else (0.0,) * 3,
+            "diameter": craft.diameter,
+            "reference_length": craft.reference_length,
+            "cd_scale": craft.aero.cd_scale,
+            "cl_scale": craft.aero.cl_scale,
+            "cm_scale": craft.aero.cm_scale,
+            "magnus_force_coefficient": craft.aero.magnus_force_coefficient,
+            "magnus_moment_coefficient": craft.aero.magnus_moment_coefficient,
+            "spin_time_constant": craft.spin_decay.time_constant,
+            "disk_faces": craft.spin_decay.disk_faces,
+            "site_latitude": model.site.latitude,
+            "site_longitude": model.site.longitude,
+            "site_height": model.site.height,
+            "wind_speed_ref": wind.speed_ref,
+            "wind_height_ref": wind.height_ref,
+            "wind_roughness_height": wind.roughness_height,
+            "wind_shear_exponent": wind.shear_exponent,
+            "wind_direction_from": wind.direction_from,
+            "wind_veer": wind.veer,
+            "gust_L": wind.gust_L,
+            "gust_start": wind.gust_start,
+            "gust_duration": wind.gust_duration,
+        }
+    )
+
+
+def quaternion_from_tilt(tilt: float = 0.0, azimuth: float = 0.0) -> np.ndarray:
+    """Attitude q_LB (w, x, y, z) of a craft whose axis b1 is tilted from up.
+
+    Parameters
+    ----------
+    tilt : angle between b1 and the local vertical (L up) [rad].
+    azimuth : direction the axis leans toward, clockwise from north [rad].
+
+    At zero tilt b1 = up, b2 = east, b3 = north. The tilt rotates B about the
+    horizontal axis perpendicular to the lean direction.
+    """
+    # Upright: R_LB = [up, east, north] as columns, i.e. q0 = (1/2)(1, -1, -1, -1).
+    q0 = np.array([0.5, -0.5, -0.5, -0.5])
+    if tilt == 0.0:
+        return q0
+    lean_L = np.array([math.sin(azimuth), math.cos(azimuth), 0.0])
+    axis_L = np.cross(np.array([0.0, 0.0, 1.0]), lean_L)  # rotating up toward lean
+    h = 0.5 * tilt
+    q_tilt = np.concatenate([[math.cos(h)], math.sin(h) * axis_L])
+    return _quat_mul(q_tilt, q0)
+
+
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ]
+    )
+
+
+def initial_state(
+    model: Model,
+    *,
+    r_L: Sequence[float] = (0.0, 0.0, 0.0),
+    v_L: Sequence[float] = (0.0, 0.0, 0.0),
+    tilt: float = 0.0,
+    tilt_azimuth: float = 0.0,
+    w_B: Sequence[float] = (0.0, 0.0, 0.0),
+    spin: float | None = None,
+) -> np.ndarray:
+    """Launch state of ``model``: at the pad, upright, spinning at the craft's spin rate.
+
+    Parameters
+    ----------
+    r_L, v_L : position [m] and velocity [m/s] of the mass centre, L frame.
+    tilt, tilt_azimuth : see :func:`quaternion_from_tilt` [rad].
+    w_B : angular velocity of B relative to N, B frame [rad/s].
+    spin : rotor spin relative to B [rad/s]; default ``model.craft.spin``.
+    """
+    craft = model.craft
+    return STATE.pack(
+        {
+            "r_L": r_L,
+            "v_L": v_L,
+            "q_LB": quaternion_from_tilt(tilt, tilt_azimuth),
+            "w_B": w_B,
+            "spin": craft.spin if spin is None else spin,
+            "liner_mass": craft.liner.mass if craft.liner else 0.0,
+            "rcs_mass": craft.rcs.propellant_mass if craft.rcs else 0.0,
+        }
+    )

@@ -1,0 +1,48 @@
+"""Reaction control system: thruster forces, moments and propellant flow.
+
+Thrusters are fixed in B (docs/frames.md); their positions are from P. Moments
+are taken about the current system mass centre S*. Propellant flows at
+sum(T_k) / (Isp g0); an empty tank gives no thrust.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from lightcraft_opt.params import Rcs
+from lightcraft_opt.symbolic.rotation import Expr, cross
+
+__all__ = ["STANDARD_GRAVITY", "rcs_loads"]
+
+STANDARD_GRAVITY = 9.80665  # g0 in the definition of Isp [m/s^2]
+
+
+def rcs_loads(
+    thrust: Expr, rcs_mass: Expr, cm_B: Expr, isp: Expr, rcs: Rcs
+) -> tuple[Expr, Expr, Expr]:
+    """RCS force, moment and propellant mass rate.
+
+    Parameters
+    ----------
+    thrust : (n,) commanded thrust per thruster [N].
+    rcs_mass : propellant left [kg]; thrust is zero once it reaches 0.
+    cm_B : (3,) system mass centre from P, B frame [m].
+    isp : specific impulse [s].
+    rcs : thruster geometry (structural).
+
+    Returns
+    -------
+    F_B : (3,) force on the craft, B frame [N].
+    M_B : (3,) moment about S*, B frame [N m].
+    mass_rate : d(rcs_mass)/dt [kg/s] (<= 0 for non-negative thrust).
+    """
+    on = ca.if_else(rcs_mass > 0, 1, 0)
+    F = ca.DM.zeros(3)
+    M = ca.DM.zeros(3)
+    total = 0
+    for k, thruster in enumerate(rcs.thrusters):
+        f_k = on * thrust[k] * ca.DM(thruster.direction_B)
+        F = F + f_k
+        M = M + cross(ca.DM(thruster.position_B) - cm_B, f_k)
+        total = total + on * thrust[k]
+    return F, M, -total / (isp * STANDARD_GRAVITY)
