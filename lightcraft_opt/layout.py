@@ -4,7 +4,7 @@ Physics code reads ``STATE.get("w_B", x)``, never ``x[10:13]``. Every slot has a
 unit and a frame, and :meth:`VectorLayout.labels` turns them into plot and CSV
 labels. Slicing works alike on numpy arrays and casadi SX/MX column vectors.
 
-Frames: docs/frames.md. The state vector x (16 entries):
+Frames: docs/frames.md. The state vector x (17 entries):
 
 =============  ====  =======  ===================================================
 slot           size  unit     meaning
@@ -16,7 +16,12 @@ w_B            3     rad/s    angular velocity of B relative to N, B frame
 spin           1     rad/s    rotor spin rate relative to B, about b1
 liner_mass     1     kg       Delrin liner left (0 for an air-mode craft)
 rcs_mass       1     kg       RCS propellant left (0 without an RCS)
+pulses         1     -        laser pulses fired so far (engine health)
 =============  ====  =======  ===================================================
+
+Per-pulse inputs (:data:`PULSE_INPUT`): ``pointing_L`` (2) [m], lateral offset of the
+vertical beam axis from the pad, east and north; ``focus`` [m], focus distance (waist
+beam model); ``energy`` [J], pulse energy.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from lightcraft_opt.params import Model
 
 __all__ = [
     "PARAMETERS",
+    "PULSE_INPUT",
     "STATE",
     "Slot",
     "VectorLayout",
@@ -178,6 +184,17 @@ STATE = VectorLayout(
         ("spin", 1, "rad/s", "B", ()),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
+        ("pulses", 1, "-", "", ()),
+    ],
+)
+
+#: Per-pulse laser inputs: where the beam axis points, where it focuses, how much energy.
+PULSE_INPUT = VectorLayout(
+    "pulse input",
+    [
+        ("pointing_L", 2, "m", "L", ("east", "north")),
+        ("focus", 1, "m", "L", ()),
+        ("energy", 1, "J", "", ()),
     ],
 )
 
@@ -227,6 +244,26 @@ PARAMETERS = VectorLayout(
         ("gust_L", 3, "m/s", "L", ENU),
         ("gust_start", 1, "s", "", ()),
         ("gust_duration", 1, "s", "", ()),
+        ("beam_side", 1, "m", "", ()),
+        ("beam_divergence", 1, "rad", "", ()),
+        ("beam_hole_ratio", 1, "-", "", ()),
+        ("beam_edge_width", 1, "m", "", ()),
+        ("beam_rayleigh_range", 1, "m", "", ()),
+        ("impulse_per_pulse", 1, "N s", "", ()),
+        ("reference_pulse_energy", 1, "J", "", ()),
+        ("capture_radius", 1, "m", "B", ()),
+        ("shadow_radius", 1, "m", "B", ()),
+        ("ring_radius", 1, "m", "B", ()),
+        ("ring_height", 1, "m", "B", ()),
+        ("blast_angle", 1, "rad", "", ()),
+        ("lateral_gain", 1, "-", "", ()),
+        ("tipping_gain", 1, "-", "", ()),
+        ("kernel_offset", 1, "m", "", ()),
+        ("health_floor", 1, "-", "", ()),
+        ("health_pulse", 1, "-", "", ()),
+        ("health_width", 1, "-", "", ()),
+        ("ablation", 1, "kg/J", "", ()),
+        ("spent_coupling", 1, "N s/J", "", ()),
     ],
 )
 
@@ -239,6 +276,7 @@ def parameter_values(model: Model) -> np.ndarray:
     carrier = craft.carrier
     rcs = craft.rcs
     wind = model.environment.wind
+    engine = craft.engine
     return PARAMETERS.pack(
         {
             "rotor_mass_dry": craft.mass - (liner.mass if liner else 0.0),
@@ -272,6 +310,30 @@ def parameter_values(model: Model) -> np.ndarray:
             "gust_L": wind.gust_L,
             "gust_start": wind.gust_start,
             "gust_duration": wind.gust_duration,
+            "beam_side": model.flight.beam_side,
+            "beam_divergence": model.laser.divergence,
+            "beam_hole_ratio": model.laser.hole_ratio,
+            "beam_edge_width": model.laser.edge_width,
+            "beam_rayleigh_range": model.laser.rayleigh_range,
+            "impulse_per_pulse": model.flight.impulse_per_pulse,
+            "reference_pulse_energy": model.flight.pulse_energy,
+            "capture_radius": engine.capture_radius,
+            "shadow_radius": engine.shadow_radius,
+            "ring_radius": engine.ring_radius,
+            "ring_height": engine.ring_height,
+            "blast_angle": engine.blast_angle,
+            "lateral_gain": engine.lateral_gain,
+            "tipping_gain": engine.tipping_gain,
+            "kernel_offset": engine.kernel_offset,
+            "health_floor": engine.health_floor,
+            "health_pulse": engine.health_pulse,
+            "health_width": engine.health_width,
+            "ablation": engine.ablation,
+            "spent_coupling": (
+                model.flight.coupling_coefficient
+                if engine.spent_coupling is None
+                else engine.spent_coupling
+            ),
         }
     )
 
@@ -340,5 +402,6 @@ def initial_state(
             "spin": craft.spin if spin is None else spin,
             "liner_mass": craft.liner.mass if craft.liner else 0.0,
             "rcs_mass": craft.rcs.propellant_mass if craft.rcs else 0.0,
+            "pulses": 0.0,
         }
     )

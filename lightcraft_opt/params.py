@@ -22,10 +22,13 @@ __all__ = [
     "AeroModel",
     "Aerodynamics",
     "BeamProfile",
+    "BeamSizeModel",
     "Carrier",
     "Craft",
+    "Engine",
     "Environment",
     "Flight",
+    "ImpulseModel",
     "Laser",
     "Liner",
     "Model",
@@ -351,6 +354,86 @@ class Rcs:
         _set(self, "propellant_mass", _non_negative("rcs.propellant_mass", self.propellant_mass))
         _set(self, "tank_position_B", _vec3("rcs.tank_position_B", self.tank_position_B))
 
+class ImpulseModel(Enum):
+    """How the captured energy's asymmetry becomes lateral and angular impulse."""
+
+    SECTOR = "sector"
+    KERNEL = "kernel"
+
+
+@dataclass(frozen=True)
+class Engine:
+    """The lightcraft engine: optic, blast ring, impulse model, health and ablation.
+
+    Geometry is in B from P (docs/frames.md); values are guesses to calibrate
+    (physics.md section 6) unless a model file says otherwise.
+
+    Attributes
+    ----------
+    capture_radius : outer radius of the optic that collects the beam [m].
+    shadow_radius : radius of the central shadow (nose, no capture) [m].
+    ring_radius : radius of the focal (blast) ring [m].
+    ring_height : axial position of the ring along b1 from P [m].
+    impulse_model : sector model or kernel form.
+    blast_angle : effective radial tilt beta of each sector's reaction [rad]; its sign
+        decides whether the lateral push restores (sector model).
+    lateral_gain, tipping_gain : k_L, k_M of the kernel form [-] (signed).
+    kernel_offset : d0, offset of peak lateral impulse in the kernel form [m].
+    health_floor : air-mode thrust fraction left after overheating, g_inf [-].
+    health_pulse : pulse number of the overheating step, n_f [-].
+    health_width : width of the step in pulses, w_n [-].
+    ablation : liner mass lost per captured joule [kg/J] (Delrin).
+    spent_coupling : axial impulse per captured joule once the liner is spent [N s/J];
+        ``None`` means the flight's own coupling (air mode).
+    quadrature_radial, quadrature_azimuthal : points of the optic quadrature.
+    """
+
+    capture_radius: float = 0.055
+    shadow_radius: float = 0.0075
+    ring_radius: float = 0.05
+    ring_height: float = 0.0
+    impulse_model: ImpulseModel = ImpulseModel.SECTOR
+    blast_angle: float = 0.15
+    lateral_gain: float = 0.1
+    tipping_gain: float = 0.1
+    kernel_offset: float = 0.045
+    health_floor: float = 0.3
+    health_pulse: float = 100.0
+    health_width: float = 8.0
+    ablation: float = 30e-9
+    spent_coupling: float | None = None
+    quadrature_radial: int = 8
+    quadrature_azimuthal: int = 32
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.impulse_model, ImpulseModel):
+            raise ParameterError(
+                "engine.impulse_model",
+                f"must be one of {[m.value for m in ImpulseModel]}, got {self.impulse_model!r}",
+            )
+        _set(self, "capture_radius", _positive("engine.capture_radius", self.capture_radius))
+        _set(self, "shadow_radius", _non_negative("engine.shadow_radius", self.shadow_radius))
+        if self.shadow_radius >= self.capture_radius:
+            raise ParameterError("engine.shadow_radius", "must be less than the capture radius")
+        _set(self, "ring_radius", _positive("engine.ring_radius", self.ring_radius))
+        _set(self, "ring_height", _finite("engine.ring_height", self.ring_height))
+        _set(self, "blast_angle", _in_range("engine.blast_angle", self.blast_angle, -1.5, 1.5))
+        _set(self, "lateral_gain", _finite("engine.lateral_gain", self.lateral_gain))
+        _set(self, "tipping_gain", _finite("engine.tipping_gain", self.tipping_gain))
+        _set(self, "kernel_offset", _positive("engine.kernel_offset", self.kernel_offset))
+        _set(self, "health_floor", _in_range("engine.health_floor", self.health_floor, 0, 1))
+        _set(self, "health_pulse", _positive("engine.health_pulse", self.health_pulse))
+        _set(self, "health_width", _positive("engine.health_width", self.health_width))
+        _set(self, "ablation", _non_negative("engine.ablation", self.ablation))
+        if self.spent_coupling is not None:
+            _set(
+                self, "spent_coupling", _non_negative("engine.spent_coupling", self.spent_coupling)
+            )
+        for name in ("quadrature_radial", "quadrature_azimuthal"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 2:
+                raise ParameterError(f"engine.{name}", f"must be an integer >= 2, got {v!r}")
+
 
 @dataclass(frozen=True)
 class Craft:
@@ -379,6 +462,7 @@ class Craft:
     rcs: Rcs | None = None
     aero: Aerodynamics = field(default_factory=Aerodynamics)
     spin_decay: SpinDecay = field(default_factory=SpinDecay)
+    engine: Engine = field(default_factory=Engine)
 
     def __post_init__(self) -> None:
         _set(self, "diameter", _positive("craft.diameter", self.diameter))
@@ -447,6 +531,13 @@ class Craft:
 
 
 # --------------------------------------------------------------------------- laser, site, world
+class BeamSizeModel(Enum):
+    """How the beam's outer side grows along the beam."""
+
+    LINEAR = "linear"  # a(z) = a0 + divergence z
+    WAIST = "waist"  # a(z) = a_w sqrt(1 + ((z - z_focus) / z_R)^2), focus steerable
+
+
 class BeamProfile(Enum):
     """Transverse fluence profile of the beam (used by the beam model)."""
 
@@ -468,7 +559,9 @@ class Laser:
     profile : transverse beam profile.
     hole_ratio : inner/outer side of a hollow square [-].
     edge_width : soft-edge width of the profile [m].
-    divergence : full-angle growth of the beam side with range [rad].
+    divergence : full-angle growth of the beam side with range [rad] (LINEAR).
+    size_model : linear divergence or a waist whose focus distance is an input.
+    rayleigh_range : z_R of the waist form [m].
     pointing_limit : largest lateral beam-axis offset the director reaches [m].
     focus_range : (nearest, farthest) focus distance [m].
     """
@@ -482,6 +575,8 @@ class Laser:
     hole_ratio: float = 0.4
     edge_width: float = 0.003
     divergence: float = 0.0
+    size_model: BeamSizeModel = BeamSizeModel.LINEAR
+    rayleigh_range: float = 50.0
     pointing_limit: float = 0.1
     focus_range: tuple[float, float] = (1.0, 1000.0)
 
@@ -498,6 +593,12 @@ class Laser:
         _set(self, "hole_ratio", _in_range("laser.hole_ratio", self.hole_ratio, 0.0, 0.99))
         _set(self, "edge_width", _positive("laser.edge_width", self.edge_width))
         _set(self, "divergence", _non_negative("laser.divergence", self.divergence))
+        if not isinstance(self.size_model, BeamSizeModel):
+            raise ParameterError(
+                "laser.size_model",
+                f"must be one of {[m.value for m in BeamSizeModel]}, got {self.size_model!r}",
+            )
+        _set(self, "rayleigh_range", _positive("laser.rayleigh_range", self.rayleigh_range))
         _set(self, "pointing_limit", _non_negative("laser.pointing_limit", self.pointing_limit))
         focus = _series("laser.focus_range", self.focus_range, 2)
         if len(focus) != 2:

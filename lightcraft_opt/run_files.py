@@ -20,7 +20,7 @@ __all__ = ["model_hash", "write_summary", "write_trajectory_csv"]
 
 TRAJECTORY_COLUMNS = (
     "t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "qw", "qx", "qy", "qz",
-    "w1_radps", "w2_radps", "w3_radps", "spin_radps", "liner_mass_kg", "rcs_mass_kg",
+    "w1_radps", "w2_radps", "w3_radps", "spin_radps", "liner_mass_kg", "rcs_mass_kg", "pulses",
     "mass_kg", "tilt_deg", "coning_deg",
 )
 

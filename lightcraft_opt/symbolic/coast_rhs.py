@@ -90,7 +90,7 @@ def coast_terms(t: ca.SX, x: ca.SX, u: ca.SX, p: ca.SX, model: Model) -> dict[st
     W_L = earth_rate_L(PARAMETERS.get("site_latitude", p)) if env.earth_rotation else ca.SX.zeros(3)
     q_dot = quat_derivative(q, w_B - ca.mtimes(R_LB.T, W_L))
 
-    xdot = ca.vertcat(v_L, a_L, q_dot, w_dot, spin_dot, 0, rcs_rate)
+    xdot = ca.vertcat(v_L, a_L, q_dot, w_dot, spin_dot, 0, rcs_rate, 0)
     return {
         "xdot": xdot,
         "a_L": a_L,
