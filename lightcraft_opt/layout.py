@@ -44,6 +44,7 @@ __all__ = [
     "VectorLayout",
     "initial_state",
     "input_layout",
+    "map_input_layout",
     "parameter_values",
     "quaternion_from_tilt",
 ]
@@ -197,6 +198,17 @@ PULSE_INPUT = VectorLayout(
         ("energy", 1, "J", "", ()),
     ],
 )
+
+
+def map_input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:
+    """Inputs u[k] of the pulse map: the pulse (:data:`PULSE_INPUT` slots) followed by
+    the continuous inputs held over the interval (:func:`input_layout` slots)."""
+    spec = [(s.name, s.size, s.unit, s.frame, s.components) for s in PULSE_INPUT.slots]
+    spec += [
+        (s.name, s.size, s.unit, s.frame, s.components)
+        for s in input_layout(n_thrusters, has_carrier).slots
+    ]
+    return VectorLayout("map input", spec)
 
 
 def input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:

@@ -5,9 +5,49 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from enum import Enum
+
 from lightcraft_opt.errors import OptionError
 
-__all__ = ["SimulationOptions"]
+__all__ = ["CoastScheme", "PulseMapOptions", "SimulationOptions"]
+
+
+class CoastScheme(Enum):
+    """How the pulse map integrates the coast between pulses (symbolic/coast.py)."""
+
+    RK4 = "rk4"  # classical Runge-Kutta, fixed steps
+    SPLIT = "split"  # Strang splitting, exact spinning-body rotation (2nd order)
+    SPLIT4 = "split4"  # Yoshida composition of SPLIT (4th order)
+
+
+@dataclass(frozen=True)
+class PulseMapOptions:
+    """How Φ integrates one pulse interval.
+
+    Attributes
+    ----------
+    scheme : coast integration scheme.
+    substeps : fixed steps per pulse interval.
+    dense : states returned inside each interval by the dense-output Function;
+        must divide ``substeps``.
+    """
+
+    scheme: CoastScheme = CoastScheme.SPLIT4
+    substeps: int = 32
+    dense: int = 8
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scheme, CoastScheme):
+            allowed = [s.value for s in CoastScheme]
+            raise OptionError(f"PulseMapOptions.scheme must be one of {allowed}, got {self.scheme!r}")
+        for name in ("substeps", "dense"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise OptionError(f"PulseMapOptions.{name} must be a positive integer, got {v!r}")
+        if self.substeps % self.dense:
+            raise OptionError(
+                f"PulseMapOptions.dense ({self.dense}) must divide substeps ({self.substeps})"
+            )
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,143 @@
+"""Fixed-step coasts between pulses: RK4 substeps, or a splitting that rotates the
+spinning body exactly.
+
+Both are pure casadi expressions (differentiable, usable inside Φ). The coning mode
+of a 10,000 RPM craft is at |H|/I ~ 1356 rad/s (216 Hz), eight times the pulse rate:
+RK4 needs steps of ~0.2 ms to resolve it (physics.md section 2).
+
+Splitting (Strang, second order): the right-hand side f = f_fast + f_slow, where
+f_fast is the torque-free motion of the axisymmetric spinning body in a
+non-rotating site frame. That part has a closed form (Goldstein 5.6): with H_B the
+angular momentum, I_t the transverse and J the rotor axial moment,
+
+    w_B(h)  = Rot(b1, +Omega_n h) w_B,          Omega_n = (J w_R - I_t w1) / I_t
+    R_LB(h) = Rot(h_L, |H| h / I_t) R_LB Rot(b1, -Omega_n h)
+
+(w_R = w1 + spin; H fixed in L). f_slow (translation, aerodynamic, RCS and friction
+torques, Earth rate) is smooth on the pulse time scale and is stepped by RK4:
+slow(h/2), fast(h), slow(h/2). The fast part needs an axisymmetric mass
+distribution about S* (no carrier, RCS tank on the axis): the builder checks it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import casadi as ca
+
+from lightcraft_opt.errors import OptionError
+from lightcraft_opt.layout import STATE
+from lightcraft_opt.params import Model
+from lightcraft_opt.symbolic.assemble import assemble
+from lightcraft_opt.symbolic.gyrostat import angular_momentum, gyrostat_accelerations
+from lightcraft_opt.symbolic.mass_properties import mass_properties
+from lightcraft_opt.symbolic.rotation import dcm, quat_derivative, quat_multiply
+
+__all__ = ["exact_spin_flow", "rk4_coast", "split_coast"]
+
+Rhs = Callable[[ca.SX, ca.SX], ca.SX]  # (t, x) -> xdot
+
+
+def rk4_coast(rhs: Rhs, t0: ca.SX, x0: ca.SX, dt: ca.SX, steps: int) -> list[ca.SX]:
+    """Classical RK4 with ``steps`` equal steps over [t0, t0 + dt].
+
+    Returns the state after every step (``steps`` entries, the last is x(t0 + dt)).
+    """
+    h = dt / steps
+    x, out = x0, []
+    for k in range(steps):
+        t = t0 + k * h
+        k1 = rhs(t, x)
+        k2 = rhs(t + h / 2, x + h / 2 * k1)
+        k3 = rhs(t + h / 2, x + h / 2 * k2)
+        k4 = rhs(t + h, x + h * k3)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        out.append(x)
+    return out
+
+
+def _axis_angle_quaternion(phi: ca.SX) -> ca.SX:
+    """Unit quaternion of the rotation vector phi (axis * angle), smooth at phi = 0."""
+    theta2 = ca.sumsqr(phi)
+    theta = ca.sqrt(theta2 + 1e-300)
+    # sin(theta/2)/theta with its series below 1e-4 rad (error < 1e-17)
+    half_sinc = ca.if_else(theta2 < 1e-8, 0.5 - theta2 / 48, ca.sin(theta / 2) / theta)
+    return ca.vertcat(ca.cos(theta / 2), half_sinc * phi)
+
+
+def exact_spin_flow(x: ca.SX, p: ca.SX, h: ca.SX) -> ca.SX:
+    """Torque-free motion of the axisymmetric spinning body over h [s], in closed form.
+
+    Changes only q_LB and w_B (B frame); everything else is held.
+    """
+    mp = mass_properties(x, p)
+    I_t = mp.I + mp.I_B[1, 1]
+    w = STATE.get("w_B", x)
+    spin = STATE.get("spin", x)
+    q = STATE.get("q_LB", x)
+    H_B = angular_momentum(w, spin, mp.I_B, mp.J, mp.I)
+    omega_n = (H_B[0] - I_t * w[0]) / I_t
+    c, s = ca.cos(omega_n * h), ca.sin(omega_n * h)
+    w_new = ca.vertcat(w[0], c * w[1] - s * w[2], s * w[1] + c * w[2])
+    H_L = ca.mtimes(dcm(q), H_B)
+    q_precess = _axis_angle_quaternion(H_L * h / I_t)
+    q_body = ca.vertcat(ca.cos(omega_n * h / 2), -ca.sin(omega_n * h / 2), 0, 0)
+    q_new = quat_multiply(quat_multiply(q_precess, q), q_body)
+    return assemble(STATE, {"q_LB": q_new, "w_B": w_new}, base=x)
+
+
+def _fast_rhs(x: ca.SX, p: ca.SX, model: Model) -> ca.SX:
+    """f_fast: the torque-free rotation in a non-rotating frame (what exact_spin_flow solves)."""
+    mp = mass_properties(x, p)
+    w = STATE.get("w_B", x)
+    spin = STATE.get("spin", x)
+    w_dot, spin_dot = gyrostat_accelerations(
+        w, spin, ca.SX.zeros(3), 0, mp.I_B, mp.J, mp.I, massless_carrier=not model.craft.has_carrier
+    )
+    q_dot = quat_derivative(STATE.get("q_LB", x), w)
+    return assemble(STATE, {"q_LB": q_dot, "w_B": w_dot, "spin": spin_dot})
+
+
+def check_splitting_applies(model: Model) -> None:
+    """The exact fast flow needs an axisymmetric craft; raise OptionError otherwise."""
+    craft = model.craft
+    if craft.has_carrier:
+        raise OptionError(
+            "coast scheme 'split' needs an axisymmetric spinning body; this craft has a "
+            "despun carrier: use 'rk4'"
+        )
+
+
+def split_coast(
+    rhs: Rhs, p: ca.SX, model: Model, t0: ca.SX, x0: ca.SX, dt: ca.SX, steps: int,
+    order: int = 2,
+) -> list[ca.SX]:
+    """Strang splitting: RK4 on f - f_fast for h/2, exact fast flow for h, RK4 for h/2.
+
+    Returns the state after every step, like :func:`rk4_coast`.
+    """
+    check_splitting_applies(model)
+
+    def slow(t: ca.SX, x: ca.SX) -> ca.SX:
+        return rhs(t, x) - _fast_rhs(x, p, model)
+
+    def strang(t: ca.SX, x: ca.SX, h: ca.SX) -> ca.SX:
+        x = rk4_coast(slow, t, x, h / 2, 1)[-1]
+        x = exact_spin_flow(x, p, h)
+        return rk4_coast(slow, t + h / 2, x, h / 2, 1)[-1]
+
+    h = dt / steps
+    x, out = x0, []
+    for k in range(steps):
+        t = t0 + k * h
+        if order == 2:
+            x = strang(t, x, h)
+        else:  # Yoshida's fourth-order composition of three Strang steps
+            for a, b in ((0.0, _Y1), (_Y1, _Y0), (_Y1 + _Y0, _Y1)):
+                x = strang(t + a * h, x, b * h)
+        out.append(x)
+    return out
+
+
+_Y1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
+_Y0 = 1.0 - 2.0 * _Y1
