@@ -13,7 +13,7 @@ from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.plots.trajectory import flight_overview
 from lightcraft_opt.run_files import write_summary, write_trajectory_csv
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.coast_reference import simulate_coast
 
 __all__ = ["main"]
 
@@ -29,7 +29,7 @@ def _simulate(args: argparse.Namespace) -> int:
         tilt_azimuth=math.radians(args.tilt_azimuth_deg),
     )
     print(f"simulating {model.name} for {args.duration} s (coast only: no laser yet) ...")
-    result = simulate(model, args.duration, x0=x0)
+    result = simulate_coast(model, args.duration, x0=x0)
     write_trajectory_csv(result, out / "trajectory.csv")
     summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
     fig = flight_overview(result)

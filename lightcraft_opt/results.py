@@ -9,7 +9,7 @@ import numpy as np
 
 from lightcraft_opt.layout import STATE
 
-__all__ = ["SimulationResult", "SimulationStatus"]
+__all__ = ["PulseRecord", "SimulationResult", "SimulationStatus"]
 
 
 class SimulationStatus(Enum):
@@ -19,6 +19,40 @@ class SimulationStatus(Enum):
     LANDED = "landed"
     LEFT_BEAM = "left_beam"
     FAILED = "failed"
+
+
+@dataclass(frozen=True)
+class PulseRecord:
+    """What every laser pulse of a flight did.
+
+    Attributes
+    ----------
+    t : (k,) pulse times [s].
+    u : (k, map-input size) the pulse-map inputs applied (pointing [m, L], focus [m],
+        energy [J], then continuous inputs).
+    engine : (k, 11) engine outputs: energy_captured [J], impulse_B (3) [N s, B],
+        angular_impulse_B (3) [N m s, B], offset_L (2) [m, L], liner_loss [kg], health [-].
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    engine: np.ndarray
+
+    @property
+    def energy_captured(self) -> np.ndarray:
+        return self.engine[:, 0]
+
+    @property
+    def impulse_B(self) -> np.ndarray:
+        return self.engine[:, 1:4]
+
+    @property
+    def angular_impulse_B(self) -> np.ndarray:
+        return self.engine[:, 4:7]
+
+    @property
+    def offset_L(self) -> np.ndarray:
+        return self.engine[:, 7:9]
 
 
 @dataclass(frozen=True)
@@ -35,6 +69,7 @@ class SimulationResult:
     H_L : (n, 3) angular momentum about the mass centre, L frame [kg m^2/s].
     kinetic_energy : (n,) [J].
     mass : (n,) total mass [kg].
+    pulses : per-pulse record (None for a coast without the laser).
     """
 
     model_name: str
@@ -47,6 +82,7 @@ class SimulationResult:
     H_L: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
     kinetic_energy: np.ndarray = field(default_factory=lambda: np.empty(0))
     mass: np.ndarray = field(default_factory=lambda: np.empty(0))
+    pulses: PulseRecord | None = None
 
     def state(self, name: str) -> np.ndarray:
         """Slot ``name`` of the state over time: (n,) or (n, size)."""

@@ -15,7 +15,7 @@ from test_rotational_dynamics import GYROSTAT_CARRIER
 from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Aerodynamics, Environment, Wind
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.gravity import EARTH_GM, dcm_EL, site_position_E
 from lightcraft_opt.symbolic.invariants import build_invariants
@@ -59,7 +59,7 @@ def test_drag_free_coast_keeps_the_kepler_invariants():
     base = table1_flight5()
     craft = replace(base.craft, aero=Aerodynamics(cd_scale=0.0, cl_scale=0.0, cm_scale=0.0))
     model = replace(base, craft=craft, environment=Environment(earth_rotation=False))
-    res = simulate(model, 5.0, x0=initial_state(model, v_L=(2.0, -1.0, 20.0)),
+    res = simulate_coast(model, 5.0, x0=initial_state(model, v_L=(2.0, -1.0, 20.0)),
                    options=SimulationOptions(rtol=1e-12, atol=1e-12))
     site = model.site
     R_EL = np.asarray(dcm_EL(site.latitude, site.longitude))

@@ -14,7 +14,7 @@ from conftest import table1_flight5, torque_free
 
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.options import SimulationOptions
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.symbolic.coast import exact_spin_flow, rk4_coast, split_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 
@@ -24,7 +24,7 @@ REFERENCE = SimulationOptions(rtol=1e-13, atol=1e-13, samples_per_interval=1,
 
 
 def _reference(model, x0):
-    return simulate(model, PERIOD, x0=x0, options=REFERENCE).x[-1]
+    return simulate_coast(model, PERIOD, x0=x0, options=REFERENCE).x[-1]
 
 
 def test_exact_spin_flow_is_the_torque_free_motion():

@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 from lightcraft_opt.layout import STATE, initial_state, parameter_values, quaternion_from_tilt
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Carrier
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs, coast_terms
 from lightcraft_opt.symbolic.invariants import build_invariants
 
@@ -40,7 +40,7 @@ def _phase_rate(t: np.ndarray, z: np.ndarray) -> float:
 def test_flight5_nutation_and_coning_rates_match_torque_free_symmetric_top():
     model = torque_free(table1_flight5())
     J, I, spin = model.craft.inertia_axial, model.craft.inertia_transverse, model.craft.spin
-    res = simulate(model, 0.5, x0=_coasting_state(model, w_B=(0.0, 1e-3, 0.0)), options=TIGHT)
+    res = simulate_coast(model, 0.5, x0=_coasting_state(model, w_B=(0.0, 1e-3, 0.0)), options=TIGHT)
     w = res.state("w_B")
     # w_t turns in B at J/I spin (gauge w1 = 0); relative to the rotor (turning at spin in B):
     rate_B = _phase_rate(res.t, w[:, 1] + 1j * w[:, 2])
@@ -65,7 +65,7 @@ def test_coning_rate_at_large_cone_angle_is_H_over_I():
     model = torque_free(table1_flight5())
     J, I, spin = model.craft.inertia_axial, model.craft.inertia_transverse, model.craft.spin
     w_t = math.tan(math.radians(5.0)) * J * spin / I  # 5 degree coning
-    res = simulate(model, 0.2, x0=_coasting_state(model, w_B=(0.0, w_t, 0.0)), options=TIGHT)
+    res = simulate_coast(model, 0.2, x0=_coasting_state(model, w_B=(0.0, w_t, 0.0)), options=TIGHT)
     assert math.degrees(res.coning[0]) == pytest.approx(5.0, rel=1e-12)
     H = res.H_L[0]
     h = H / np.linalg.norm(H)
@@ -97,7 +97,7 @@ GYROSTAT_CARRIER = Carrier(
 def test_torque_free_motion_conserves_angular_momentum_and_energy(carrier):
     model = torque_free(table1_flight5(), carrier=carrier)
     x0 = _coasting_state(model, w_B=(0.3, 40.0, -25.0), tilt=0.2)
-    res = simulate(model, 10.0, x0=x0, options=TIGHT)
+    res = simulate_coast(model, 10.0, x0=x0, options=TIGHT)
     assert res.status.value == "duration_reached"
     H = res.H_L
     dH = np.max(np.linalg.norm(H - H[0], axis=1)) / np.linalg.norm(H[0])
@@ -114,7 +114,7 @@ def test_coast_agrees_with_independent_dop853_integrator():
     model = table1_flight5()  # full model: aerodynamics, spin decay, rotating Earth
     x0 = initial_state(model, r_L=(0.0, 0.0, 50.0), v_L=(1.0, -0.5, 15.0), tilt=0.1,
                        w_B=(0.0, 20.0, 5.0))
-    res = simulate(model, 1.0, x0=x0, options=TIGHT)
+    res = simulate_coast(model, 1.0, x0=x0, options=TIGHT)
     rhs = build_coast_rhs(model)
     p = parameter_values(model)
 
@@ -137,7 +137,7 @@ def test_paper_aero_moment_spinning_craft_holds_angle_of_attack_nonspinning_dive
 
     def alpha_history(model, spin):
         x0 = initial_state(model, spin=spin, **x_kw)
-        res = simulate(model, 0.3, x0=x0, options=SimulationOptions(samples_per_interval=20))
+        res = simulate_coast(model, 0.3, x0=x0, options=SimulationOptions(samples_per_interval=20))
         t_s, x_s = ca.SX.sym("t"), ca.SX.sym("x", STATE.size)
         terms = coast_terms(t_s, x_s, ca.SX(0, 1), ca.SX(p), model)
         alpha = ca.Function("alpha", [t_s, x_s], [terms["alpha"]])

@@ -1,8 +1,8 @@
-"""Forward simulation of a flight (numeric runner over the symbolic model).
+"""Reference coast: the continuous model with the laser off, by variable-step CVODES.
 
-Until the pulse map arrives this integrates the coast dynamics only (no laser),
-interval by interval at the flight's pulse period, so that a pulse jump can be
-inserted between intervals without an integrator ever stepping through it.
+The independent check of the pulse map's fixed-step coasts, and a ballistic-flight
+simulator in its own right. It integrates interval by interval at the flight's pulse
+period and finds the landing by secant steps on the integrated flow.
 """
 
 from __future__ import annotations
@@ -16,11 +16,11 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, input_layout, parameter_values
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Model
+from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.results import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.invariants import build_invariants
 
-__all__ = ["coast_integrator", "simulate"]
+__all__ = ["coast_integrator", "simulate_coast"]
 
 
 def coast_integrator(model: Model, samples: int, options: SimulationOptions) -> ca.Function:
@@ -95,7 +95,7 @@ def _checked_vector(name: str, value: Sequence[float] | np.ndarray, size: int) -
     return v
 
 
-def simulate(
+def simulate_coast(
     model: Model,
     duration: float,
     *,
@@ -104,7 +104,7 @@ def simulate(
     p: Sequence[float] | np.ndarray | None = None,
     options: SimulationOptions | None = None,
 ) -> SimulationResult:
-    """Simulate ``model`` for ``duration`` seconds (coast dynamics, no laser yet).
+    """Coast ``model`` for ``duration`` seconds with the laser off (CVODES).
 
     Parameters
     ----------
@@ -174,19 +174,4 @@ def simulate(
         xk = block[-1]
         t0 = tb[-1]
 
-    t = np.asarray(times)
-    x = np.vstack(states)
-    inv = build_invariants().map(len(t))
-    H, energy, tilt, coning, mass = inv(x.T, pk)
-    return SimulationResult(
-        model_name=model.name,
-        t=t,
-        x=x,
-        status=status,
-        message=message,
-        tilt=np.asarray(tilt).ravel(),
-        coning=np.asarray(coning).ravel(),
-        H_L=np.asarray(H).T,
-        kinetic_energy=np.asarray(energy).ravel(),
-        mass=np.asarray(mass).ravel(),
-    )
+    return flight_result(model, np.asarray(times), np.vstack(states), pk, status, message)
