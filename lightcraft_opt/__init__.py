@@ -1,4 +1,4 @@
-"""lightcraft_opt: flight dynamics, trajectory optimisation and control of laser-propelled lightcraft.
+"""lightcraft_opt: flight dynamics, optimisation and control of laser-propelled lightcraft.
 
 Frames and units: docs/frames.md. Everything inside is SI.
 """

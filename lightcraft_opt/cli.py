@@ -8,12 +8,12 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.plots.trajectory import flight_overview
 from lightcraft_opt.run_files import write_summary, write_trajectory_csv
-from lightcraft_opt.coast_reference import simulate_coast
 
 __all__ = ["main"]
 
@@ -48,11 +48,19 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
     sim.add_argument("--duration", type=float, default=10.0, help="seconds (default 10)")
     sim.add_argument("--out", default="runs/out", help="output folder")
-    sim.add_argument("--launch-speed", type=float, default=20.0,
-                     help="initial vertical speed [m/s] of the coast-only flight (default 20)")
+    sim.add_argument(
+        "--launch-speed",
+        type=float,
+        default=20.0,
+        help="initial vertical speed [m/s] of the coast-only flight (default 20)",
+    )
     sim.add_argument("--tilt-deg", type=float, default=2.0, help="initial tilt [deg] (default 2)")
-    sim.add_argument("--tilt-azimuth-deg", type=float, default=90.0,
-                     help="direction of the tilt, clockwise from north [deg] (default 90: east)")
+    sim.add_argument(
+        "--tilt-azimuth-deg",
+        type=float,
+        default=90.0,
+        help="direction of the tilt, clockwise from north [deg] (default 90: east)",
+    )
     sim.set_defaults(run=_simulate)
     return parser
 

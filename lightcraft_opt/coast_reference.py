@@ -13,10 +13,17 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, input_layout, parameter_values
+from lightcraft_opt.flight_measures import flight_result
+from lightcraft_opt.layout import (
+    PARAMETERS,
+    STATE,
+    checked_vector,
+    initial_state,
+    input_layout,
+    parameter_values,
+)
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.results import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 
@@ -68,8 +75,12 @@ def coast_integrator(model: Model, samples: int, options: SimulationOptions) -> 
 
 
 def _landing(
-    step: ca.Function, x_prev: np.ndarray, t_prev: float, dt_guess: float,
-    uk: np.ndarray, pk: np.ndarray,
+    step: ca.Function,
+    x_prev: np.ndarray,
+    t_prev: float,
+    dt_guess: float,
+    uk: np.ndarray,
+    pk: np.ndarray,
 ) -> tuple[float, np.ndarray]:
     """Time and state where r_L[up] crosses 0 after (t_prev, x_prev), by secant steps
     on the integrated flow (not on interpolated samples)."""
@@ -84,15 +95,6 @@ def _landing(
         a, b, za = b, b - zb * (b - a) / (zb - za), zb
         xb = np.asarray(step(x_prev, t_prev, b, uk, pk))[:, -1]
     return t_prev + b, xb
-
-
-def _checked_vector(name: str, value: Sequence[float] | np.ndarray, size: int) -> np.ndarray:
-    v = np.asarray(value, dtype=float).reshape(-1)
-    if v.size != size:
-        raise ParameterError(name, f"needs {size} values, got {v.size}")
-    if not np.all(np.isfinite(v)):
-        raise ParameterError(name, "must be finite (got NaN or inf)")
-    return v
 
 
 def simulate_coast(
@@ -126,9 +128,9 @@ def simulate_coast(
         raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
     craft = model.craft
     ulay = input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
-    xk = _checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
-    uk = _checked_vector("u", np.zeros(ulay.size) if u is None else u, ulay.size)
-    pk = _checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)
+    xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
+    uk = checked_vector("u", np.zeros(ulay.size) if u is None else u, ulay.size)
+    pk = checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)
 
     interval = 1.0 / model.flight.pulse_rate
     n_full = int(np.floor(duration / interval + 1e-9))

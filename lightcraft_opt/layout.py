@@ -42,6 +42,7 @@ __all__ = [
     "STATE",
     "Slot",
     "VectorLayout",
+    "checked_vector",
     "initial_state",
     "input_layout",
     "map_input_layout",
@@ -122,11 +123,13 @@ class VectorLayout:
         for casadi and as floats for 1-D numpy."""
         s = self.slot(name)
         if s.size == 1:
-            return vector[s.start]  # type: ignore[index,no-any-return]
-        return vector[s.start : s.stop]  # type: ignore[index,no-any-return]
+            return vector[s.start]  # type: ignore[index]
+        return vector[s.start : s.stop]  # type: ignore[index]
 
-    def pack(self, values: Mapping[str, Any], default: Mapping[str, Any] | None = None) -> np.ndarray:
-        """Flat float vector from ``{slot: value}``; every slot must be given (or in ``default``)."""
+    def pack(
+        self, values: Mapping[str, Any], default: Mapping[str, Any] | None = None
+    ) -> np.ndarray:
+        """Flat float vector from ``{slot: value}``; every slot given here or in ``default``."""
         out = np.empty(self.size)
         merged = dict(default or {})
         merged.update(values)
@@ -278,6 +281,20 @@ PARAMETERS = VectorLayout(
         ("spent_coupling", 1, "N s/J", "", ()),
     ],
 )
+
+
+def checked_vector(name: str, value: Sequence[float] | np.ndarray, size: int) -> np.ndarray:
+    """``value`` as a flat float vector of ``size`` finite entries, or a ParameterError
+    naming ``name``."""
+    try:
+        v = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(name, f"must be {size} numbers, got {value!r}") from None
+    if v.size != size:
+        raise ParameterError(name, f"needs {size} values, got {v.size}")
+    if not np.all(np.isfinite(v)):
+        raise ParameterError(name, "must be finite (got NaN or inf)")
+    return v
 
 
 def parameter_values(model: Model) -> np.ndarray:

@@ -93,60 +93,100 @@ def _choice(enum: type[Enum]) -> _Spec:
     return _Spec("choice", choices=enum)
 
 
-_TEXT, _SWITCH, _NUMBER, _NUMBERS = _q("text"), _q("switch"), _q("dimensionless"), _q(
-    "dimensionless", "list")
+_TEXT, _SWITCH, _NUMBER, _NUMBERS = (
+    _q("text"),
+    _q("switch"),
+    _q("dimensionless"),
+    _q("dimensionless", "list"),
+)
 
 #: Table name -> field of the params dataclass -> what the file holds for it.
 SCHEMA: Mapping[str, Mapping[str, _Spec]] = {
     "model": {"name": _TEXT, "site": _TEXT, "laser": _TEXT},
     "craft": {
-        "name": _TEXT, "diameter": _q("length"), "mass": _q("mass"),
-        "inertia_axial": _q("inertia"), "inertia_transverse": _q("inertia"),
-        "spin": _q("angular rate"), "propellant": _choice(params.Propellant),
+        "name": _TEXT,
+        "diameter": _q("length"),
+        "mass": _q("mass"),
+        "inertia_axial": _q("inertia"),
+        "inertia_transverse": _q("inertia"),
+        "spin": _q("angular rate"),
+        "propellant": _choice(params.Propellant),
     },
     "liner": {"mass": _q("mass"), "radius": _q("length"), "axial_offset": _q("length")},
     "carrier": {
-        "mass": _q("mass"), "inertia": _q("inertia", "list", 6),
+        "mass": _q("mass"),
+        "inertia": _q("inertia", "list", 6),
         "position_B": _q("length", "list", 3),
     },
     "rcs": {
-        "isp": _q("time"), "propellant_mass": _q("mass"),
+        "isp": _q("time"),
+        "propellant_mass": _q("mass"),
         "tank_position_B": _q("length", "list", 3),
     },
     "thruster": {
-        "position_B": _q("length", "list", 3), "direction_B": _q("dimensionless", "list", 3),
+        "position_B": _q("length", "list", 3),
+        "direction_B": _q("dimensionless", "list", 3),
         "max_thrust": _q("force"),
     },
     "aero": {
-        "model": _choice(params.AeroModel), "cd": _NUMBERS, "cl": _NUMBERS, "cm": _NUMBERS,
-        "table_alpha": _q("angle", "list"), "reference_length": _q("length"),
-        "cd_scale": _NUMBER, "cl_scale": _NUMBER, "cm_scale": _NUMBER,
-        "magnus_force_coefficient": _NUMBER, "magnus_moment_coefficient": _NUMBER,
+        "model": _choice(params.AeroModel),
+        "cd": _NUMBERS,
+        "cl": _NUMBERS,
+        "cm": _NUMBERS,
+        "table_alpha": _q("angle", "list"),
+        "reference_length": _q("length"),
+        "cd_scale": _NUMBER,
+        "cl_scale": _NUMBER,
+        "cm_scale": _NUMBER,
+        "magnus_force_coefficient": _NUMBER,
+        "magnus_moment_coefficient": _NUMBER,
     },
     "spin_decay": {
-        "model": _choice(params.SpinDecayModel), "time_constant": _q("time"), "disk_faces": _NUMBER,
+        "model": _choice(params.SpinDecayModel),
+        "time_constant": _q("time"),
+        "disk_faces": _NUMBER,
     },
     "flight": {
-        "pulse_energy": _q("energy"), "pulse_rate": _q("frequency"),
-        "beam_side": _q("length"), "impulse_per_pulse": _q("impulse"),
+        "pulse_energy": _q("energy"),
+        "pulse_rate": _q("frequency"),
+        "beam_side": _q("length"),
+        "impulse_per_pulse": _q("impulse"),
     },
     "environment": {"gravity_j2": _SWITCH, "earth_rotation": _SWITCH},
     "wind": {
-        "speed_ref": _q("speed"), "height_ref": _q("length"), "roughness_height": _q("length"),
-        "shear_exponent": _NUMBER, "direction_from": _q("angle"), "veer": _q("angle per length"),
-        "gust_L": _q("speed", "list", 3), "gust_start": _q("time"),
-        "gust_duration": _q("time"), "table_height": _q("length", "list"),
-        "table_speed": _q("speed", "list"), "table_direction_from": _q("angle", "list"),
-        "gust_table_time": _q("time", "list"), "gust_table_L": _q("speed", "rows", 3),
+        "speed_ref": _q("speed"),
+        "height_ref": _q("length"),
+        "roughness_height": _q("length"),
+        "shear_exponent": _NUMBER,
+        "direction_from": _q("angle"),
+        "veer": _q("angle per length"),
+        "gust_L": _q("speed", "list", 3),
+        "gust_start": _q("time"),
+        "gust_duration": _q("time"),
+        "table_height": _q("length", "list"),
+        "table_speed": _q("speed", "list"),
+        "table_direction_from": _q("angle", "list"),
+        "gust_table_time": _q("time", "list"),
+        "gust_table_L": _q("speed", "rows", 3),
     },
-    "site": {"name": _TEXT, "latitude": _q("angle"), "longitude": _q("angle"),
-             "height": _q("length")},
+    "site": {
+        "name": _TEXT,
+        "latitude": _q("angle"),
+        "longitude": _q("angle"),
+        "height": _q("length"),
+    },
     "laser": {
-        "name": _TEXT, "pulse_energy_max": _q("energy"), "pulse_rate": _q("frequency"),
-        "pulse_duration": _q("time"), "wavelength": _q("length"),
+        "name": _TEXT,
+        "pulse_energy_max": _q("energy"),
+        "pulse_rate": _q("frequency"),
+        "pulse_duration": _q("time"),
+        "wavelength": _q("length"),
         "profile": _choice(params.BeamProfile),
-        "hole_ratio": _NUMBER, "edge_width": _q("length"), "divergence": _q("angle"),
-        "pointing_limit": _q("length"), "focus_range": _q("length", "list", 2),
+        "hole_ratio": _NUMBER,
+        "edge_width": _q("length"),
+        "divergence": _q("angle"),
+        "pointing_limit": _q("length"),
+        "focus_range": _q("length", "list", 2),
     },
 }
 
@@ -215,8 +255,14 @@ def load_model(path: str | Path) -> params.Model:
     places = {"flight": ("flight", fkeys)}
     flight = _build(src, places, params.Flight, fvalues)
     environment = _environment(src, _table(src, data, "environment"))
-    parts = {"name": top["name"], "craft": craft, "site": site, "laser": laser,
-             "flight": flight, "environment": environment}
+    parts = {
+        "name": top["name"],
+        "craft": craft,
+        "site": site,
+        "laser": laser,
+        "flight": flight,
+        "environment": environment,
+    }
     return _build(src, places, params.Model, parts)
 
 
@@ -226,7 +272,9 @@ def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
     values, keys = _read(src, data, "craft", "craft", params.Craft, subtables)
     places: dict[str, tuple[str, Mapping[str, str]]] = {"craft": ("craft", keys)}
     simple: tuple[tuple[str, type], ...] = (
-        ("liner", params.Liner), ("carrier", params.Carrier), ("aero", params.Aerodynamics),
+        ("liner", params.Liner),
+        ("carrier", params.Carrier),
+        ("aero", params.Aerodynamics),
         ("spin_decay", params.SpinDecay),
     )
     for name, cls in simple:
@@ -247,8 +295,9 @@ def _rcs(src: str, data: Mapping[str, Any]) -> tuple[params.Rcs, tuple[str, Mapp
     values, keys = _read(src, data, "craft.rcs", "rcs", params.Rcs, ("thrusters",))
     rows = data.get("thrusters")
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
-        raise ModelFileError(src, "craft.rcs.thrusters",
-                             "needs one or more [[craft.rcs.thrusters]] tables")
+        raise ModelFileError(
+            src, "craft.rcs.thrusters", "needs one or more [[craft.rcs.thrusters]] tables"
+        )
     thrusters = []
     for i, row in enumerate(rows):
         where = f"craft.rcs.thrusters[{i}]"
@@ -295,7 +344,11 @@ def _component(src: str, file: Path, top: Mapping[str, Any], key: str) -> Path:
 
 # --------------------------------------------------------------------------- keys and values
 def _read(
-    src: str, data: Mapping[str, Any], where: str, table: str, cls: type,
+    src: str,
+    data: Mapping[str, Any],
+    where: str,
+    table: str,
+    cls: type,
     subtables: tuple[str, ...] = (),
 ) -> tuple[dict[str, Any], dict[str, str]]:
     """Convert one table to SI keyword arguments of ``cls``.
@@ -311,15 +364,21 @@ def _read(
         name = _join(where, key)
         field, unit = _match(src, key, name, schema, subtables)
         if field in keys:
-            raise ModelFileError(src, name, f"{field} is also given as "
-                                 f"{_join(where, keys[field])}; give it once, in one unit")
+            raise ModelFileError(
+                src,
+                name,
+                f"{field} is also given as {_join(where, keys[field])}; give it once, in one unit",
+            )
         keys[field] = key
         values[field] = _value(src, name, raw, schema[field], unit)
     for f in fields(cls):
         required = f.default is MISSING and f.default_factory is MISSING
         if required and f.name in schema and f.name not in keys:
-            raise ModelFileError(src, _join(where, f.name),
-                                 f"missing required key; write {_spellings(f.name, schema)}")
+            raise ModelFileError(
+                src,
+                _join(where, f.name),
+                f"missing required key; write {_spellings(f.name, schema)}",
+            )
     return values, keys
 
 
@@ -330,25 +389,34 @@ def _match(
     spec = schema.get(key)
     if spec is not None:
         if spec.kind in QUANTITIES:
-            raise ModelFileError(src, name, f"{key} is a {spec.kind} and needs its unit in the "
-                                 f"key: write {_spellings(key, schema)}")
+            raise ModelFileError(
+                src,
+                name,
+                f"{key} is a {spec.kind} and needs its unit in the "
+                f"key: write {_spellings(key, schema)}",
+            )
         return key, None
     field = max((f for f in schema if key.startswith(f + "_")), key=len, default=None)
     if field is not None:
-        unit = key[len(field) + 1:]
+        unit = key[len(field) + 1 :]
         kind = schema[field].kind
         if unit in QUANTITIES.get(kind, {}):
             return field, unit
         if "_" not in unit or unit in _ALL_UNITS:
             if kind not in QUANTITIES:
-                raise ModelFileError(src, name, f"{field} is {kind} and takes no unit; "
-                                     f"write {field}")
-            raise ModelFileError(src, name, f"unit {unit!r} is not known for {kind}; "
-                                 f"use {_spellings(field, schema)}")
+                raise ModelFileError(
+                    src, name, f"{field} is {kind} and takes no unit; write {field}"
+                )
+            raise ModelFileError(
+                src, name, f"unit {unit!r} is not known for {kind}; use {_spellings(field, schema)}"
+            )
     known = [k for f in schema for k in _keys_for(f, schema)]
     close = difflib.get_close_matches(key, [*known, *subtables], n=3, cutoff=0.6)
-    hint = ("did you mean " + " or ".join(repr(c) for c in close) + "?" if close
-            else "known keys: " + ", ".join([*known, *subtables]))
+    hint = (
+        "did you mean " + " or ".join(repr(c) for c in close) + "?"
+        if close
+        else "known keys: " + ", ".join([*known, *subtables])
+    )
     raise ModelFileError(src, name, f"unknown key; {hint}")
 
 
@@ -387,8 +455,10 @@ def _value(src: str, name: str, raw: Any, spec: _Spec, unit: str | None) -> Any:
     if spec.shape == "list":
         return tuple(_number(src, f"{name}[{i}]", v, factor) for i, v in enumerate(rows))
     return tuple(
-        tuple(_number(src, f"{name}[{i}][{j}]", v, factor)
-              for j, v in enumerate(_list(src, f"{name}[{i}]", row, spec.length)))
+        tuple(
+            _number(src, f"{name}[{i}][{j}]", v, factor)
+            for j, v in enumerate(_list(src, f"{name}[{i}]", row, spec.length))
+        )
         for i, row in enumerate(rows)
     )
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
@@ -39,7 +38,9 @@ class PulseMapOptions:
     def __post_init__(self) -> None:
         if not isinstance(self.scheme, CoastScheme):
             allowed = [s.value for s in CoastScheme]
-            raise OptionError(f"PulseMapOptions.scheme must be one of {allowed}, got {self.scheme!r}")
+            raise OptionError(
+                f"PulseMapOptions.scheme must be one of {allowed}, got {self.scheme!r}"
+            )
         for name in ("substeps", "dense"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:

@@ -11,6 +11,7 @@ Unit conversion never happens here: see :mod:`lightcraft_opt.model_files`.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -108,7 +109,7 @@ def _series(name: str, value: Sequence[float], min_len: int = 1) -> tuple[float,
 
 
 def _increasing(name: str, values: tuple[float, ...]) -> None:
-    if any(b <= a for a, b in zip(values, values[1:], strict=False)):
+    if any(b <= a for a, b in itertools.pairwise(values)):
         raise ParameterError(name, "must be strictly increasing")
 
 
@@ -208,9 +209,7 @@ class Aerodynamics:
                 raise ParameterError("aero.table_alpha", "angles must lie in [0, pi/2] rad")
             for name in ("cd", "cl", "cm"):
                 if len(getattr(self, name)) != n:
-                    raise ParameterError(
-                        f"aero.{name}", f"table needs {n} values (one per angle)"
-                    )
+                    raise ParameterError(f"aero.{name}", f"table needs {n} values (one per angle)")
         if self.reference_length is not None:
             _set(
                 self, "reference_length", _positive("aero.reference_length", self.reference_length)
@@ -353,6 +352,7 @@ class Rcs:
         _set(self, "isp", _positive("rcs.isp", self.isp))
         _set(self, "propellant_mass", _non_negative("rcs.propellant_mass", self.propellant_mass))
         _set(self, "tank_position_B", _vec3("rcs.tank_position_B", self.tank_position_B))
+
 
 class ImpulseModel(Enum):
     """How the captured energy's asymmetry becomes lateral and angular impulse."""

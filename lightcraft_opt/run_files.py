@@ -13,15 +13,34 @@ from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.params import Model
 from lightcraft_opt.results import SimulationResult
 
-__all__ = ["model_hash", "write_summary", "write_trajectory_csv"]
+__all__ = ["model_hash", "write_pulses_csv", "write_summary", "write_trajectory_csv"]
 
 TRAJECTORY_COLUMNS = (
-    "t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "qw", "qx", "qy", "qz",
-    "w1_radps", "w2_radps", "w3_radps", "spin_radps", "liner_mass_kg", "rcs_mass_kg", "pulses",
-    "mass_kg", "tilt_deg", "coning_deg",
+    "t_s",
+    "x_m",
+    "y_m",
+    "z_m",
+    "vx_mps",
+    "vy_mps",
+    "vz_mps",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "w1_radps",
+    "w2_radps",
+    "w3_radps",
+    "spin_radps",
+    "liner_mass_kg",
+    "rcs_mass_kg",
+    "pulses",
+    "mass_kg",
+    "tilt_deg",
+    "coning_deg",
 )
 
 
@@ -35,11 +54,55 @@ def write_trajectory_csv(result: SimulationResult, path: Path) -> None:
     table = np.column_stack(
         [result.t, result.x, result.mass, np.degrees(result.tilt), np.degrees(result.coning)]
     )
-    np.savetxt(path, table, delimiter=",", header=",".join(TRAJECTORY_COLUMNS), comments="",
-               fmt="%.12g")
+    np.savetxt(
+        path, table, delimiter=",", header=",".join(TRAJECTORY_COLUMNS), comments="", fmt="%.12g"
+    )
 
 
-def write_summary(result: SimulationResult, model: Model, path: Path, **extra: Any) -> dict[str, Any]:
+PULSE_COLUMNS = (
+    "k",
+    "t_s",
+    "energy_J",
+    "energy_captured_J",
+    "impulse_axial_Ns",
+    "impulse_b2_Ns",
+    "impulse_b3_Ns",
+    "angular_impulse_b1_Nms",
+    "angular_impulse_b2_Nms",
+    "angular_impulse_b3_Nms",
+    "offset_east_m",
+    "offset_north_m",
+    "liner_loss_kg",
+    "health",
+    "pointing_east_m",
+    "pointing_north_m",
+    "focus_m",
+)
+
+
+def write_pulses_csv(result: SimulationResult, path: Path) -> None:
+    """One row per pulse, columns :data:`PULSE_COLUMNS` (impulses in B, offsets in L)."""
+    rec = result.pulses
+    if rec is None:
+        raise ValueError("this result has no pulse record (a coast without the laser)")
+    n = len(rec.t)
+    energy = rec.u[:, PULSE_INPUT.index("energy")]
+    table = np.column_stack(
+        [
+            np.arange(n),
+            rec.t,
+            energy,
+            rec.engine,
+            rec.u[:, PULSE_INPUT.index("pointing_L")],
+            rec.u[:, PULSE_INPUT.index("focus")],
+        ]
+    )
+    np.savetxt(path, table, delimiter=",", header=",".join(PULSE_COLUMNS), comments="", fmt="%.12g")
+
+
+def write_summary(
+    result: SimulationResult, model: Model, path: Path, **extra: Any
+) -> dict[str, Any]:
     """summary.json: status, apogee, air time, model hash, plus ``extra`` entries."""
     summary: dict[str, Any] = {
         "model": model.name,
@@ -50,6 +113,9 @@ def write_summary(result: SimulationResult, model: Model, path: Path, **extra: A
         "air_time_s": result.air_time,
         "final_position_m": result.state("r_L")[-1].tolist(),
         "max_tilt_deg": float(np.degrees(np.max(result.tilt))),
+        "pulses_fired": 0
+        if result.pulses is None
+        else int(np.sum(result.pulses.u[:, PULSE_INPUT.index("energy")] > 0)),
         **extra,
     }
     path.write_text(json.dumps(summary, indent=2) + "\n")

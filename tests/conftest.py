@@ -38,8 +38,9 @@ def table1_flight5(**craft_changes: object) -> Model:
         craft=craft,
         site=Site("WSMR", math.radians(32.4), math.radians(-106.4), 1194.0),
         laser=Laser("PLVTS", 420.0, 26.0, 18e-6, 10.6e-6),
-        flight=Flight(pulse_energy=420.0, pulse_rate=26.0, beam_side=0.071974,
-                      impulse_per_pulse=0.0637),
+        flight=Flight(
+            pulse_energy=420.0, pulse_rate=26.0, beam_side=0.071974, impulse_per_pulse=0.0637
+        ),
     )
 
 

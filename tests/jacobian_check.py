@@ -42,12 +42,16 @@ def assert_jacobians_match_finite_differences(
                 fp = np.asarray(f(*plus)[j] if f.n_out() > 1 else f(*plus)).ravel()
                 fm = np.asarray(f(*minus)[j] if f.n_out() > 1 else f(*minus)).ravel()
                 J_fd[:, k] = (fp - fm) / (2 * h)
-            assert np.all(np.isfinite(J_ad)), f"{f.name()}: non-finite d{f.name_out(j)}/d{f.name_in(i)}"
+            assert np.all(np.isfinite(J_ad)), (
+                f"{f.name()}: non-finite d{f.name_out(j)}/d{f.name_in(i)}"
+            )
             if J_ad.size == 0:
                 continue
             biggest = float(np.max(np.abs(J_ad)))
-            worst = float(np.max(np.abs(J_ad - J_fd))) / biggest if biggest > 0 else float(
-                np.max(np.abs(J_fd))
+            worst = (
+                float(np.max(np.abs(J_ad - J_fd))) / biggest
+                if biggest > 0
+                else float(np.max(np.abs(J_fd)))
             )
             assert worst < rtol, (
                 f"{f.name()}: d{f.name_out(j)}/d{f.name_in(i)} differs from finite "

@@ -56,9 +56,16 @@ def test_closed_forms_solve_the_hydrostatic_equation():
         return float(f(R0 * H / (R0 - H))[1])
 
     gmr = 9.80665 * 0.0289644 / 8.31432
-    sol = solve_ivp(lambda H, lnp: [-gmr / T_of_H(H)], (0.0, 84000.0), [np.log(101325.0)],
-                    method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True,
-                    t_eval=[5000.0, 15000.0, 30000.0, 50000.0, 60000.0, 80000.0])
+    sol = solve_ivp(
+        lambda H, lnp: [-gmr / T_of_H(H)],
+        (0.0, 84000.0),
+        [np.log(101325.0)],
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-12,
+        dense_output=True,
+        t_eval=[5000.0, 15000.0, 30000.0, 50000.0, 60000.0, 80000.0],
+    )
     for H, lnp in zip(sol.t, sol.y[0], strict=True):
         assert float(f(R0 * H / (R0 - H))[2]) == pytest.approx(np.exp(lnp), rel=1e-7)
 

@@ -12,15 +12,14 @@ import numpy as np
 import pytest
 from conftest import table1_flight5, torque_free
 
+from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.options import SimulationOptions
-from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.symbolic.coast import exact_spin_flow, rk4_coast, split_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 
 PERIOD = 1 / 26
-REFERENCE = SimulationOptions(rtol=1e-13, atol=1e-13, samples_per_interval=1,
-                              stop_on_landing=False)
+REFERENCE = SimulationOptions(rtol=1e-13, atol=1e-13, samples_per_interval=1, stop_on_landing=False)
 
 
 def _reference(model, x0):
@@ -60,15 +59,22 @@ def _errors(coasting, scheme, steps_list):
         if scheme == "rk4":
             xe = rk4_coast(f, 0, xs, PERIOD, n)[-1]
         else:
-            xe = split_coast(f, ps, model, 0, xs, PERIOD, n, order=2 if scheme == "split" else 4)[-1]
+            xe = split_coast(f, ps, model, 0, xs, PERIOD, n, order=2 if scheme == "split" else 4)[
+                -1
+            ]
         x = np.asarray(ca.Function("c", [xs, ps], [xe])(x0, p)).ravel()
         out.append(np.max(np.abs(x - x_ref)[STATE.index("w_B")]))
     return np.array(out)
 
 
-@pytest.mark.parametrize(("scheme", "steps", "order"), [
-    ("rk4", [128, 256], 4), ("split", [64, 128], 2), ("split4", [16, 32], 4),
-])
+@pytest.mark.parametrize(
+    ("scheme", "steps", "order"),
+    [
+        ("rk4", [128, 256], 4),
+        ("split", [64, 128], 2),
+        ("split4", [16, 32], 4),
+    ],
+)
 def test_coast_schemes_converge_at_their_order(coasting, scheme, steps, order):
     e = _errors(coasting, scheme, steps)
     observed = np.log2(e[0] / e[1])

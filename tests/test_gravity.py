@@ -33,7 +33,9 @@ def _somigliana(lat: float) -> float:
 def test_inverse_square_gravity_at_the_pad():
     model = table1_flight5()
     p = parameter_values(model)
-    g = np.asarray(build_gravity(Environment(earth_rotation=False))([0, 0, 0], [0, 0, 0], p)).ravel()
+    g = np.asarray(
+        build_gravity(Environment(earth_rotation=False))([0, 0, 0], [0, 0, 0], p)
+    ).ravel()
     lat, lon, h = model.site.latitude, model.site.longitude, model.site.height
     R = np.asarray(site_position_E(lat, lon, h)).ravel()
     assert np.linalg.norm(g) == pytest.approx(EARTH_GM / (R @ R), rel=1e-14)

@@ -32,8 +32,13 @@ RCS = Rcs(
 
 def _props(model, x):
     mp = mass_properties(ca.DM(x), ca.DM(parameter_values(model)))
-    return (float(mp.mass), np.asarray(mp.cm_B).ravel(), np.asarray(mp.I_B),
-            float(mp.J), float(mp.I))
+    return (
+        float(mp.mass),
+        np.asarray(mp.cm_B).ravel(),
+        np.asarray(mp.I_B),
+        float(mp.J),
+        float(mp.I),
+    )
 
 
 def test_launch_mass_properties_reproduce_table1_with_a_liner():
@@ -87,7 +92,7 @@ def test_rcs_force_moment_and_mass_flow():
     dirs = np.array([t.direction_B for t in RCS.thrusters])
     pos = np.array([t.position_B for t in RCS.thrusters])
     assert F == pytest.approx(thrust @ dirs, rel=1e-14)
-    m, cm, *_ = _props(model, x)
+    _m, cm, *_ = _props(model, x)
     M_ref = sum(np.cross(pos[k] - cm, thrust[k] * dirs[k]) for k in range(3))
     assert M == pytest.approx(M_ref, rel=1e-12)
     assert xdot[STATE.index("rcs_mass")] == pytest.approx(

@@ -58,7 +58,10 @@ def test_flight7_is_the_flight5_airframe_on_flight16_coupling() -> None:
     f5, f7, f16 = (load_model(MODELS / f"flight{n}.toml") for n in (5, 7, 16))
     c5, c7 = f5.craft, f7.craft
     assert (c7.diameter, c7.mass, c7.inertia_axial, c7.inertia_transverse) == (
-        c5.diameter, c5.mass, c5.inertia_axial, c5.inertia_transverse
+        c5.diameter,
+        c5.mass,
+        c5.inertia_axial,
+        c5.inertia_transverse,
     )
     assert c7.propellant is Propellant.DELRIN and c7.liner is not None
     assert f7.flight.pulse_energy == 420.0
@@ -97,13 +100,16 @@ def test_component_files() -> None:
 # --------------------------------------------------------------------------- units
 def test_same_model_in_si_keys(tmp_path: Path) -> None:
     """Writing the Table 1 numbers in SI gives the same model as writing them in g, mm, RPM."""
-    flight = _copy(tmp_path, {
-        "diameter_mm = 122.2": "diameter_m = 0.1222",
-        "mass_g = 32.5": "mass_kg = 0.0325",
-        "inertia_axial_g_cm2 = 602.7": "inertia_axial_kg_m2 = 6.027e-5",
-        "spin_rpm = 10000.0": f"spin_rad_s = {10_000 * RPM!r}",
-        "beam_side_cm = 7.1974": "beam_side_m = 0.071974",
-    })
+    flight = _copy(
+        tmp_path,
+        {
+            "diameter_mm = 122.2": "diameter_m = 0.1222",
+            "mass_g = 32.5": "mass_kg = 0.0325",
+            "inertia_axial_g_cm2 = 602.7": "inertia_axial_kg_m2 = 6.027e-5",
+            "spin_rpm = 10000.0": f"spin_rad_s = {10_000 * RPM!r}",
+            "beam_side_cm = 7.1974": "beam_side_m = 0.071974",
+        },
+    )
     assert load_model(flight) == load_model(MODELS / "flight5.toml")
 
 
@@ -136,8 +142,14 @@ position_B_mm = [0.0, -50.0, 0.0]
 direction_B = [0.0, 0.0, -1.0]
 max_thrust_n = 0.05
 """
-    flight = _copy(tmp_path, {"direction_from_deg = 0.0": "direction_from_deg = 90.0\n"
-                              "veer_deg_per_m = 0.5\ngust_L_mps = [1.0, 0.0, 0.0]"}, extra)
+    flight = _copy(
+        tmp_path,
+        {
+            "direction_from_deg = 0.0": "direction_from_deg = 90.0\n"
+            "veer_deg_per_m = 0.5\ngust_L_mps = [1.0, 0.0, 0.0]"
+        },
+        extra,
+    )
     m = load_model(flight)
     assert m.craft.carrier is not None and m.craft.rcs is not None
     assert m.craft.carrier.inertia[0] == 1e-5
@@ -153,45 +165,109 @@ BAD = [
     # (case, flight5.toml line, replacement, field in the error, words in the message)
     ("missing key", "mass_g = 32.5", "", "craft.mass", "mass_kg"),
     ("unknown key", "mass_g = 32.5", "mas_g = 32.5", "craft.mas_g", "mass_g"),
-    ("misspelt unit", "spin_rpm = 10000.0", "spin_rmp = 10000.0", "craft.spin_rmp",
-     "unit 'rmp' is not known for angular rate; use spin_rad_s, spin_rpm or spin_deg_s"),
-    ("misspelt field", "spin_rpm = 10000.0", "spim_rpm = 10000.0", "craft.spim_rpm",
-     "did you mean 'spin_rpm'?"),
+    (
+        "misspelt unit",
+        "spin_rpm = 10000.0",
+        "spin_rmp = 10000.0",
+        "craft.spin_rmp",
+        "unit 'rmp' is not known for angular rate; use spin_rad_s, spin_rpm or spin_deg_s",
+    ),
+    (
+        "misspelt field",
+        "spin_rpm = 10000.0",
+        "spim_rpm = 10000.0",
+        "craft.spim_rpm",
+        "did you mean 'spin_rpm'?",
+    ),
     ("unknown table", "[craft.spin_decay]", "[craft.spindecay]", "craft.spindecay", "spin_decay"),
-    ("bad unit", "mass_g = 32.5", "mass_lb = 0.0716", "craft.mass_lb",
-     "unit 'lb' is not known for mass; use mass_kg, mass_g or mass_mg"),
-    ("unit on a ratio", "cd_scale = 1.0", "cd_scale_pct = 100", "craft.aero.cd_scale_pct",
-     "write cd_scale"),
+    (
+        "bad unit",
+        "mass_g = 32.5",
+        "mass_lb = 0.0716",
+        "craft.mass_lb",
+        "unit 'lb' is not known for mass; use mass_kg, mass_g or mass_mg",
+    ),
+    (
+        "unit on a ratio",
+        "cd_scale = 1.0",
+        "cd_scale_pct = 100",
+        "craft.aero.cd_scale_pct",
+        "write cd_scale",
+    ),
     ("no unit", "mass_g = 32.5", "mass = 0.0325", "craft.mass", "needs its unit"),
     ("two units", "mass_g = 32.5", "mass_g = 32.5\nmass_kg = 0.0325", "craft.mass_kg", "mass_g"),
     ("negative mass", "mass_g = 32.5", "mass_g = -32.5", "craft.mass_g", "positive"),
     ("zero diameter", "diameter_mm = 122.2", "diameter_mm = 0", "craft.diameter_mm", "positive"),
-    ("NaN inertia", "inertia_axial_g_cm2 = 602.7", "inertia_axial_g_cm2 = nan",
-     "craft.inertia_axial_g_cm2", "finite"),
+    (
+        "NaN inertia",
+        "inertia_axial_g_cm2 = 602.7",
+        "inertia_axial_g_cm2 = nan",
+        "craft.inertia_axial_g_cm2",
+        "finite",
+    ),
     ("infinite spin", "spin_rpm = 10000.0", "spin_rpm = inf", "craft.spin_rpm", "finite"),
-    ("triangle inequality", "inertia_axial_g_cm2 = 602.7", "inertia_axial_g_cm2 = 1000.0",
-     "craft.inertia_axial_g_cm2", "triangle"),
+    (
+        "triangle inequality",
+        "inertia_axial_g_cm2 = 602.7",
+        "inertia_axial_g_cm2 = 1000.0",
+        "craft.inertia_axial_g_cm2",
+        "triangle",
+    ),
     ("string for number", "mass_g = 32.5", 'mass_g = "32.5"', "craft.mass_g", "must be a number"),
     ("bool for number", "mass_g = 32.5", "mass_g = true", "craft.mass_g", "must be a number"),
     ("number for text", 'name = "#200-5/6"', "name = 200", "craft.name", "string"),
-    ("bad choice", 'propellant = "air"', 'propellant = "kerosene"', "craft.propellant",
-     "['air', 'delrin']"),
-    ("number for switch", "earth_rotation = true", "earth_rotation = 1",
-     "environment.earth_rotation", "true or false"),
-    ("NaN in a vector", "direction_from_deg = 0.0", "gust_L_mps = [0.0, nan, 0.0]",
-     "environment.wind.gust_L_mps[1]", "finite"),
-    ("short vector", "direction_from_deg = 0.0", "gust_L_mps = [0.0, 1.0]",
-     "environment.wind.gust_L_mps", "3 values"),
-    ("table as value", 'propellant = "air"', 'propellant = "air"\nliner = 3', "craft.liner",
-     "must be a table"),
+    (
+        "bad choice",
+        'propellant = "air"',
+        'propellant = "kerosene"',
+        "craft.propellant",
+        "['air', 'delrin']",
+    ),
+    (
+        "number for switch",
+        "earth_rotation = true",
+        "earth_rotation = 1",
+        "environment.earth_rotation",
+        "true or false",
+    ),
+    (
+        "NaN in a vector",
+        "direction_from_deg = 0.0",
+        "gust_L_mps = [0.0, nan, 0.0]",
+        "environment.wind.gust_L_mps[1]",
+        "finite",
+    ),
+    (
+        "short vector",
+        "direction_from_deg = 0.0",
+        "gust_L_mps = [0.0, 1.0]",
+        "environment.wind.gust_L_mps",
+        "3 values",
+    ),
+    (
+        "table as value",
+        'propellant = "air"',
+        'propellant = "air"\nliner = 3',
+        "craft.liner",
+        "must be a table",
+    ),
     ("misspelt table", "[flight]", "[flights]", "flights", "did you mean 'flight'"),
-    ("missing site file", 'site = "white_sands.toml"', 'site = "nowhere.toml"', "site",
-     "nowhere.toml"),
+    (
+        "missing site file",
+        'site = "white_sands.toml"',
+        'site = "nowhere.toml"',
+        "site",
+        "nowhere.toml",
+    ),
     ("syntax error", "mass_g = 32.5", "mass_g = 32.5.1", "craft.mass_g", "line"),
-    ("duplicate key (TOML)", "mass_g = 32.5", "mass_g = 32.5\nmass_g = 33", "craft.mass_g",
-     "line"),
-    ("energy above the laser's", "pulse_energy_j = 420.0", "pulse_energy_j = 500.0",
-     "flight.pulse_energy_j", "exceeds"),
+    ("duplicate key (TOML)", "mass_g = 32.5", "mass_g = 32.5\nmass_g = 33", "craft.mass_g", "line"),
+    (
+        "energy above the laser's",
+        "pulse_energy_j = 420.0",
+        "pulse_energy_j = 500.0",
+        "flight.pulse_energy_j",
+        "exceeds",
+    ),
 ]
 
 
@@ -209,12 +285,27 @@ BAD_COMPONENTS = [
     ("white_sands.toml", "latitude_deg = 32.4", "latitude_deg = 95.0", "latitude_deg", "[-"),
     ("white_sands.toml", "height_m = 1194.0", "height_ft = 3917", "height_ft", "unit 'ft'"),
     ("plvts.toml", "hole_ratio = 0.4", "hole_ratio = -0.4", "hole_ratio", "must lie in"),
-    ("plvts.toml", "focus_range_m = [2.0, 500.0]", "focus_range_m = [2.0, 5.0, 9.0]",
-     "focus_range_m", "2 values"),
-    ("plvts.toml", "focus_range_m = [2.0, 500.0]", "focus_range_m = [500.0, 2.0]",
-     "focus_range_m", "nearest"),
-    ("plvts.toml", "pulse_duration_us = 18.0", "pulse_duration_ms = 50", "pulse_duration_ms",
-     "overlap"),
+    (
+        "plvts.toml",
+        "focus_range_m = [2.0, 500.0]",
+        "focus_range_m = [2.0, 5.0, 9.0]",
+        "focus_range_m",
+        "2 values",
+    ),
+    (
+        "plvts.toml",
+        "focus_range_m = [2.0, 500.0]",
+        "focus_range_m = [500.0, 2.0]",
+        "focus_range_m",
+        "nearest",
+    ),
+    (
+        "plvts.toml",
+        "pulse_duration_us = 18.0",
+        "pulse_duration_ms = 50",
+        "pulse_duration_ms",
+        "overlap",
+    ),
 ]
 
 
@@ -234,10 +325,14 @@ def test_bad_component_file_is_named(
     ("name", "old", "new", "field", "words"),
     [
         ("flight16.toml", "mass_g = 3.0", "mass_g = 30.0", "craft.liner.mass_g", "less than"),
-        ("flight16.toml", "radius_mm = 45.0", "radius_mm = 150.0", "craft.liner",
-         "more inertia"),
-        ("flight16.toml", "radius_mm = 45.0", "radius_mm = -45.0", "craft.liner.radius_mm",
-         "positive"),
+        ("flight16.toml", "radius_mm = 45.0", "radius_mm = 150.0", "craft.liner", "more inertia"),
+        (
+            "flight16.toml",
+            "radius_mm = 45.0",
+            "radius_mm = -45.0",
+            "craft.liner.radius_mm",
+            "positive",
+        ),
     ],
 )
 def test_bad_liner(tmp_path: Path, name: str, old: str, new: str, field: str, words: str) -> None:
@@ -272,7 +367,7 @@ max_thrust_n = 0.05
 def test_missing_table(tmp_path: Path) -> None:
     flight = _copy(tmp_path)
     text = flight.read_text()
-    flight.write_text(text[: text.index("[flight]")] + text[text.index("[environment]"):])
+    flight.write_text(text[: text.index("[flight]")] + text[text.index("[environment]") :])
     with pytest.raises(ModelFileError) as info:
         load_model(flight)
     _assert_names(info.value, flight, "flight", "missing required table [flight]")
@@ -293,8 +388,9 @@ def test_no_other_exception_leaks(tmp_path: Path) -> None:
             if not found:
                 continue
             for value in junk:
-                flight = _copy(tmp_path / f"{name}-{found.group(1)}-{junk.index(value)}",
-                               name="flight16.toml")
+                flight = _copy(
+                    tmp_path / f"{name}-{found.group(1)}-{junk.index(value)}", name="flight16.toml"
+                )
                 _replace(flight.parent / name, {line: f"{found.group(1)} = {value}"})
                 try:
                     load_model(flight)
@@ -304,7 +400,9 @@ def test_no_other_exception_leaks(tmp_path: Path) -> None:
 
 # --------------------------------------------------------------------------- helpers
 def _copy(
-    tmp_path: Path, changes: dict[str, str] | None = None, extra: str = "",
+    tmp_path: Path,
+    changes: dict[str, str] | None = None,
+    extra: str = "",
     name: str = "flight5.toml",
 ) -> Path:
     """Copy the model files to ``tmp_path``, edit ``name`` and return its path."""

@@ -16,10 +16,10 @@ import pytest
 from conftest import table1_flight5, torque_free
 from scipy.integrate import solve_ivp
 
+from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.layout import STATE, initial_state, parameter_values, quaternion_from_tilt
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Carrier
-from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs, coast_terms
 from lightcraft_opt.symbolic.invariants import build_invariants
 
@@ -105,15 +105,18 @@ def test_torque_free_motion_conserves_angular_momentum_and_energy(carrier):
     p = parameter_values(model)
     inv = build_invariants()
     # rotational energy only (the translational part grows in free fall)
-    rot = np.array([float(inv(x, p)[1]) - 0.5 * float(inv(x, p)[4]) * x[3:6] @ x[3:6] for x in res.x])
+    rot = np.array(
+        [float(inv(x, p)[1]) - 0.5 * float(inv(x, p)[4]) * x[3:6] @ x[3:6] for x in res.x]
+    )
     assert np.max(np.abs(rot - rot[0])) / rot[0] < 1e-9
 
 
 def test_coast_agrees_with_independent_dop853_integrator():
     """CVODES (inside simulate) and scipy's DOP853 on the same right-hand side."""
     model = table1_flight5()  # full model: aerodynamics, spin decay, rotating Earth
-    x0 = initial_state(model, r_L=(0.0, 0.0, 50.0), v_L=(1.0, -0.5, 15.0), tilt=0.1,
-                       w_B=(0.0, 20.0, 5.0))
+    x0 = initial_state(
+        model, r_L=(0.0, 0.0, 50.0), v_L=(1.0, -0.5, 15.0), tilt=0.1, w_B=(0.0, 20.0, 5.0)
+    )
     res = simulate_coast(model, 1.0, x0=x0, options=TIGHT)
     rhs = build_coast_rhs(model)
     p = parameter_values(model)
@@ -121,8 +124,9 @@ def test_coast_agrees_with_independent_dop853_integrator():
     def f(t, x):
         return np.asarray(rhs(t, x, [], p)).ravel()
 
-    ref = solve_ivp(f, (0.0, 1.0), x0, method="DOP853", rtol=1e-12, atol=1e-12,
-                    t_eval=res.t, dense_output=False)
+    ref = solve_ivp(
+        f, (0.0, 1.0), x0, method="DOP853", rtol=1e-12, atol=1e-12, t_eval=res.t, dense_output=False
+    )
     assert ref.success
     scale = np.maximum(np.abs(ref.y.T), 1.0)
     err = np.max(np.abs(res.x - ref.y.T) / scale)
@@ -163,8 +167,7 @@ def test_gyrostat_spin_rate_follows_motor_torque():
     J = model.craft.inertia_axial
     assert J * (w1_dot + spin_dot) == pytest.approx(torque, rel=1e-12)
     # and the carrier turns the other way: total axial momentum is unchanged
-    H_dot_axial = (np.asarray(_system_inertia(model))[0] @ xdot[STATE.index("w_B")]
-                   + J * spin_dot)
+    H_dot_axial = np.asarray(_system_inertia(model))[0] @ xdot[STATE.index("w_B")] + J * spin_dot
     assert abs(H_dot_axial) < 1e-12 * torque / J
 
 

@@ -56,8 +56,15 @@ def test_exponential_decay_paper_eq6(flight5: Model) -> None:
     tau = 12.5
     p = params(flight5, spin_time_constant=tau)
     f = build_spin_decay(SpinDecayModel.EXPONENTIAL)
-    sol = solve_ivp(lambda t, w: [float(f(w[0], J, RHO, MU, p)) / J], (0.0, 12.0), [W0],
-                    method="DOP853", rtol=1e-11, atol=1e-9, dense_output=True)
+    sol = solve_ivp(
+        lambda t, w: [float(f(w[0], J, RHO, MU, p)) / J],
+        (0.0, 12.0),
+        [W0],
+        method="DOP853",
+        rtol=1e-11,
+        atol=1e-9,
+        dense_output=True,
+    )
     assert sol.success
     t = np.linspace(0.0, 12.0, 25)
     np.testing.assert_allclose(sol.sol(t)[0], W0 * np.exp(-t / tau), rtol=1e-9)
@@ -84,8 +91,9 @@ def test_rotating_disk_is_a_smooth_max_of_the_two_laws(w: float, flight5: Model)
     hard = max(laminar, turbulent)
     assert hard * (1 - 1e-12) <= T <= hard * 2 ** (1 / SMOOTH_MAX_ORDER)
     x = turbulent / laminar
-    assert T == pytest.approx(laminar * (1 + x**SMOOTH_MAX_ORDER) ** (1 / SMOOTH_MAX_ORDER),
-                              rel=1e-12)
+    assert T == pytest.approx(
+        laminar * (1 + x**SMOOTH_MAX_ORDER) ** (1 / SMOOTH_MAX_ORDER), rel=1e-12
+    )
     if w == W0:
         assert T == pytest.approx(hard, rel=0.005)
 
@@ -95,9 +103,11 @@ def test_rotating_disk_limits(flight5: Model) -> None:
     p = params(flight5, disk_faces=1.0)
     slow, fast = 1e-3, 1e6
     assert abs(torque(SpinDecayModel.ROTATING_DISK, slow, p)) == pytest.approx(
-        disk_by_hand(slow, 0.0611)[0], rel=1e-9)
+        disk_by_hand(slow, 0.0611)[0], rel=1e-9
+    )
     assert abs(torque(SpinDecayModel.ROTATING_DISK, fast, p)) == pytest.approx(
-        disk_by_hand(fast, 0.0611)[1], rel=1e-6)
+        disk_by_hand(fast, 0.0611)[1], rel=1e-6
+    )
 
 
 def test_rotating_disk_scales_with_faces_and_density(flight5: Model) -> None:

@@ -30,8 +30,14 @@ def blowing_from(w: np.ndarray) -> float:
     return math.atan2(-w[0], -w[1]) % (2 * math.pi)
 
 
-SHEAR = Wind(speed_ref=6.0, height_ref=10.0, roughness_height=0.05, shear_exponent=0.2,
-             direction_from=math.radians(30.0), veer=0.004)
+SHEAR = Wind(
+    speed_ref=6.0,
+    height_ref=10.0,
+    roughness_height=0.05,
+    shear_exponent=0.2,
+    direction_from=math.radians(30.0),
+    veer=0.004,
+)
 
 
 def test_calm_air_gives_zero(flight5: Model) -> None:
@@ -45,8 +51,10 @@ def test_speed_ref_at_height_ref_in_stated_direction(flight5: Model) -> None:
     f, p = with_wind(flight5, replace(SHEAR, veer=0.0))
     w = at(f, 1.0, 10.0, p)
     np.testing.assert_allclose(
-        w, [-6.0 * math.sin(math.radians(30)), -6.0 * math.cos(math.radians(30)), 0.0],
-        rtol=1e-14, atol=1e-14,
+        w,
+        [-6.0 * math.sin(math.radians(30)), -6.0 * math.cos(math.radians(30)), 0.0],
+        rtol=1e-14,
+        atol=1e-14,
     )
 
 
@@ -95,7 +103,9 @@ def test_gust_one_minus_cosine_shape(flight5: Model) -> None:
 def test_gust_adds_to_the_mean_wind(flight5: Model) -> None:
     f0, p0 = with_wind(flight5, SHEAR)
     f, p = with_wind(flight5, replace(SHEAR, gust_L=(0.0, 3.0, 0.0), gust_start=1.0))
-    np.testing.assert_allclose(at(f, 1.5, 30.0, p), at(f0, 1.5, 30.0, p0) + [0, 3.0, 0], rtol=1e-14)
+    np.testing.assert_allclose(
+        at(f, 1.5, 30.0, p), at(f0, 1.5, 30.0, p0) + np.array([0, 3.0, 0]), rtol=1e-14
+    )
 
 
 def test_numbers_come_from_p_not_from_the_dataclass(flight5: Model) -> None:
@@ -108,11 +118,15 @@ def test_numbers_come_from_p_not_from_the_dataclass(flight5: Model) -> None:
 
 # --------------------------------------------------------------------------- tables
 def sampled_profile_table(wind: Wind, heights: np.ndarray) -> Wind:
-    speed = wind.speed_ref * ((heights + wind.roughness_height)
-                              / (wind.height_ref + wind.roughness_height)) ** wind.shear_exponent
+    speed = (
+        wind.speed_ref
+        * ((heights + wind.roughness_height) / (wind.height_ref + wind.roughness_height))
+        ** wind.shear_exponent
+    )
     direction = wind.direction_from + wind.veer * heights
-    return Wind(table_height=tuple(heights), table_speed=tuple(speed),
-                table_direction_from=tuple(direction))
+    return Wind(
+        table_height=tuple(heights), table_speed=tuple(speed), table_direction_from=tuple(direction)
+    )
 
 
 def test_height_table_agrees_with_power_law(flight5: Model) -> None:
@@ -121,8 +135,9 @@ def test_height_table_agrees_with_power_law(flight5: Model) -> None:
     f_law, p_law = with_wind(flight5, SHEAR)
     f_tab, p_tab = with_wind(flight5, sampled_profile_table(SHEAR, heights))
     for z in heights:
-        np.testing.assert_allclose(at(f_tab, 0.0, z, p_tab), at(f_law, 0.0, z, p_law),
-                                   rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(
+            at(f_tab, 0.0, z, p_tab), at(f_law, 0.0, z, p_law), rtol=1e-13, atol=1e-13
+        )
     for z in np.linspace(5.0, 200.0, 97):
         w_tab, w_law = at(f_tab, 0.0, z, p_tab), at(f_law, 0.0, z, p_law)
         # speed curvature |U''| = U n (1 - n) / (z + z0)^2, largest at the lower node
@@ -133,8 +148,11 @@ def test_height_table_agrees_with_power_law(flight5: Model) -> None:
 
 
 def test_height_table_takes_the_short_way_round(flight5: Model) -> None:
-    table = Wind(table_height=(0.0, 100.0), table_speed=(4.0, 4.0),
-                 table_direction_from=(math.radians(350.0), math.radians(10.0)))
+    table = Wind(
+        table_height=(0.0, 100.0),
+        table_speed=(4.0, 4.0),
+        table_direction_from=(math.radians(350.0), math.radians(10.0)),
+    )
     f, p = with_wind(flight5, table)
     w = at(f, 0.0, 50.0, p)
     assert abs(math.remainder(blowing_from(w), 2 * math.pi)) < 1e-12  # from north, not south
@@ -147,7 +165,9 @@ def test_gust_table_agrees_with_one_minus_cosine(flight5: Model) -> None:
     gust, t0, T = np.array([1.5, 0.0, -0.5]), 1.0, 2.0
     times = np.linspace(t0, t0 + T, 81)
     shape = (1 - np.cos(2 * math.pi * (times - t0) / T)) / 2
-    table = Wind(gust_table_time=tuple(times), gust_table_L=tuple(map(tuple, np.outer(shape, gust))))
+    table = Wind(
+        gust_table_time=tuple(times), gust_table_L=tuple(map(tuple, np.outer(shape, gust)))
+    )
     f_par, p_par = with_wind(flight5, Wind(gust_L=tuple(gust), gust_start=t0, gust_duration=T))
     f_tab, p_tab = with_wind(flight5, table)
     h = T / 80
@@ -179,8 +199,11 @@ def test_jacobian_matches_finite_differences(kind: str, flight5: Model) -> None:
         heights = np.arange(0.0, 201.0, 10.0)
         times = np.linspace(0.0, 4.0, 9)
         rows = np.outer(np.sin(times), [1.0, 2.0, -0.3])
-        wind = replace(sampled_profile_table(gusty, heights),
-                       gust_table_time=tuple(times), gust_table_L=tuple(map(tuple, rows)))
+        wind = replace(
+            sampled_profile_table(gusty, heights),
+            gust_table_time=tuple(times),
+            gust_table_L=tuple(map(tuple, rows)),
+        )
     else:
         wind = gusty
     f, p = with_wind(flight5, wind)

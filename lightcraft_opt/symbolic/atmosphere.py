@@ -9,6 +9,8 @@ Sutherland's law.
 
 from __future__ import annotations
 
+import itertools
+
 import casadi as ca
 
 __all__ = ["LAYERS", "build_atmosphere", "us1976"]
@@ -38,7 +40,7 @@ def _base_pressures() -> list[float]:
     import math
 
     p = [101325.0]
-    for (hb, tb, lapse), (hn, _, _) in zip(LAYERS, LAYERS[1:], strict=False):
+    for (hb, tb, lapse), (hn, _, _) in itertools.pairwise(LAYERS):
         if lapse == 0.0:
             p.append(p[-1] * math.exp(-_GMR * (hn - hb) / tb))
         else:

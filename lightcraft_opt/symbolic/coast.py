@@ -109,7 +109,13 @@ def check_splitting_applies(model: Model) -> None:
 
 
 def split_coast(
-    rhs: Rhs, p: ca.SX, model: Model, t0: ca.SX, x0: ca.SX, dt: ca.SX, steps: int,
+    rhs: Rhs,
+    p: ca.SX,
+    model: Model,
+    t0: ca.SX,
+    x0: ca.SX,
+    dt: ca.SX,
+    steps: int,
     order: int = 2,
 ) -> list[ca.SX]:
     """Strang splitting: RK4 on f - f_fast for h/2, exact fast flow for h, RK4 for h/2.

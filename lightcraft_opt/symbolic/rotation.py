@@ -6,6 +6,8 @@ components to L components: ``v_L = rotate(q_LB, v_B)`` (docs/frames.md).
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import casadi as ca
 
 __all__ = [
@@ -18,7 +20,7 @@ __all__ = [
     "rotate_inverse",
 ]
 
-Expr = ca.SX | ca.MX
+Expr: TypeAlias = ca.SX | ca.MX
 
 
 def cross(a: Expr, b: Expr) -> Expr:

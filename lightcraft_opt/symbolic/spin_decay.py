@@ -110,8 +110,7 @@ def spin_decay_torque(
     """
     if not isinstance(model, SpinDecayModel):
         raise OptionError(
-            f"spin decay model must be one of {[m.value for m in SpinDecayModel]}, "
-            f"got {model!r}"
+            f"spin decay model must be one of {[m.value for m in SpinDecayModel]}, got {model!r}"
         )
     if model is SpinDecayModel.NONE:
         return 0 * w_rotor

@@ -1,0 +1,102 @@
+"""The house rules as tests: import-linter floors, ruff and mypy, all configured in pyproject.toml.
+
+The floors (STYLE.md) are import-linter contracts in ``[tool.importlinter]``; a wrong arrow
+fails here instead of in review. ``test_contracts_catch_a_wrong_arrow`` checks the contracts
+are not vacuous by planting wrong imports in a copy of the package.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import shutil
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "lightcraft_opt"
+
+
+def _require(module: str) -> None:
+    if importlib.util.find_spec(module) is None:
+        pytest.skip(f"{module} is not installed (pip install -e '.[test]')")
+
+
+def _lint_imports() -> list[str]:
+    """The ``lint-imports`` console script of this interpreter (not whatever is first on PATH)."""
+    _require("importlinter")
+    name = "lint-imports.exe" if sys.platform == "win32" else "lint-imports"
+    script = Path(sysconfig.get_path("scripts")) / name
+    if script.exists():
+        return [str(script)]
+    found = shutil.which("lint-imports")
+    if found is None:
+        pytest.skip("import-linter is installed but its lint-imports script is not found")
+    return [found]
+
+
+def _run(cmd: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        cmd, cwd=cwd, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=120
+    )
+
+
+def _report(proc: subprocess.CompletedProcess[str]) -> str:
+    return f"$ {' '.join(proc.args)}\nexit {proc.returncode}\n{proc.stdout}\n{proc.stderr}"
+
+
+def _assert_clean(proc: subprocess.CompletedProcess[str]) -> None:
+    if proc.returncode != 0:
+        pytest.fail(_report(proc), pytrace=False)
+
+
+def test_import_contracts_kept() -> None:
+    proc = _run([*_lint_imports(), "--no-cache"], ROOT)
+    _assert_clean(proc)
+    assert "0 broken" in proc.stdout, _report(proc)
+
+
+@pytest.mark.parametrize(
+    ("where", "line", "broken"),
+    [
+        ("symbolic/_wrong_arrow.py", "import matplotlib\n", "Floor 1 (symbolic)"),
+        ("params.py", "import casadi\n", "Floor 0 (errors, params"),
+        ("simulate.py", "import lightcraft_opt.plots\n", "Floors point down"),
+        ("mpc.py", "from lightcraft_opt import cli\n", "Floors point down"),
+        ("results.py", "import control\n", "Only lightcraft_opt.linearize imports"),
+        ("_unplaced.py", "import math\n", "Floors point down"),
+    ],
+)
+def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, broken: str) -> None:
+    """A copy of the package with one wrong import added breaks the named contract."""
+    lint = _lint_imports()
+    shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
+    shutil.copytree(
+        PACKAGE, tmp_path / "lightcraft_opt", ignore=shutil.ignore_patterns("__pycache__")
+    )
+    target = tmp_path / "lightcraft_opt" / where
+    with target.open("a", encoding="utf-8") as f:
+        f.write("\n" + line)
+    # lint-imports puts its working directory first on sys.path, so it analyses the copy.
+    proc = _run([*lint, "--no-cache"], tmp_path)
+    assert proc.returncode != 0, _report(proc)
+    _, _, broken_section = proc.stdout.partition("Broken contracts")
+    assert broken in broken_section, _report(proc)
+    module = "lightcraft_opt." + where.removesuffix(".py").replace("/", ".")
+    assert module in proc.stdout, f"the copy was not analysed\n{_report(proc)}"
+
+
+def test_ruff_clean() -> None:
+    _require("ruff")
+    paths = [p for p in ("lightcraft_opt", "tests", "bench") if (ROOT / p).exists()]
+    proc = _run([sys.executable, "-m", "ruff", "check", "--no-cache", *paths], ROOT)
+    _assert_clean(proc)
+
+
+def test_mypy_clean() -> None:
+    _require("mypy")
+    proc = _run([sys.executable, "-m", "mypy"], ROOT)  # packages and flags: [tool.mypy]
+    _assert_clean(proc)
