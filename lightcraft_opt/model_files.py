@@ -25,7 +25,10 @@ unit in the key (``mass_g``, ``spin_rpm``, ``beam_side_cm``), an SI value the SI
     impulse_per_pulse_ns = 0.0637
 
 Optional: ``[craft.liner]``, ``[craft.carrier]``, ``[craft.rcs]`` with
-``[[craft.rcs.thrusters]]``, ``[craft.aero]``, ``[craft.spin_decay]``, ``[environment]``,
+``[[craft.rcs.thrusters]]``, ``[craft.aero]``, ``[craft.spin_decay]``, ``[craft.engine]``
+(optic, blast ring, impulse model, health, ablation: ``capture_radius_mm``,
+``blast_angle_deg``, ``ablation_ug_per_j``, ``spent_coupling_n_per_mw``,
+``impulse_model = "sector"``, ``quadrature_radial = 8`` ...), ``[environment]``,
 ``[environment.wind]``. Site and laser files hold their keys at the top level. Any problem
 raises one :class:`ModelFileError` naming the file and the key as written in it.
 """
@@ -66,6 +69,8 @@ QUANTITIES: Mapping[str, Mapping[str, float | str]] = {
     "energy": {"j": "1", "kj": "1e3"},
     "force": {"n": "1"},
     "impulse": {"ns": "1", "n_s": "1"},
+    "mass per energy": {"kg_per_j": "1", "mg_per_j": "1e-6", "ug_per_j": "1e-9"},
+    "impulse per energy": {"ns_per_j": "1", "n_per_mw": "1e-6"},
 }
 _ALL_UNITS = {u for units in QUANTITIES.values() for u in units}
 _NOT_SI = {u for units in QUANTITIES.values() for u, factor in units.items() if factor != "1"}
@@ -76,7 +81,8 @@ class _Spec:
     """What one dataclass field holds in a file.
 
     ``kind``: a key of :data:`QUANTITIES`, or "dimensionless", "text", "switch", "choice".
-    ``shape``: "scalar", "list" (of numbers) or "rows" (list of lists of numbers).
+    ``shape``: "scalar", "integer" (a whole dimensionless number, written without a
+    decimal point), "list" (of numbers) or "rows" (list of lists of numbers).
     """
 
     kind: str
@@ -99,6 +105,7 @@ _TEXT, _SWITCH, _NUMBER, _NUMBERS = (
     _q("dimensionless"),
     _q("dimensionless", "list"),
 )
+_INTEGER = _q("dimensionless", "integer")
 
 #: Table name -> field of the params dataclass -> what the file holds for it.
 SCHEMA: Mapping[str, Mapping[str, _Spec]] = {
@@ -146,6 +153,24 @@ SCHEMA: Mapping[str, Mapping[str, _Spec]] = {
         "time_constant": _q("time"),
         "disk_faces": _NUMBER,
     },
+    "engine": {
+        "capture_radius": _q("length"),
+        "shadow_radius": _q("length"),
+        "ring_radius": _q("length"),
+        "ring_height": _q("length"),
+        "impulse_model": _choice(params.ImpulseModel),
+        "blast_angle": _q("angle"),
+        "lateral_gain": _NUMBER,
+        "tipping_gain": _NUMBER,
+        "kernel_offset": _q("length"),
+        "health_floor": _NUMBER,
+        "health_pulse": _NUMBER,
+        "health_width": _NUMBER,
+        "ablation": _q("mass per energy"),
+        "spent_coupling": _q("impulse per energy"),
+        "quadrature_radial": _INTEGER,
+        "quadrature_azimuthal": _INTEGER,
+    },
     "flight": {
         "pulse_energy": _q("energy"),
         "pulse_rate": _q("frequency"),
@@ -185,6 +210,8 @@ SCHEMA: Mapping[str, Mapping[str, _Spec]] = {
         "hole_ratio": _NUMBER,
         "edge_width": _q("length"),
         "divergence": _q("angle"),
+        "size_model": _choice(params.BeamSizeModel),
+        "rayleigh_range": _q("length"),
         "pointing_limit": _q("length"),
         "focus_range": _q("length", "list", 2),
     },
@@ -268,7 +295,7 @@ def load_model(path: str | Path) -> params.Model:
 
 # --------------------------------------------------------------------------- tables
 def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
-    subtables = ("liner", "carrier", "rcs", "aero", "spin_decay")
+    subtables = ("liner", "carrier", "rcs", "aero", "spin_decay", "engine")
     values, keys = _read(src, data, "craft", "craft", params.Craft, subtables)
     places: dict[str, tuple[str, Mapping[str, str]]] = {"craft": ("craft", keys)}
     simple: tuple[tuple[str, type], ...] = (
@@ -276,6 +303,7 @@ def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
         ("carrier", params.Carrier),
         ("aero", params.Aerodynamics),
         ("spin_decay", params.SpinDecay),
+        ("engine", params.Engine),
     )
     for name, cls in simple:
         where = f"craft.{name}"
@@ -448,6 +476,12 @@ def _value(src: str, name: str, raw: Any, spec: _Spec, unit: str | None) -> Any:
         if raw not in allowed:
             raise ModelFileError(src, name, f"must be one of {allowed}, got {raw!r}")
         return spec.choices(raw)
+    if spec.shape == "integer":
+        if isinstance(raw, bool) or not isinstance(raw, int):
+            raise ModelFileError(
+                src, name, f"must be a whole number (no decimal point), got {raw!r}"
+            )
+        return raw
     factor = QUANTITIES[spec.kind][unit] if unit else "1"
     if spec.shape == "scalar":
         return _number(src, name, raw, factor)

@@ -21,7 +21,7 @@ def test_nan_initial_state_names_the_field():
     model = table1_flight5()
     x0 = initial_state(model)
     x0[STATE.index("w_B")][1] = np.nan
-    with pytest.raises(ParameterError, match="x0.*finite"):
+    with pytest.raises(ParameterError, match=r"x0.*finite"):
         simulate_coast(model, 1.0, x0=x0)
 
 
@@ -32,7 +32,7 @@ def test_non_positive_duration_is_refused(duration):
 
 
 def test_wrong_state_size_is_refused():
-    with pytest.raises(ParameterError, match="x0.*needs 17"):
+    with pytest.raises(ParameterError, match=r"x0.*needs 17"):
         simulate_coast(table1_flight5(), 1.0, x0=np.zeros(5))
 
 

@@ -17,7 +17,9 @@ from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.model_files import QUANTITIES, SCHEMA, load_laser, load_model, load_site
 from lightcraft_opt.params import (
     Aerodynamics,
+    BeamSizeModel,
     Environment,
+    ImpulseModel,
     Propellant,
     SpinDecayModel,
     Wind,
@@ -158,6 +160,147 @@ max_thrust_n = 0.05
     assert m.craft.rcs.thrusters[0].direction_B == (0.0, 0.0, 1.0)
     assert m.environment.wind.direction_from == pytest.approx(math.pi / 2, rel=1e-15)
     assert m.environment.wind.veer == pytest.approx(math.radians(0.5), rel=1e-15)
+
+
+# --------------------------------------------------------------------------- engine and beam
+def test_engine_tables_in_si() -> None:
+    """[craft.engine] of the three flights (physics.md section 6 guesses) in SI, exactly."""
+    e5, e7, e16 = (load_model(MODELS / f"flight{n}.toml").craft.engine for n in (5, 7, 16))
+    assert (e5.capture_radius, e5.shadow_radius, e5.ring_radius, e5.ring_height) == (
+        0.055,
+        0.0075,
+        0.05,
+        0.0,
+    )
+    assert e5.impulse_model is ImpulseModel.SECTOR
+    assert e5.blast_angle == pytest.approx(math.radians(8.6), rel=1e-15)
+    assert (e5.lateral_gain, e5.tipping_gain, e5.kernel_offset) == (0.1, 0.1, 0.045)
+    assert (e5.health_floor, e5.health_pulse, e5.health_width) == (0.3, 100.0, 8.0)
+    assert e5.ablation == 0.0 and e5.spent_coupling is None
+    assert (e5.quadrature_radial, e5.quadrature_azimuthal) == (8, 32)
+    assert type(e5.quadrature_radial) is int
+    assert (e16.capture_radius, e16.ring_radius, e16.kernel_offset) == (0.0495, 0.045, 0.04)
+    for e in (e7, e16):
+        assert e.ablation == 2e-8  # 20 ug/J
+        assert e.spent_coupling == 1.5167e-4  # 151.67 N/MW
+    # the spent Delrin craft flies on Flight 5's air-mode coupling (physics.md section 5)
+    f5 = load_model(MODELS / "flight5.toml").flight
+    assert e16.spent_coupling == pytest.approx(f5.coupling_coefficient, rel=1e-4)
+
+
+def test_engine_keys_in_other_units(tmp_path: Path) -> None:
+    """Every new unit converts: cm, rad, mg/J, N s/J and N/MW give the same engine."""
+    flight = _copy(
+        tmp_path,
+        {
+            "capture_radius_mm = 55.0": "capture_radius_cm = 5.5",
+            "kernel_offset_mm = 45.0": "kernel_offset_m = 0.045",
+            "blast_angle_deg = 8.6": "blast_angle_rad = 0.15",
+            "ablation_ug_per_j = 0.0": "ablation_mg_per_j = 0.02\nspent_coupling_ns_per_j = 2e-4",
+            'impulse_model = "sector"': 'impulse_model = "kernel"',
+        },
+    )
+    e = load_model(flight).craft.engine
+    assert (e.capture_radius, e.kernel_offset, e.blast_angle) == (0.055, 0.045, 0.15)
+    assert (e.ablation, e.spent_coupling) == (2e-8, 2e-4)
+    assert e.impulse_model is ImpulseModel.KERNEL
+    flight = _copy(tmp_path / "mw", {"ablation_ug_per_j = 0.0": "spent_coupling_n_per_mw = 200"})
+    assert load_model(flight).craft.engine.spent_coupling == 2e-4
+
+
+def test_laser_size_model(tmp_path: Path) -> None:
+    laser = load_laser(MODELS / "plvts.toml")
+    assert laser.size_model is BeamSizeModel.LINEAR and laser.rayleigh_range == 50.0
+    flight = _copy(tmp_path)
+    _replace(
+        tmp_path / "plvts.toml",
+        {
+            'size_model = "linear"': 'size_model = "waist"',
+            "rayleigh_range_m = 50.0": "rayleigh_range_km = 0.12",
+        },
+    )
+    laser = load_model(flight).laser
+    assert laser.size_model is BeamSizeModel.WAIST and laser.rayleigh_range == 120.0
+
+
+BAD_ENGINE_AND_BEAM = [
+    # (file edited, line, replacement, field in the error, words in the message)
+    (
+        "flight5.toml",
+        "quadrature_radial = 8",
+        "quadrature_radial = 8.0",
+        "craft.engine.quadrature_radial",
+        "whole number",
+    ),
+    (
+        "flight5.toml",
+        "quadrature_azimuthal = 32",
+        "quadrature_azimuthal = 1",
+        "craft.engine.quadrature_azimuthal",
+        "integer >= 2",
+    ),
+    (
+        "flight5.toml",
+        'impulse_model = "sector"',
+        'impulse_model = "ring"',
+        "craft.engine.impulse_model",
+        "['sector', 'kernel']",
+    ),
+    (
+        "flight5.toml",
+        "shadow_radius_mm = 7.5",
+        "shadow_radius_mm = 60.0",
+        "craft.engine.shadow_radius_mm",
+        "less than the capture radius",
+    ),
+    (
+        "flight5.toml",
+        "blast_angle_deg = 8.6",
+        "blast_angle_deg = 100.0",
+        "craft.engine.blast_angle_deg",
+        "(converted to SI)",
+    ),
+    (
+        "flight16.toml",
+        "ablation_ug_per_j = 20.0",
+        "ablation_ug_per_j = -20.0",
+        "craft.engine.ablation_ug_per_j",
+        "must not be negative",
+    ),
+    (
+        "flight16.toml",
+        "spent_coupling_n_per_mw = 151.67",
+        "spent_coupling_n_per_kw = 0.15",
+        "craft.engine.spent_coupling_n_per_kw",
+        "did you mean 'spent_coupling_n_per_mw'",
+    ),
+    (
+        "plvts.toml",
+        'size_model = "linear"',
+        'size_model = "parabolic"',
+        "size_model",
+        "['linear', 'waist']",
+    ),
+    (
+        "plvts.toml",
+        "rayleigh_range_m = 50.0",
+        "rayleigh_range_m = 0.0",
+        "rayleigh_range_m",
+        "positive",
+    ),
+]
+
+
+@pytest.mark.parametrize(("name", "old", "new", "field", "words"), BAD_ENGINE_AND_BEAM)
+def test_bad_engine_or_beam_key(
+    tmp_path: Path, name: str, old: str, new: str, field: str, words: str
+) -> None:
+    flight = _copy(tmp_path, name="flight16.toml" if name == "flight16.toml" else "flight5.toml")
+    edited = tmp_path / name
+    _replace(edited, {old: new})
+    with pytest.raises(ModelFileError) as info:
+        load_model(flight)
+    _assert_names(info.value, edited, field, words)
 
 
 # --------------------------------------------------------------------------- bad files

@@ -33,10 +33,12 @@ soft-edge width w = ``beam_edge_width`` [m], logistic s(t) = (1 + tanh(t/2)) / 2
   (with the true |x|) times (1 - e^{-s/w}) s((s/2 + |x|)/w), a factor between
   1 - e^{-s/(2w)} and 1: the same soft edge, but smooth without any eps, exactly zero
   for s = 0 (a hole ratio of 0 gives a plain square), and its integral over x is
-  *exactly* s.
-  So F integrates over the plane to E exactly (up to rounding), for any a, b, w.
+  *exactly* s. So F integrates over the plane to E exactly (up to rounding), for any
+  a, b, w.
   The hole is dark only up to its own soft edges: at the hole's centre the fluence
-  is 1 - tanh(b/(4w))^2 ~ 4 e^{-b/(2w)} of the ring's (3 % for b = 2.9 cm, w = 3 mm).
+  is sech^2(b/(4w)) - sech^2(a/(4w)) ~ 4 e^{-b/(2w)} of the ring's (3 % for Flight 5's
+  b = 2.9 cm, w = 3 mm), and the hole holds the edge leak ~ 4 b w ln 2 / (a^2 - b^2) of E
+  (5.5 % for Flight 5), which vanishes with w (tests/test_beam.py).
 - ``TOP_HAT``: a soft disc of diameter a, radius R = a/2, rho^2 = xi^2 + eta^2::
 
       F = E s((R^2 - rho^2)/(2 R w)) / (2 pi R w softplus(R/(2w))),
