@@ -13,7 +13,8 @@ from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.plots.trajectory import flight_overview
-from lightcraft_opt.run_files import write_summary, write_trajectory_csv
+from lightcraft_opt.run_files import write_pulses_csv, write_summary, write_trajectory_csv
+from lightcraft_opt.simulate import simulate
 
 __all__ = ["main"]
 
@@ -24,19 +25,27 @@ def _simulate(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     x0 = initial_state(
         model,
+        r_L=(args.offset_east_cm / 100, args.offset_north_cm / 100, 0.0),
         v_L=(0.0, 0.0, args.launch_speed),
         tilt=math.radians(args.tilt_deg),
         tilt_azimuth=math.radians(args.tilt_azimuth_deg),
     )
-    print(f"simulating {model.name} for {args.duration} s (coast only: no laser yet) ...")
-    result = simulate_coast(model, args.duration, x0=x0)
+    if args.coast_only:
+        print(f"coasting {model.name} for up to {args.duration} s with the laser off ...")
+        result = simulate_coast(model, args.duration, x0=x0)
+    else:
+        print(f"simulating {model.name} for up to {args.duration} s under the laser ...")
+        result = simulate(
+            model, args.duration, x0=x0, dropout_rate=args.dropout_rate, seed=args.seed
+        )
+        write_pulses_csv(result, out / "pulses.csv")
     write_trajectory_csv(result, out / "trajectory.csv")
     summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
     fig = flight_overview(result)
     fig.savefig(out / "flight.png", dpi=110)
     print(
         f"{summary['status']}: apogee {summary['apogee_m']:.2f} m, air time "
-        f"{summary['air_time_s']:.2f} s -> {out}/trajectory.csv, summary.json, flight.png"
+        f"{summary['air_time_s']:.2f} s -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
 
@@ -49,17 +58,38 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--duration", type=float, default=10.0, help="seconds (default 10)")
     sim.add_argument("--out", default="runs/out", help="output folder")
     sim.add_argument(
-        "--launch-speed",
-        type=float,
-        default=20.0,
-        help="initial vertical speed [m/s] of the coast-only flight (default 20)",
+        "--launch-speed", type=float, default=0.0, help="initial vertical speed [m/s] (default 0)"
     )
-    sim.add_argument("--tilt-deg", type=float, default=2.0, help="initial tilt [deg] (default 2)")
+    sim.add_argument("--tilt-deg", type=float, default=0.0, help="initial tilt [deg] (default 0)")
     sim.add_argument(
         "--tilt-azimuth-deg",
         type=float,
         default=90.0,
         help="direction of the tilt, clockwise from north [deg] (default 90: east)",
+    )
+    sim.add_argument(
+        "--offset-east-cm",
+        type=float,
+        default=0.0,
+        help="initial offset from the beam axis, east [cm]",
+    )
+    sim.add_argument(
+        "--offset-north-cm",
+        type=float,
+        default=0.0,
+        help="initial offset from the beam axis, north [cm]",
+    )
+    sim.add_argument(
+        "--dropout-rate",
+        type=float,
+        default=0.0,
+        help="probability that the laser drops a pulse (default 0)",
+    )
+    sim.add_argument("--seed", type=int, default=None, help="seed of the pulse drop-outs")
+    sim.add_argument(
+        "--coast-only",
+        action="store_true",
+        help="laser off: coast from the initial state (variable-step CVODES)",
     )
     sim.set_defaults(run=_simulate)
     return parser
