@@ -49,13 +49,7 @@ def test_flight5_nutation_and_coning_rates_match_torque_free_symmetric_top():
     assert relative_to_rotor == pytest.approx(309.23, abs=0.005)  # physics.md, 2 decimals
 
     # b1 cones about the fixed H_L at |H|/I = J spin / (I cos theta)
-    H = res.H_L[0]
-    h = H / np.linalg.norm(H)
-    e1 = np.cross(h, [1.0, 0.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(h, e1)
-    b1_L = np.array([_b1_L(q) for q in res.state("q_LB")])
-    coning = _phase_rate(res.t, b1_L @ e1 + 1j * (b1_L @ e2))
+    coning = _coning_rate(res)
     theta = res.coning[0]
     assert coning == pytest.approx(J * spin / (I * math.cos(theta)), rel=1e-6)
     assert coning == pytest.approx(1356.43, abs=0.005)  # physics.md: 216 Hz
@@ -68,17 +62,22 @@ def test_coning_rate_at_large_cone_angle_is_H_over_I():
     res = simulate_coast(model, 0.2, x0=_coasting_state(model, w_B=(0.0, w_t, 0.0)), options=TIGHT)
     assert math.degrees(res.coning[0]) == pytest.approx(5.0, rel=1e-12)
     H = res.H_L[0]
-    h = H / np.linalg.norm(H)
-    e1 = np.cross(h, [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(h, e1)
-    b1_L = np.array([_b1_L(q) for q in res.state("q_LB")])
-    rate = _phase_rate(res.t, b1_L @ e1 + 1j * (b1_L @ e2))
+    rate = _coning_rate(res)
     assert rate == pytest.approx(np.linalg.norm(H) / I, rel=1e-6)
     assert rate == pytest.approx(J * spin / (I * math.cos(res.coning[0])), rel=1e-6)
     # the cone angle itself stays constant, to the integrator's accuracy
     # (rtol 1e-12 accumulated over ~270 rad of coning)
     assert np.ptp(res.coning) / res.coning[0] < 1e-7
+
+
+def _coning_rate(res) -> float:
+    """Rate at which b1 turns about the (fixed) angular momentum H_L [rad/s]."""
+    h = res.H_L[0] / np.linalg.norm(res.H_L[0])
+    e1 = np.cross(h, [0.0, 1.0, 0.0])  # any axis not along H (H is near up here)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(h, e1)
+    b1_L = np.array([_b1_L(q) for q in res.state("q_LB")])
+    return _phase_rate(res.t, b1_L @ e1 + 1j * (b1_L @ e2))
 
 
 def _b1_L(q: np.ndarray) -> np.ndarray:
