@@ -150,9 +150,13 @@ def simulate(
         times.extend(tb[keep])
         states.extend(X[keep])
         xk = X[-1]
-        if e_launch is None:
-            e_launch = float(eng[0])
-        weak = weak + 1 if u[i_energy] > 0 and eng[0] < LEFT_BEAM_FRACTION * e_launch else 0
+        if e_launch is None and u[i_energy] > 0:
+            e_launch = float(eng[0])  # first pulse actually fired (not dropped)
+        weak = (
+            weak + 1
+            if e_launch is not None and u[i_energy] > 0 and eng[0] < LEFT_BEAM_FRACTION * e_launch
+            else 0
+        )
         if weak >= LEFT_BEAM_PULSES:
             status = SimulationStatus.LEFT_BEAM
             message = f"optic captured < {LEFT_BEAM_FRACTION:.0%} of the launch energy"
