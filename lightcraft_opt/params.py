@@ -376,7 +376,9 @@ class Engine:
     ring_height : axial position of the ring along b1 from P [m].
     impulse_model : sector model or kernel form.
     blast_angle : effective radial tilt beta of each sector's reaction [rad]; its sign
-        decides whether the lateral push restores (sector model).
+        decides whether the lateral push restores (sector model), its size the ratio
+        tipping / lateral = R_f / tan(beta): the default 0.5 lets the craft ride the beam
+        (models/flight5.toml says why).
     lateral_gain, tipping_gain : k_L, k_M of the kernel form [-] (signed).
     kernel_offset : d0, offset of peak lateral impulse in the kernel form [m].
     health_floor : air-mode thrust fraction left after overheating, g_inf [-].
@@ -393,7 +395,7 @@ class Engine:
     ring_radius: float = 0.05
     ring_height: float = 0.0
     impulse_model: ImpulseModel = ImpulseModel.SECTOR
-    blast_angle: float = 0.15
+    blast_angle: float = 0.5
     lateral_gain: float = 0.1
     tipping_gain: float = 0.1
     kernel_offset: float = 0.045

@@ -168,7 +168,7 @@ def test_first_pulse_is_table1_whatever_the_focus(focus: float) -> None:
 @pytest.mark.parametrize("model", [F5, F16], ids=["flight5", "flight16"])
 @pytest.mark.parametrize("direction_deg", [0.0, 130.0])
 def test_offset_restores_and_tips_away(model: Model, direction_deg: float) -> None:
-    """Sector model, default blast angle +0.15 rad: the lateral impulse points toward the beam
+    """Sector model, default blast angle +0.5 rad: the lateral impulse points toward the beam
     axis, the angular impulse turns b1 away from it; both grow with the offset up to 3 cm and
     collapse with E_cap once the beam leaves the optic (under 0.5 % of E_cap(0) at 10 cm along
     the square's axes, 11 cm near its diagonals, where its corners reach 5.1 cm out)."""

@@ -173,7 +173,7 @@ def test_engine_tables_in_si() -> None:
         0.0,
     )
     assert e5.impulse_model is ImpulseModel.SECTOR
-    assert e5.blast_angle == pytest.approx(math.radians(8.6), rel=1e-15)
+    assert e5.blast_angle == pytest.approx(math.radians(28.6), rel=1e-15)
     assert (e5.lateral_gain, e5.tipping_gain, e5.kernel_offset) == (0.1, 0.1, 0.045)
     assert (e5.health_floor, e5.health_pulse, e5.health_width) == (0.3, 100.0, 8.0)
     assert e5.ablation == 0.0 and e5.spent_coupling is None
@@ -195,7 +195,7 @@ def test_engine_keys_in_other_units(tmp_path: Path) -> None:
         {
             "capture_radius_mm = 55.0": "capture_radius_cm = 5.5",
             "kernel_offset_mm = 45.0": "kernel_offset_m = 0.045",
-            "blast_angle_deg = 8.6": "blast_angle_rad = 0.15",
+            "blast_angle_deg = 28.6": "blast_angle_rad = 0.15",
             "ablation_ug_per_j = 0.0": "ablation_mg_per_j = 0.02\nspent_coupling_ns_per_j = 2e-4",
             'impulse_model = "sector"': 'impulse_model = "kernel"',
         },
@@ -255,7 +255,7 @@ BAD_ENGINE_AND_BEAM = [
     ),
     (
         "flight5.toml",
-        "blast_angle_deg = 8.6",
+        "blast_angle_deg = 28.6",
         "blast_angle_deg = 100.0",
         "craft.engine.blast_angle_deg",
         "(converted to SI)",
