@@ -12,7 +12,7 @@ from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
-from lightcraft_opt.plots.trajectory import flight_overview
+from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
 from lightcraft_opt.run_files import write_pulses_csv, write_summary, write_trajectory_csv
 from lightcraft_opt.simulate import simulate
 
@@ -41,8 +41,10 @@ def _simulate(args: argparse.Namespace) -> int:
         write_pulses_csv(result, out / "pulses.csv")
     write_trajectory_csv(result, out / "trajectory.csv")
     summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
-    fig = flight_overview(result)
-    fig.savefig(out / "flight.png", dpi=110)
+    # Figures not registered with pyplot: nothing to close, freed with the dict.
+    figures = flight_figures(result, capture_radius=model.craft.engine.capture_radius)
+    for name, fig in figures.items():
+        fig.savefig(out / name, dpi=PLOT_DPI)
     print(
         f"{summary['status']}: apogee {summary['apogee_m']:.2f} m, air time "
         f"{summary['air_time_s']:.2f} s -> {out}/"

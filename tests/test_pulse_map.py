@@ -44,11 +44,13 @@ def test_first_pulse_velocity_jump_is_table1_impulse_over_launch_mass(name, dv):
     assert np.max(np.abs(eng[2:7])) < 1e-12 * impulse
 
 
-@pytest.mark.parametrize(("substeps", "tol"), [(32, 1e-5), (64, 5e-7)])
+@pytest.mark.parametrize(("substeps", "tol"), [(32, 5e-5), (64, 3e-6)])
 def test_pulse_map_coast_equals_cvodes_between_pulses(flight5, substeps, tol):
-    """After the jump, Φ's coast (Yoshida splitting) against CVODES at 1e-12: the
-    default 32 substeps are measured at 4e-6 relative on w_B with 1.6 degrees of
-    coning; halving the step gains the scheme's fourth order."""
+    """After the jump, Φ's coast (Yoshida splitting) against CVODES at 1e-12. The error
+    is the aerodynamic torque sampled at the 216 Hz coning: here the restoring kick leaves
+    0.19 m/s sideways at a 9.9 m/s climb (1.1 degrees of angle of attack) and 0.9 degrees
+    of coning. Measured on w_B (the worst slot): 3.8e-5 relative with the default 32
+    substeps, 2.3e-6 with 64 (the scheme's fourth order); position 8e-8 and 5e-9."""
     model = flight5
     phi = build_pulse_map(model, PulseMapOptions(substeps=substeps))
     p = parameter_values(model)
@@ -104,4 +106,8 @@ def test_cli_simulate_writes_trajectory_pulses_summary_and_plot(tmp_path):
     assert len(pulses) == 13  # 0.5 s at 26 Hz
     assert len(rows) >= 8 * len(pulses)  # dense: >= 8 rows per pulse interval
     assert pulses[0, 4] == pytest.approx(0.0637, rel=1e-12)
-    assert (out / "summary.json").exists() and (out / "flight.png").stat().st_size > 10_000
+    assert (out / "summary.json").exists()
+    for name in ("flight.png", "altitude.png", "track.png", "attitude.png"):
+        png = (out / name).read_bytes()
+        assert png.startswith(b"\x89PNG\r\n\x1a\n"), name
+        assert len(png) > 10_000, name  # drawn, not an empty canvas

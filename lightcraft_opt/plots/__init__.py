@@ -1,0 +1,24 @@
+"""Plots of flights (floor 3, the only matplotlib user).
+
+Axes-level functions take a result and an optional ``ax`` and return the artists
+(``trajectory``: time histories; ``track``: the beam plane); ``figures`` builds the whole
+figures the CLI saves. Nothing here calls ``show()``.
+"""
+
+from lightcraft_opt.plots.figures import (
+    PLOT_DPI,
+    altitude_figure,
+    attitude_figure,
+    flight_figures,
+    flight_overview,
+    track_figure,
+)
+
+__all__ = [
+    "PLOT_DPI",
+    "altitude_figure",
+    "attitude_figure",
+    "flight_figures",
+    "flight_overview",
+    "track_figure",
+]

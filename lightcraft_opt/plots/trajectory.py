@@ -1,7 +1,8 @@
-"""Flight plots: altitude, vertical speed, beam-plane track, tilt and coning.
+"""Time histories of a flight: altitude, vertical speed, offset from the pad, tilt, coning.
 
 Each function takes a result and an optional axes, draws, and returns the artists
-(STYLE rule 10); none calls ``show()``.
+(STYLE rule 10); none calls ``show()``. Positions and velocities are the L frame of
+docs/frames.md (x east, y north, z up, origin at the pad).
 """
 
 from __future__ import annotations
@@ -12,15 +13,22 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from lightcraft_opt.layout import PULSE_INPUT
+from lightcraft_opt.plots.labels import state_label
 from lightcraft_opt.results import SimulationResult
 
 __all__ = [
-    "flight_overview",
+    "mark_apogee",
     "plot_altitude",
     "plot_attitude",
+    "plot_coning",
+    "plot_pulse_times",
+    "plot_tilt",
     "plot_track",
     "plot_vertical_speed",
 ]
+
+TIME_LABEL = "time [s]"
 
 
 def _axes(ax: Axes | None) -> Axes:
@@ -30,60 +38,139 @@ def _axes(ax: Axes | None) -> Axes:
     return fig.add_subplot()
 
 
+def _finish(ax: Axes) -> None:
+    ax.set_xlabel(TIME_LABEL)
+    ax.grid(True, alpha=0.3)
+
+
 def plot_altitude(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """Altitude above the pad [m] against time [s] (paper Figs. 8-9)."""
+    """Altitude above the pad, r_L[up] [m], against time [s] (paper Figs. 8-9)."""
     ax = _axes(ax)
     lines = ax.plot(result.t, result.state("r_L")[:, 2], label=result.model_name)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("altitude above pad, r_L[up] [m]")
-    ax.grid(True, alpha=0.3)
+    ax.set_ylabel(state_label("altitude above pad", "r_L", "up"))
+    _finish(ax)
     return lines
 
 
 def plot_vertical_speed(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """Vertical speed [m/s] against time [s] (paper Fig. 7)."""
+    """Vertical speed, v_L[up] [m/s], against time [s] (paper Fig. 7)."""
     ax = _axes(ax)
     lines = ax.plot(result.t, result.state("v_L")[:, 2], label=result.model_name)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("vertical speed, v_L[up] [m/s]")
-    ax.grid(True, alpha=0.3)
+    ax.set_ylabel(state_label("vertical speed", "v_L", "up"))
+    _finish(ax)
     return lines
 
 
 def plot_track(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """East and north offset from the pad [cm] against time (paper Fig. 10, x-y-t)."""
+    """East and north offset of the mass centre from the pad, r_L [cm], against time.
+
+    The x-y-t track of paper Fig. 10 drawn as two time histories; the beam-plane view
+    is :func:`lightcraft_opt.plots.track.plot_track_xyt`.
+    """
     ax = _axes(ax)
     r = result.state("r_L")
     lines = ax.plot(result.t, 100 * r[:, 0], label="east") + ax.plot(
         result.t, 100 * r[:, 1], label="north"
     )
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("offset from pad, r_L [cm]")
+    ax.set_ylabel(state_label("offset from pad", "r_L", unit="cm"))
     ax.legend(loc="best")
-    ax.grid(True, alpha=0.3)
+    _finish(ax)
+    return lines
+
+
+def plot_tilt(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
+    """Tilt, the angle between b1 and L up [deg], against time [s]."""
+    ax = _axes(ax)
+    lines = ax.plot(result.t, np.degrees(result.tilt), color="tab:purple", label="tilt")
+    ax.set_ylabel("tilt, b1 from L up [deg]")
+    _finish(ax)
+    return lines
+
+
+def plot_coning(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
+    """Coning (nutation) angle between b1 and the angular momentum H [deg], against time."""
+    ax = _axes(ax)
+    lines = ax.plot(result.t, np.degrees(result.coning), color="tab:orange", label="coning")
+    ax.set_ylabel("coning (nutation), b1 from H [deg]")
+    _finish(ax)
     return lines
 
 
 def plot_attitude(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """Tilt of b1 from vertical and coning (nutation) angle [deg] against time."""
+    """Tilt of b1 from vertical and coning (nutation) angle [deg] on one axes."""
     ax = _axes(ax)
     lines = ax.plot(result.t, np.degrees(result.tilt), label="tilt") + ax.plot(
         result.t, np.degrees(result.coning), label="coning (b1 to H)"
     )
-    ax.set_xlabel("time [s]")
     ax.set_ylabel("angle [deg]")
     ax.legend(loc="best")
-    ax.grid(True, alpha=0.3)
+    _finish(ax)
     return lines
 
 
-def flight_overview(result: SimulationResult) -> Figure:
-    """A 2x2 figure: altitude, vertical speed, track, attitude."""
-    fig = Figure(figsize=(11, 7), layout="constrained")
-    axs = fig.subplots(2, 2)
-    plot_altitude(result, ax=axs[0, 0])
-    plot_vertical_speed(result, ax=axs[0, 1])
-    plot_track(result, ax=axs[1, 0])
-    plot_attitude(result, ax=axs[1, 1])
-    fig.suptitle(f"{result.model_name}: {result.status.value}, apogee {result.apogee:.2f} m")
-    return fig
+def plot_pulse_times(
+    result: SimulationResult, *, ax: Axes | None = None, height: float = 0.035
+) -> list[Any]:
+    """A rug of the laser pulse instants along the bottom of ``ax``.
+
+    Ticks ``height`` (a fraction of the axes) tall: grey for pulses fired, red for pulses
+    the laser dropped (zero energy). Nothing is drawn for a result without a pulse record.
+    """
+    ax = _axes(ax)
+    rec = result.pulses
+    if rec is None or len(rec.t) == 0:
+        return []
+    dropped = rec.u[:, PULSE_INPUT.slot("energy").start] <= 0.0
+    where = ax.get_xaxis_transform()  # x in data, y in axes fraction
+    artists: list[Any] = [
+        ax.vlines(
+            rec.t[~dropped],
+            0.0,
+            height,
+            transform=where,
+            color="0.35",
+            lw=0.7,
+            label=f"laser pulses ({int(np.sum(~dropped))})",
+        )
+    ]
+    if np.any(dropped):
+        artists.append(
+            ax.vlines(
+                rec.t[dropped],
+                0.0,
+                2 * height,
+                transform=where,
+                color="tab:red",
+                lw=1.0,
+                label=f"dropped pulses ({int(np.sum(dropped))})",
+            )
+        )
+    return artists
+
+
+def mark_apogee(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
+    """Mark and label the highest point of the altitude curve.
+
+    When the highest point is the last sample and the craft still climbs there, the
+    label says so: the simulation ended before the apogee.
+    """
+    ax = _axes(ax)
+    z = result.state("r_L")[:, 2]
+    i = int(np.argmax(z))
+    t_top, z_top = float(result.t[i]), float(z[i])
+    climbing = i == len(z) - 1 and float(result.state("v_L")[i, 2]) > 0.0
+    what = "highest point (still climbing)" if climbing else "apogee"
+    marker = ax.plot(t_top, z_top, "v", color="tab:red", ms=7, zorder=5)
+    right_half = t_top > result.t[0] + 0.5 * (result.t[-1] - result.t[0])
+    text = ax.annotate(
+        f"{what}\n{z_top:.2f} m at {t_top:.2f} s",
+        (t_top, z_top),
+        xytext=(-8 if right_half else 8, 6),
+        textcoords="offset points",
+        ha="right" if right_half else "left",
+        va="bottom",
+        fontsize=9,
+        color="tab:red",
+    )
+    ax.margins(y=0.2)  # head room for the label
+    return [*marker, text]

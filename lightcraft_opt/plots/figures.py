@@ -1,0 +1,152 @@
+"""Whole figures of one flight, one per file the CLI writes (paper Figs. 7-10).
+
+Each builder takes a result and returns a :class:`matplotlib.figure.Figure` that is not
+registered with pyplot (nothing to close, nothing shown); the caller saves it, e.g. at
+:data:`PLOT_DPI`. Positions are in the L frame of docs/frames.md (x east, y north, z up,
+origin at the pad).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+from lightcraft_opt.plots.labels import auto_length_unit
+from lightcraft_opt.plots.track import (
+    beam_axis_L,
+    plot_pulse_offsets,
+    plot_track_xy,
+    plot_track_xyt,
+)
+from lightcraft_opt.plots.trajectory import (
+    mark_apogee,
+    plot_altitude,
+    plot_attitude,
+    plot_coning,
+    plot_pulse_times,
+    plot_tilt,
+    plot_track,
+    plot_vertical_speed,
+)
+from lightcraft_opt.results import SimulationResult
+
+__all__ = [
+    "PLOT_DPI",
+    "altitude_figure",
+    "attitude_figure",
+    "flight_figures",
+    "flight_overview",
+    "track_figure",
+]
+
+#: Resolution the CLI saves the figures at [dots per inch].
+PLOT_DPI = 110
+
+
+def _title(result: SimulationResult) -> str:
+    return (
+        f"{result.model_name}: {result.status.value}, "
+        f"{result.air_time:.2f} s simulated, apogee {result.apogee:.2f} m"
+    )
+
+
+def altitude_figure(result: SimulationResult) -> Figure:
+    """Altitude above the pad [m] over vertical speed [m/s], sharing time [s].
+
+    Paper Figs. 7-9. The highest point is marked, and a rug along the bottom of each
+    axes shows the laser pulse instants (dropped pulses in red).
+    """
+    fig = Figure(figsize=(8.5, 7.0), layout="constrained")
+    ax_z, ax_v = fig.subplots(2, 1, sharex=True)
+    plot_altitude(result, ax=ax_z)
+    mark_apogee(result, ax=ax_z)
+    plot_pulse_times(result, ax=ax_z)
+    plot_vertical_speed(result, ax=ax_v)
+    ax_v.axhline(0.0, color="0.5", lw=0.8, zorder=1)
+    plot_pulse_times(result, ax=ax_v)
+    ax_z.label_outer()
+    ax_z.legend(loc="upper left", fontsize=9)
+    fig.suptitle(_title(result))
+    return fig
+
+
+def attitude_figure(result: SimulationResult) -> Figure:
+    """Tilt of b1 from L up [deg] over the coning (nutation) angle b1 to H [deg], sharing time.
+
+    A rug along the bottom of each axes shows the laser pulse instants.
+    """
+    fig = Figure(figsize=(8.5, 6.5), layout="constrained")
+    ax_tilt, ax_cone = fig.subplots(2, 1, sharex=True)
+    plot_tilt(result, ax=ax_tilt)
+    plot_coning(result, ax=ax_cone)
+    for ax in (ax_tilt, ax_cone):
+        plot_pulse_times(result, ax=ax)
+        ax.set_ylim(bottom=0.0)  # both angles are non-negative
+    ax_tilt.label_outer()
+    ax_tilt.legend(loc="upper left", fontsize=9)
+    fig.suptitle(_title(result))
+    return fig
+
+
+def track_figure(
+    result: SimulationResult,
+    *,
+    capture_radius: float | None = None,
+    length_unit: str | None = None,
+) -> Figure:
+    """Beam-plane track: x-y-t in 3-D (paper Fig. 10) beside the x-y view from above.
+
+    Parameters
+    ----------
+    result : the flight; the beam axis comes from its pulse record (pointing_L, L frame).
+    capture_radius : optic capture radius [m] (``model.craft.engine.capture_radius``),
+        drawn around the beam axis for scale; None draws no circle.
+    length_unit : "m", "cm" or "mm" for east/north; None picks cm for a track within 2 m
+        of the pad and m beyond.
+    """
+    _, pointing = beam_axis_L(result)
+    xy = np.vstack([result.state("r_L")[:, :2], pointing])
+    extent = float(np.max(np.abs(xy))) + (capture_radius or 0.0)
+    unit = length_unit or auto_length_unit(extent)
+    # wspace: room for the 3-D time label, which constrained layout does not see
+    fig = Figure(figsize=(14.0, 6.2), layout=ConstrainedLayoutEngine(wspace=0.08))
+    grid = fig.add_gridspec(1, 2, width_ratios=(1.1, 1.0))
+    ax_3d = fig.add_subplot(grid[0, 0], projection="3d")
+    ax_xy = fig.add_subplot(grid[0, 1])
+    plot_track_xyt(result, ax=ax_3d, capture_radius=capture_radius, length_unit=unit)
+    ax_3d.legend(loc="upper left", fontsize=9)
+    ax_3d.set_title("x-y-t track")
+    plot_track_xy(result, ax=ax_xy, capture_radius=capture_radius, length_unit=unit)
+    dots = plot_pulse_offsets(result, ax=ax_xy, length_unit=unit)
+    if dots:
+        fig.colorbar(dots[0], ax=ax_xy, shrink=0.85, label="captured / pulse energy [-]")
+    ax_xy.legend(loc="best", fontsize=9)
+    ax_xy.set_title("beam plane, seen from above")
+    fig.suptitle(_title(result))
+    return fig
+
+
+def flight_overview(result: SimulationResult) -> Figure:
+    """A 2x2 figure: altitude, vertical speed, track, attitude."""
+    fig = Figure(figsize=(11, 7), layout="constrained")
+    axs = fig.subplots(2, 2)
+    plot_altitude(result, ax=axs[0, 0])
+    plot_vertical_speed(result, ax=axs[0, 1])
+    plot_track(result, ax=axs[1, 0])
+    plot_attitude(result, ax=axs[1, 1])
+    fig.suptitle(f"{result.model_name}: {result.status.value}, apogee {result.apogee:.2f} m")
+    return fig
+
+
+def flight_figures(
+    result: SimulationResult, *, capture_radius: float | None = None
+) -> dict[str, Figure]:
+    """Every figure of a flight by file name: flight.png (the overview), altitude.png,
+    track.png and attitude.png. ``capture_radius`` [m] as in :func:`track_figure`."""
+    return {
+        "flight.png": flight_overview(result),
+        "altitude.png": altitude_figure(result),
+        "track.png": track_figure(result, capture_radius=capture_radius),
+        "attitude.png": attitude_figure(result),
+    }
