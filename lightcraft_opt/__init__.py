@@ -5,7 +5,10 @@ Frames and units: docs/frames.md. Everything inside is SI.
 
 from lightcraft_opt.errors import LightcraftError, ModelFileError, OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
+from lightcraft_opt.model_files import load_model
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
+from lightcraft_opt.results import SimulationResult, SimulationStatus
+from lightcraft_opt.simulate import simulate
 
 __all__ = [
     "PARAMETERS",
@@ -19,10 +22,14 @@ __all__ = [
     "ModelFileError",
     "OptionError",
     "ParameterError",
+    "SimulationResult",
+    "SimulationStatus",
     "Site",
     "Wind",
     "initial_state",
+    "load_model",
     "parameter_values",
+    "simulate",
 ]
 
 __version__ = "0.1.0"
