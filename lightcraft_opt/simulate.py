@@ -3,7 +3,7 @@
 ``u = inputs(k, t, x); x = Φ(x, u, p, t)``: the laser pulse at t_k, then the coast
 to the next pulse. The flight ends when the duration is reached, the craft lands
 (mass centre back below the pad) or leaves the beam (the optic captures under 1 %
-of the launch energy for three pulses in a row while the laser fires).
+of the pulse's energy for three fired pulses in a row; dropped pulses do not count).
 """
 
 from __future__ import annotations
@@ -118,7 +118,6 @@ def simulate(
     times, states = [0.0], [xk]
     pulse_t, pulse_u, pulse_e = [], [], []
     status, message = SimulationStatus.DURATION_REACHED, ""
-    e_launch: float | None = None
     weak = 0
     for k in range(n_pulses):
         t = k * phi.period
@@ -150,16 +149,14 @@ def simulate(
         times.extend(tb[keep])
         states.extend(X[keep])
         xk = X[-1]
-        if e_launch is None and u[i_energy] > 0:
-            e_launch = float(eng[0])  # first pulse actually fired (not dropped)
-        weak = (
-            weak + 1
-            if e_launch is not None and u[i_energy] > 0 and eng[0] < LEFT_BEAM_FRACTION * e_launch
-            else 0
-        )
+        if u[i_energy] > 0:  # a dropped pulse neither counts nor resets the count
+            weak = weak + 1 if eng[0] < LEFT_BEAM_FRACTION * u[i_energy] else 0
         if weak >= LEFT_BEAM_PULSES:
             status = SimulationStatus.LEFT_BEAM
-            message = f"optic captured < {LEFT_BEAM_FRACTION:.0%} of the launch energy"
+            message = (
+                f"optic captured < {LEFT_BEAM_FRACTION:.0%} of the pulse energy for "
+                f"{LEFT_BEAM_PULSES} fired pulses"
+            )
             break
     record = PulseRecord(
         t=np.asarray(pulse_t),
