@@ -138,11 +138,23 @@ def split_coast(
         t = t0 + k * h
         if order == 2:
             x = strang(t, x, h)
-        else:  # Yoshida's fourth-order composition of three Strang steps
-            for a, b in ((0.0, _Y1), (_Y1, _Y0), (_Y1 + _Y0, _Y1)):
-                x = strang(t + a * h, x, b * h)
+        else:
+            x = _yoshida(slow, p, t, x, h)
         out.append(x)
     return out
+
+
+def _yoshida(slow: Rhs, p: ca.SX, t: ca.SX, x: ca.SX, h: ca.SX) -> ca.SX:
+    """Yoshida's fourth-order composition of three Strang steps (c1, c0, c1) h, with the two
+    slow half-steps that meet between Strang steps merged into one RK4 step of their summed
+    length (the exact slow flows compose; RK4's local error stays O(h^5)): four slow RK4
+    steps a substep instead of six."""
+    tau = t
+    for length, fast in ((_Y1 / 2, _Y1), ((_Y1 + _Y0) / 2, _Y0), ((_Y0 + _Y1) / 2, _Y1)):
+        x = rk4_coast(slow, tau, x, length * h, 1)[-1]
+        tau = tau + length * h
+        x = exact_spin_flow(x, p, fast * h)
+    return rk4_coast(slow, tau, x, _Y1 / 2 * h, 1)[-1]
 
 
 _Y1 = 1.0 / (2.0 - 2.0 ** (1.0 / 3.0))
