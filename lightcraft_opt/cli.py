@@ -36,7 +36,12 @@ def _simulate(args: argparse.Namespace) -> int:
     else:
         print(f"simulating {model.name} for up to {args.duration} s under the laser ...")
         result = simulate(
-            model, args.duration, x0=x0, dropout_rate=args.dropout_rate, seed=args.seed
+            model,
+            args.duration,
+            x0=x0,
+            dropout_rate=args.dropout_rate,
+            seed=args.seed,
+            compiled=args.compiled,
         )
         write_pulses_csv(result, out / "pulses.csv")
     write_trajectory_csv(result, out / "trajectory.csv")
@@ -88,6 +93,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="probability that the laser drops a pulse (default 0)",
     )
     sim.add_argument("--seed", type=int, default=None, help="seed of the pulse drop-outs")
+    sim.add_argument(
+        "--compiled",
+        action="store_true",
+        help="compile the pulse map to C with gcc first, cached in $LIGHTCRAFT_CACHE or "
+        "~/.cache/lightcraft_opt (the first run of a model structure takes minutes)",
+    )
     sim.add_argument(
         "--coast-only",
         action="store_true",

@@ -4,14 +4,18 @@
 to the next pulse. The flight ends when the duration is reached, the craft lands
 (mass centre back below the pad) or leaves the beam (the optic captures under 1 %
 of the pulse's energy for three fired pulses in a row; dropped pulses do not count).
+Open-loop inputs are stepped a second of pulses per call (Φ's mapaccum), then checked
+pulse by pulse exactly as a policy's flight is.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
+import casadi as ca
 import numpy as np
 
+from lightcraft_opt.compiled import compile_pulse_map
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.layout import (
@@ -34,6 +38,8 @@ InputPolicy = Callable[[int, float, np.ndarray], Sequence[float] | np.ndarray]
 
 LEFT_BEAM_FRACTION = 0.01
 LEFT_BEAM_PULSES = 3
+CHUNK_SECONDS = 1.0  # open-loop inputs: pulses per mapaccum call, in seconds of flight
+_Z_UP = STATE.slot("r_L").start + 2  # altitude above the pad in x
 
 
 def nominal_inputs(model: Model) -> np.ndarray:
@@ -50,14 +56,12 @@ def nominal_inputs(model: Model) -> np.ndarray:
     return lay.pack(values)
 
 
-def _policy(
-    model: Model, inputs: InputPolicy | np.ndarray | Sequence[float] | None, size: int
-) -> InputPolicy:
+def _input_rows(
+    model: Model, inputs: np.ndarray | Sequence[float] | None, size: int, n: int
+) -> np.ndarray:
+    """(n, size) map inputs of an open-loop flight, one row per pulse."""
     if inputs is None:
-        u0 = nominal_inputs(model)
-        return lambda k, t, x: u0
-    if callable(inputs):
-        return inputs
+        return np.tile(nominal_inputs(model), (n, 1))
     arr = np.asarray(inputs, dtype=float)
     if arr.ndim == 1:
         arr = arr[None, :]
@@ -65,7 +69,7 @@ def _policy(
         raise ParameterError("inputs", f"needs rows of {size} map inputs, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ParameterError("inputs", "must be finite (got NaN or inf)")
-    return lambda k, t, x: arr[min(k, len(arr) - 1)]
+    return arr[np.minimum(np.arange(n), len(arr) - 1)]
 
 
 def simulate(
@@ -79,6 +83,7 @@ def simulate(
     options: PulseMapOptions | None = None,
     dropout_rate: float = 0.0,
     seed: int | None = None,
+    compiled: bool = False,
 ) -> SimulationResult:
     """Simulate a flight of ``model`` under the laser for ``duration`` seconds.
 
@@ -88,12 +93,18 @@ def simulate(
     duration : s, > 0.
     inputs : per-pulse map inputs (layout :func:`~lightcraft_opt.layout.map_input_layout`):
         None for :func:`nominal_inputs`, one row held for every pulse, a (k, size) array
-        (the last row held after its end), or a policy ``(k, t, x) -> u``.
+        (the last row held after its end), or a policy ``(k, t, x) -> u``. Open-loop
+        inputs (not a policy) are stepped about a second of pulses per call of
+        ``pulse_map.dense.mapaccum``; a policy is called pulse by pulse. Both give the
+        same flight, to the last bit.
     x0 : state at the first pulse (default: on the pad, upright, spinning).
     p : parameter vector (default from ``model``).
     pulse_map : a prebuilt Φ (saves building it again); else built with ``options``.
     dropout_rate : probability that the laser drops a pulse (its energy set to 0).
-    seed : of the drop-out random generator.
+    seed : of the drop-out random generator (one draw per pulse, in order).
+    compiled : compile Φ to C first (:func:`~lightcraft_opt.compiled.compile_pulse_map`,
+        cached on disk; falls back to the interpreted Φ with a warning). For many runs,
+        compile once and pass ``pulse_map`` instead.
 
     Returns
     -------
@@ -107,60 +118,127 @@ def simulate(
     craft = model.craft
     lay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
     phi = pulse_map or build_pulse_map(model, options)
+    if compiled:
+        phi = compile_pulse_map(phi)
     xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     pk = checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)
-    policy = _policy(model, inputs, lay.size)
-    rng = np.random.default_rng(seed)
-    i_energy = lay.index("energy")
-    iz = STATE.slot("r_L").start + 2
-
     n_pulses = int(np.ceil(duration / phi.period - 1e-9))
-    times, states = [0.0], [xk]
-    pulse_t, pulse_u, pulse_e = [], [], []
-    status, message = SimulationStatus.DURATION_REACHED, ""
-    weak = 0
-    for k in range(n_pulses):
-        t = k * phi.period
-        u = checked_vector(f"inputs[{k}]", policy(k, t, xk), lay.size).copy()
-        if dropout_rate and rng.random() < dropout_rate:
-            u[i_energy] = 0.0
-        X, eng = (np.asarray(v) for v in phi.dense(xk, u, pk, t))
-        eng = eng.ravel()
+    rng = np.random.default_rng(seed)
+    dropped = rng.random(n_pulses) < dropout_rate if dropout_rate else np.zeros(n_pulses, bool)
+    i_energy = lay.slot("energy").start
+    flight = _Flight(xk, phi.period, duration, i_energy)
+    if callable(inputs):
+        for k in range(n_pulses):
+            t = k * phi.period
+            u = checked_vector(f"inputs[{k}]", inputs(k, t, xk), lay.size).copy()
+            if dropped[k]:
+                u[i_energy] = 0.0
+            X, eng = (np.asarray(v) for v in phi.dense(xk, u, pk, t))
+            if flight.ended_by(t, u, X, eng.ravel()):
+                break
+            xk = X[:, -1]
+    else:
+        U = _input_rows(model, inputs, lay.size, n_pulses)
+        U[dropped, i_energy] = 0.0
+        _step_in_chunks(phi, U, xk, pk, flight, max(1, round(CHUNK_SECONDS / phi.period)))
+    record = PulseRecord(
+        t=np.asarray(flight.pulse_t),
+        u=np.asarray(flight.pulse_u).reshape(-1, lay.size),
+        engine=np.asarray(flight.pulse_e).reshape(len(flight.pulse_t), -1),
+    )
+    states = np.vstack(flight.states)
+    return flight_result(
+        model, np.asarray(flight.times), states, pk, flight.status, flight.message, record
+    )
+
+
+def _step_in_chunks(
+    phi: PulseMap, U: np.ndarray, x0: np.ndarray, p: np.ndarray, flight: _Flight, chunk: int
+) -> None:
+    """Step Φ over the rows of ``U`` (n, map-input size), ``chunk`` pulses per call of its
+    mapaccum, checking each pulse in order and stopping at the first that ends the flight
+    (at most one chunk is computed beyond it)."""
+    maps: dict[int, ca.Function] = {}
+    xk = x0
+    for k0 in range(0, len(U), chunk):
+        m = min(chunk, len(U) - k0)
+        if m not in maps:
+            maps[m] = _chunk_map(phi, m)
+        ts = np.arange(k0, k0 + m) * phi.period  # the same floats as k * period
+        x_next, X, E = (np.asarray(v) for v in maps[m](xk, U[k0 : k0 + m].T, p, ts[None, :]))
+        d = X.shape[1] // m
+        for j in range(m):
+            if flight.ended_by(float(ts[j]), U[k0 + j], X[:, j * d : (j + 1) * d], E[:, j]):
+                return
+        xk = x_next[:, -1]
+
+
+def _chunk_map(phi: PulseMap, m: int) -> ca.Function:
+    """``(x, U, p, T) -> (x_next per pulse, X, engine)``: m pulses of ``phi.dense`` in one
+    call, each starting from the last state of the one before (no new physics: the dense
+    Function called m times and its last column carried)."""
+    dense = phi.dense
+    x, u, p, t = (ca.MX.sym(dense.name_in(i), dense.sparsity_in(i)) for i in range(4))
+    X, engine = dense(x, u, p, t)
+    one = ca.Function(
+        "pulse_map_carry",
+        [x, u, p, t],
+        [X[:, -1], X, engine],
+        ["x", "u", "p", "t"],
+        ["x_next", "X", "engine"],
+    )
+    return one.mapaccum(f"pulse_map_chunk{m}", m)
+
+
+class _Flight:
+    """The record of a flight as its pulses come in, and the checks that end it: landing
+    (interpolated to the pad), leaving the beam, a non-finite state."""
+
+    def __init__(self, x0: np.ndarray, period: float, duration: float, i_energy: int) -> None:
+        self.period, self.duration, self.i_energy = period, duration, i_energy
+        self.times: list[float] = [0.0]
+        self.states: list[np.ndarray] = [x0]
+        self.pulse_t: list[float] = []
+        self.pulse_u: list[np.ndarray] = []
+        self.pulse_e: list[np.ndarray] = []
+        self.status, self.message = SimulationStatus.DURATION_REACHED, ""
+        self.weak = 0
+
+    def ended_by(self, t: float, u: np.ndarray, X: np.ndarray, eng: np.ndarray) -> bool:
+        """Record the pulse fired at ``t`` [s] with map input ``u``: ``X`` (STATE.size,
+        dense) states after it, ``eng`` (11,) engine outputs. True when the flight ends."""
+        iz = _Z_UP
         if not (np.all(np.isfinite(X)) and np.all(np.isfinite(eng))):
-            status, message = SimulationStatus.FAILED, f"non-finite state after pulse {k}"
-            break
-        pulse_t.append(t)
-        pulse_u.append(u)
-        pulse_e.append(eng)
+            k = len(self.pulse_t)
+            self.status, self.message = SimulationStatus.FAILED, f"non-finite state after pulse {k}"
+            return True
+        self.pulse_t.append(t)
+        self.pulse_u.append(u)
+        self.pulse_e.append(eng)
         X = X.T
-        tb = t + phi.period * np.arange(1, len(X) + 1) / len(X)
-        keep = tb <= duration + 1e-12
+        tb = t + self.period * np.arange(1, len(X) + 1) / len(X)
+        keep = tb <= self.duration + 1e-12
         below = X[:, iz] < 0.0
         if np.any(below & keep):
             i = int(np.argmax(below))
-            t_prev, x_prev = (times[-1], states[-1]) if i == 0 else (tb[i - 1], X[i - 1])
+            t_prev, x_prev = (self.times[-1], self.states[-1]) if i == 0 else (tb[i - 1], X[i - 1])
             frac = x_prev[iz] / (x_prev[iz] - X[i, iz])
-            times.extend(tb[:i])
-            states.extend(X[:i])
-            times.append(t_prev + frac * (tb[i] - t_prev))
-            states.append(x_prev + frac * (X[i] - x_prev))
-            status = SimulationStatus.LANDED
-            break
-        times.extend(tb[keep])
-        states.extend(X[keep])
-        xk = X[-1]
-        if u[i_energy] > 0:  # a dropped pulse neither counts nor resets the count
-            weak = weak + 1 if eng[0] < LEFT_BEAM_FRACTION * u[i_energy] else 0
-        if weak >= LEFT_BEAM_PULSES:
-            status = SimulationStatus.LEFT_BEAM
-            message = (
+            self.times.extend(tb[:i])
+            self.states.extend(X[:i])
+            self.times.append(t_prev + frac * (tb[i] - t_prev))
+            self.states.append(x_prev + frac * (X[i] - x_prev))
+            self.status = SimulationStatus.LANDED
+            return True
+        self.times.extend(tb[keep])
+        self.states.extend(X[keep])
+        energy = u[self.i_energy]
+        if energy > 0:  # a dropped pulse neither counts nor resets the count
+            self.weak = self.weak + 1 if eng[0] < LEFT_BEAM_FRACTION * energy else 0
+        if self.weak >= LEFT_BEAM_PULSES:
+            self.status = SimulationStatus.LEFT_BEAM
+            self.message = (
                 f"optic captured < {LEFT_BEAM_FRACTION:.0%} of the pulse energy for "
                 f"{LEFT_BEAM_PULSES} fired pulses"
             )
-            break
-    record = PulseRecord(
-        t=np.asarray(pulse_t),
-        u=np.asarray(pulse_u).reshape(-1, lay.size),
-        engine=np.asarray(pulse_e).reshape(len(pulse_t), -1),
-    )
-    return flight_result(model, np.asarray(times), np.vstack(states), pk, status, message, record)
+            return True
+        return False

@@ -136,10 +136,7 @@ def split_coast(
     x, out = x0, []
     for k in range(steps):
         t = t0 + k * h
-        if order == 2:
-            x = strang(t, x, h)
-        else:
-            x = _yoshida(slow, p, t, x, h)
+        x = strang(t, x, h) if order == 2 else _yoshida(slow, p, t, x, h)
         out.append(x)
     return out
 

@@ -1,0 +1,255 @@
+"""The fast paths of simulate against the interpreted pulse-by-pulse reference.
+
+References: the interpreted Φ (casadi's SX virtual machine) for the C-compiled Φ, which
+evaluates the same expression graph in IEEE double and so agrees to round-off (1e-12
+relative, a thousand times the unit round-off for a few hundred thousand operations);
+the per-pulse policy loop for the chunked mapaccum loop, which calls the same Function on
+the same numbers and so agrees to the last bit.
+
+C compilation uses a small Φ (4 substeps, a 2 x 8 optic quadrature): gcc takes about
+10 s for it, once per test session, in a temporary cache.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import table1_flight5
+
+from lightcraft_opt import compiled
+from lightcraft_opt.compiled import (
+    CompilationWarning,
+    compile_function,
+    compile_pulse_map,
+    library_path,
+)
+from lightcraft_opt.layout import initial_state, map_input_layout, parameter_values
+from lightcraft_opt.model_files import load_model
+from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.params import Engine
+from lightcraft_opt.results import SimulationResult, SimulationStatus
+from lightcraft_opt.simulate import nominal_inputs, simulate
+from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+SMALL = PulseMapOptions(substeps=4, dense=2)
+COARSE_OPTIC = Engine(quadrature_radial=2, quadrature_azimuthal=8)
+ROUND_OFF = 1e-12
+
+
+def _small_model(**engine_changes: object):
+    return table1_flight5(engine=replace(COARSE_OPTIC, **engine_changes))
+
+
+@pytest.fixture(scope="module")
+def cache(tmp_path_factory):
+    """A cache folder of its own for this module (LIGHTCRAFT_CACHE)."""
+    folder = tmp_path_factory.mktemp("lightcraft_cache")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("LIGHTCRAFT_CACHE", str(folder))
+        yield folder
+
+
+@pytest.fixture(scope="module")
+def small(cache):
+    """(model, interpreted Φ, compiled Φ) of the small map; the compile happens here."""
+    model = _small_model()
+    phi = build_pulse_map(model, SMALL)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompilationWarning)  # a broken gcc fails loudly here
+        fast = compile_pulse_map(phi)
+    return model, phi, fast
+
+
+def _close(a, b, rtol=ROUND_OFF):
+    a, b = np.asarray(a), np.asarray(b)
+    assert a.shape == b.shape
+    assert np.all(np.abs(a - b) <= rtol * np.maximum(1.0, np.abs(a))), np.max(np.abs(a - b))
+
+
+# --------------------------------------------------------------------------- compiled Φ
+def test_compiled_pulse_map_equals_interpreted_on_random_inputs(small):
+    model, phi, fast = small
+    assert fast.dense is not phi.dense and fast.period == phi.period
+    for f, g in ((phi.dense, fast.dense), (phi.step, fast.step)):
+        assert (g.name(), g.name_in(), g.name_out()) == (f.name(), f.name_in(), f.name_out())
+    rng = np.random.default_rng(1)
+    p = parameter_values(model)
+    u0 = nominal_inputs(model)
+    for _ in range(5):
+        x = initial_state(
+            model,
+            r_L=(*rng.uniform(-0.03, 0.03, 2), rng.uniform(0.0, 30.0)),
+            v_L=rng.uniform(-3.0, 10.0, 3),
+            w_B=rng.uniform(-2.0, 2.0, 3),
+            tilt=rng.uniform(0.0, 0.5),
+        )
+        u = u0 * rng.uniform(0.5, 1.0, u0.size)
+        t = rng.uniform(0.0, 5.0)
+        for f, g in ((phi.dense, fast.dense), (phi.step, fast.step)):
+            for a, b in zip(f(x, u, p, t), g(x, u, p, t), strict=True):
+                _close(a, b)
+
+
+def test_second_compile_is_a_cache_hit(small, monkeypatch):
+    _, phi, _ = small
+    path = library_path(phi.dense)
+    assert path.exists() and path.parent == Path(os.environ["LIGHTCRAFT_CACHE"])
+    before = path.stat().st_mtime_ns
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("compiled again instead of loading the cached library")
+
+    monkeypatch.setattr(compiled, "_build", no_build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompilationWarning)
+        again = compile_pulse_map(phi)
+    assert again is not phi
+    assert path.stat().st_mtime_ns == before
+    assert not list(path.parent.glob(".pulse_map_dense-*"))  # no temporary left behind
+
+
+def test_a_new_process_finds_the_same_library(small):
+    """The key is a pure function of the model's structure: no addresses, no ordering."""
+    code = (
+        "import sys; sys.path.insert(0, sys.argv[1]);"
+        "from test_compiled import SMALL, _small_model;"
+        "from lightcraft_opt.compiled import library_path;"
+        "from lightcraft_opt.symbolic.pulse_map import build_pulse_map;"
+        "print(library_path(build_pulse_map(_small_model(), SMALL).dense))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(Path(__file__).parent)],
+        capture_output=True,
+        text=True,
+        check=True,
+        env=os.environ.copy(),
+    )
+    assert Path(out.stdout.strip()) == library_path(small[1].dense)
+
+
+def test_cache_key_follows_structure_not_parameter_values(small):
+    """Numbers read through p (mass, spin, blast angle, optic size) share one library;
+    structure (the optic quadrature, the substeps) gets its own."""
+    model, phi, _ = small
+    key = library_path(phi.dense)
+    for same in (
+        table1_flight5(engine=COARSE_OPTIC, mass=0.04, spin=500.0),
+        _small_model(blast_angle=0.3, capture_radius=0.05),
+    ):
+        assert library_path(build_pulse_map(same, SMALL).dense) == key
+    for other, opts in (
+        (_small_model(quadrature_azimuthal=12), SMALL),
+        (model, PulseMapOptions(substeps=8, dense=2)),
+        (model, replace(SMALL, dense=4)),
+    ):
+        assert library_path(build_pulse_map(other, opts).dense) != key
+    assert library_path(phi.dense, flags=("-O3",)) != key
+
+
+def test_missing_compiler_falls_back_to_the_interpreter_with_a_warning(small, monkeypatch):
+    _, phi, _ = small
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    with pytest.warns(CompilationWarning, match="nonexistent"):
+        assert compile_pulse_map(phi) is phi
+    with pytest.warns(CompilationWarning, match="no-such-cc"):
+        assert compile_function(phi.step, compiler="no-such-cc") is phi.step
+
+
+def test_failing_compile_falls_back_and_leaves_no_library(small):
+    _, phi, _ = small
+    flags = ("-O2", "--no-such-flag-for-lightcraft")
+    with pytest.warns(CompilationWarning, match="no-such-flag"):
+        assert compile_pulse_map(phi, flags=flags) is phi
+    assert not library_path(phi.dense, flags=flags).exists()
+    assert not list(library_path(phi.dense).parent.glob(".pulse_map_dense-*"))
+
+
+def test_unwritable_cache_falls_back_with_a_warning(small, tmp_path, monkeypatch):
+    _, phi, _ = small
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("LIGHTCRAFT_CACHE", str(blocker / "cache"))
+    with pytest.warns(CompilationWarning, match="could not compile"):
+        assert compile_pulse_map(phi) is phi
+
+
+def test_simulate_compiled_flies_the_interpreted_flight(small):
+    model, phi, fast = small
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompilationWarning)
+        flag = simulate(model, 1.0, pulse_map=phi, compiled=True)  # cache hit
+    reference = simulate(model, 1.0, pulse_map=phi)
+    prebuilt = simulate(model, 1.0, pulse_map=fast)
+    for result in (flag, prebuilt):
+        assert result.status is reference.status
+        np.testing.assert_array_equal(result.t, reference.t)
+        _close(reference.x, result.x)
+        _close(reference.pulses.engine, result.pulses.engine)
+
+
+# --------------------------------------------------------------------------- mapaccum
+@pytest.fixture(scope="module")
+def flight5():
+    model = load_model(MODELS / "flight5.toml")
+    return model, build_pulse_map(model)
+
+
+def _assert_same_flight(a: SimulationResult, b: SimulationResult) -> None:
+    assert (a.status, a.message) == (b.status, b.message)
+    for name in ("t", "x"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    for name in ("t", "u", "engine"):
+        np.testing.assert_array_equal(getattr(a.pulses, name), getattr(b.pulses, name))
+
+
+@pytest.mark.parametrize(
+    ("case", "status", "pulses"),
+    [
+        ("nominal", SimulationStatus.DURATION_REACHED, 52),
+        ("laser_off_lands_in_second_chunk", SimulationStatus.LANDED, None),
+        ("tilted_leaves_beam_in_second_chunk", SimulationStatus.LEFT_BEAM, None),
+        ("ramped_energy_with_dropouts", SimulationStatus.DURATION_REACHED, 52),
+    ],
+)
+def test_mapaccum_chunks_fly_the_per_pulse_policy_flight(flight5, case, status, pulses):
+    """A 2 s Flight 5 flight from open-loop inputs (chunks of 26 pulses through
+    Φ.mapaccum) and from the same inputs as a policy (one call per pulse): identical,
+    including where a landing or leaving the beam cuts the flight inside a chunk."""
+    model, phi = flight5
+    u0 = nominal_inputs(model)
+    energy = map_input_layout(0, False).slot("energy").start
+    x0, dropout_rate, rows = initial_state(model), 0.0, u0[None, :]
+    if case == "laser_off_lands_in_second_chunk":
+        rows = np.where(np.arange(u0.size) == energy, 0.0, u0)[None, :]
+        x0 = initial_state(model, v_L=(0.0, 0.0, 8.0))  # back on the pad after 1.6 s
+    elif case == "tilted_leaves_beam_in_second_chunk":
+        x0 = initial_state(model, tilt=math.radians(10.0))
+    elif case == "ramped_energy_with_dropouts":
+        rows = np.tile(u0, (40, 1))
+        rows[:, energy] *= np.linspace(1.0, 0.7, 40)  # the last row held after pulse 40
+        dropout_rate = 0.3
+
+    def policy(k, t, x):
+        return rows[min(k, len(rows) - 1)]
+
+    common = dict(x0=x0, pulse_map=phi, dropout_rate=dropout_rate, seed=5)
+    chunked = simulate(model, 2.0, inputs=rows, **common)
+    per_pulse = simulate(model, 2.0, inputs=policy, **common)
+    _assert_same_flight(chunked, per_pulse)
+    assert chunked.status is status
+    n = len(chunked.pulses.t)
+    if pulses is None:
+        assert 26 < n < 52  # ended inside the second chunk
+    else:
+        assert n == pulses
+    if dropout_rate:
+        assert 0 < np.sum(chunked.pulses.u[:, energy] == 0.0) < n
