@@ -42,6 +42,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from lightcraft_opt import load_model
+from lightcraft_opt.compiled import compile_pulse_map
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, initial_state, parameter_values
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.params import Model
@@ -280,6 +281,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-match", action="store_true", help="skip the matched-accuracy ladder")
     ap.add_argument("--scheme", choices=[s.value for s in CoastScheme], default=None)
     ap.add_argument("--substeps", type=int, default=None, help="Φ coast substeps per pulse")
+    ap.add_argument(
+        "--compiled",
+        action="store_true",
+        help="time Φ compiled to C (lightcraft_opt.compiled; first compile takes minutes)",
+    )
     args = ap.parse_args(argv)
 
     model = load_model(args.model)
@@ -294,11 +300,16 @@ def main(argv: list[str] | None = None) -> None:
     pulse, u_coast = u[: PULSE_INPUT.size], u[PULSE_INPUT.size :]
 
     print(f"model {model.name} ({args.model}), duration {args.duration:g} s, nominal inputs")
-    print(f"Φ: scheme {options.scheme.value}, {options.substeps} substeps, dense {options.dense}")
+    print(
+        f"Φ: scheme {options.scheme.value}, {options.substeps} substeps, dense {options.dense}"
+        + (", compiled to C" if args.compiled else "")
+    )
 
     # ---------------------------------------------------------------- Φ
     start = time.perf_counter()
     phi = build_pulse_map(model, options)
+    if args.compiled:
+        phi = compile_pulse_map(phi)
     t_build = time.perf_counter() - start
     t_phi, res = best_time(
         lambda: simulate(model, args.duration, pulse_map=phi, x0=x0, p=p, inputs=u), args.repeats
