@@ -13,6 +13,7 @@ from lightcraft_opt.plots.figures import (
     flight_overview,
     track_figure,
 )
+from lightcraft_opt.plots.stability import plot_multipliers, plot_stability_map
 
 __all__ = [
     "PLOT_DPI",
@@ -20,5 +21,7 @@ __all__ = [
     "attitude_figure",
     "flight_figures",
     "flight_overview",
+    "plot_multipliers",
+    "plot_stability_map",
     "track_figure",
 ]
