@@ -1,0 +1,73 @@
+"""Linearisation of the pulse map Φ: pulse-to-pulse multipliers, controllability, LQR.
+
+One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/pulse_map.py) about an
+operating point (x_op, u_op) gives the discrete-time linear model
+
+    δ[k+1] = A δ[k] + B δu[k],   A = ∂Φ/∂x,  B = ∂Φ/∂u   (exact casadi AD),
+
+sampled at the pulse period T = 1 / pulse_rate, returned as a ``control.StateSpace``
+with ``dt = T`` and the layout's names. Its eigenvalues are the pulse-to-pulse
+multipliers (Floquet multipliers of the hybrid flow): |λ| > 1 grows by |λ| a pulse.
+
+The modules, in the order they build on each other:
+
+- :mod:`.operating_points`: points to linearise about (:func:`trim_hover`,
+  :func:`climb_point`), Φ's Jacobians (:func:`pulse_map_jacobian`) and the error state
+  of a point (:func:`error_state`);
+- :mod:`.state_space`: the linear model (:func:`linearize`) in :class:`Coordinates`
+  ``FULL`` or ``ERROR_STATE``, by default on :data:`REDUCED_STATES`;
+- :mod:`.modes`: multipliers and the kind of each mode (:func:`multipliers`,
+  :func:`beam_riding_modes`), and :func:`controllability`;
+- :mod:`.state_feedback`: discrete LQR (:func:`lqr`) and its feedback policy
+  (:func:`lqr_policy`);
+- :mod:`.stability_grid`: multipliers over spin rate × beam offset
+  (:func:`stability_map`);
+- :mod:`.signal_names`: the names of layout entries, shared by the above.
+
+Everything public is re-exported here: ``from lightcraft_opt.linearize import ...``.
+"""
+
+from lightcraft_opt.linearize.modes import (
+    Controllability,
+    ModeKind,
+    Multipliers,
+    beam_riding_modes,
+    controllability,
+    multipliers,
+)
+from lightcraft_opt.linearize.operating_points import (
+    OperatingPoint,
+    PointStatus,
+    PulseMapJacobian,
+    climb_point,
+    error_state,
+    pulse_map_jacobian,
+    trim_hover,
+)
+from lightcraft_opt.linearize.stability_grid import StabilityMap, stability_map
+from lightcraft_opt.linearize.state_feedback import LqrResult, lqr, lqr_policy
+from lightcraft_opt.linearize.state_space import REDUCED_STATES, Coordinates, linearize
+
+__all__ = [
+    "REDUCED_STATES",
+    "Controllability",
+    "Coordinates",
+    "LqrResult",
+    "ModeKind",
+    "Multipliers",
+    "OperatingPoint",
+    "PointStatus",
+    "PulseMapJacobian",
+    "StabilityMap",
+    "beam_riding_modes",
+    "climb_point",
+    "controllability",
+    "error_state",
+    "linearize",
+    "lqr",
+    "lqr_policy",
+    "multipliers",
+    "pulse_map_jacobian",
+    "stability_map",
+    "trim_hover",
+]

@@ -1,0 +1,126 @@
+"""Discrete LQR on a linear model of Φ and the state feedback it gives.
+
+:func:`lqr` designs the gain K (``control.dlqr``) on a model of :mod:`.state_space`;
+:func:`lqr_policy` turns it into the per-pulse input policy ``u = u_op - K (x ⊖ x_op)``
+for :func:`lightcraft_opt.simulate`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import control
+import numpy as np
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import map_input_layout
+from lightcraft_opt.linearize.modes import (
+    Multipliers,
+    _matrices,
+    controllability,
+    multipliers,
+)
+from lightcraft_opt.linearize.operating_points import OperatingPoint, error_state
+from lightcraft_opt.linearize.signal_names import _select
+from lightcraft_opt.params import Model
+
+
+@dataclass(frozen=True)
+class LqrResult:
+    """Discrete LQR about an operating point: δu = -K δ.
+
+    Attributes
+    ----------
+    K : (m, n) gain [input units per state unit].
+    S : (n, n) solution of the discrete Riccati equation.
+    closed_loop : multipliers of A - B K.
+    states, inputs : names of the columns and rows of K.
+    """
+
+    K: np.ndarray
+    S: np.ndarray
+    closed_loop: Multipliers
+    states: tuple[str, ...]
+    inputs: tuple[str, ...]
+
+
+def _weight(name: str, w: np.ndarray | Sequence[float], n: int, definite: bool) -> np.ndarray:
+    """(n, n) symmetric weight from a matrix or its diagonal; positive (semi)definite."""
+    W = np.asarray(w, dtype=float)
+    if W.ndim == 1:
+        W = np.diag(W)
+    if W.shape != (n, n) or not np.all(np.isfinite(W)):
+        raise ParameterError(name, f"must be a finite ({n}, {n}) matrix or {n} diagonal entries")
+    if not np.allclose(W, W.T, rtol=1e-12, atol=0.0):
+        raise ParameterError(name, "must be symmetric")
+    low = float(np.min(np.linalg.eigvalsh(W)))
+    if low < 0.0 or (definite and low <= 0.0):
+        kind = "definite" if definite else "semidefinite"
+        raise ParameterError(name, f"must be positive {kind}; smallest eigenvalue {low:.3g}")
+    return W
+
+
+def lqr(
+    sys: control.StateSpace,
+    Q: np.ndarray | Sequence[float],
+    R: np.ndarray | Sequence[float],
+) -> LqrResult:
+    """Discrete LQR (``control.dlqr``): minimise Σ δ'Qδ + δu'Rδu over pulses.
+
+    Parameters
+    ----------
+    Q : (n, n) state weight, or its n diagonal entries (per squared state unit),
+        symmetric positive semidefinite.
+    R : (m, m) input weight, or its m diagonal entries (per squared input unit),
+        symmetric positive definite.
+
+    Raises
+    ------
+    ParameterError naming the multipliers and states the inputs cannot reach when
+    (A, B) is not stabilisable (e.g. a neutral consumable or the gauge w_B[b1] kept in
+    the states), when a weight has the wrong shape or sign, or when control.dlqr fails.
+    """
+    A, B = _matrices(sys)
+    n, m = B.shape
+    Qm, Rm = _weight("Q", Q, n, definite=False), _weight("R", R, m, definite=True)
+    c = controllability(sys)
+    if not c.stabilisable:
+        lam = ", ".join(f"{v:.6g}" for v in c.modes if abs(v) >= 1.0)
+        raise ParameterError(
+            "sys",
+            f"(A, B) is not stabilisable: the multipliers {lam} lie on or outside the unit "
+            f"circle and no input reaches them (directions: {c.describe()}); keep fewer "
+            "states (linearize(states=...)) or add inputs",
+        )
+    try:
+        K, S, _ = control.dlqr(A, B, Qm, Rm)
+    except (ValueError, np.linalg.LinAlgError, control.ControlArgument) as err:
+        raise ParameterError("Q, R", f"control.dlqr failed: {err}") from err
+    closed = control.ss(A - B @ K, B, sys.C, sys.D, sys.dt, states=list(sys.state_labels))
+    return LqrResult(
+        np.asarray(K),
+        np.asarray(S),
+        multipliers(closed),
+        tuple(sys.state_labels),
+        tuple(sys.input_labels),
+    )
+
+
+def lqr_policy(
+    model: Model, point: OperatingPoint, gains: LqrResult
+) -> Callable[[int, float, np.ndarray], np.ndarray]:
+    """The state feedback ``u = u_op - K (x ⊖ x_op)`` as a per-pulse input policy
+    ``(k, t, x) -> u`` for :func:`lightcraft_opt.simulate` (the inputs left out of the
+    linear model stay at the point's values)."""
+    craft = model.craft
+    ulay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    iu = _select(ulay, gains.inputs, "gains.inputs")
+    states = gains.states
+
+    def policy(k: int, t: float, x: np.ndarray) -> np.ndarray:
+        u = point.u.copy()
+        u[iu] -= gains.K @ error_state(point, x, states)
+        return u
+
+    return policy

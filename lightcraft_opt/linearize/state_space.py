@@ -1,0 +1,120 @@
+"""The discrete-time linear model of the pulse map Φ about an operating point.
+
+One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/pulse_map.py) about an
+operating point (x_op, u_op) gives the discrete-time linear model
+
+    δ[k+1] = A δ[k] + B δu[k],   A = ∂Φ/∂x,  B = ∂Φ/∂u   (exact casadi AD),
+
+sampled at the pulse period T = 1 / pulse_rate, returned as a ``control.StateSpace``
+with ``dt = T`` and the layout's names.
+
+Coordinates (:class:`Coordinates`). ``FULL`` differentiates Φ on the 17 raw states
+(quaternion components included). ``ERROR_STATE`` (default) works on the minimal error
+state δ of :mod:`lightcraft_opt.symbolic.error_state`: x = x_op ⊕ δ, the attitude a
+small rotation theta_B of B; A = ∂(Φ(x_op ⊕ δ) ⊖ Φ(x_op))/∂δ at δ = 0, so A maps
+errors about x_op to errors about Φ(x_op). The default kept states
+(:data:`REDUCED_STATES`) are r_L, v_L, theta_B[b2, b3], w_B[b2, b3]: left out are the
+turn about the craft axis theta_B[b1] and the gauge w_B[b1] (only w_B[b1] + spin is
+physical, docs/frames.md), spin (no beam input moves it; it decays), and the
+consumables liner_mass, rcs_mass, pulses (integrators no input can move). Those
+neutral, unreachable multipliers would make (A, B) non-stabilisable for dlqr.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from enum import Enum
+
+import control
+import numpy as np
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import STATE, map_input_layout
+from lightcraft_opt.linearize.operating_points import (
+    OperatingPoint,
+    PulseMapJacobian,
+    _chart,
+    _jacobian,
+)
+from lightcraft_opt.linearize.signal_names import _names, _select
+from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.params import Model
+from lightcraft_opt.symbolic.error_state import ERROR_STATE
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+
+#: Error-state entries kept by default: the beam-riding and vertical channels.
+REDUCED_STATES = ("r_L", "v_L", "theta_B[b2]", "theta_B[b3]", "w_B[b2]", "w_B[b3]")
+
+
+class Coordinates(Enum):
+    """The states a linear model is written in."""
+
+    FULL = "full"  # layout STATE, quaternion components as they are
+    ERROR_STATE = "error_state"  # symbolic/error_state.ERROR_STATE, minimal attitude
+
+
+def linearize(
+    model: Model,
+    point: OperatingPoint,
+    *,
+    coordinates: Coordinates = Coordinates.ERROR_STATE,
+    states: Sequence[str] | None = None,
+    inputs: Sequence[str] | None = None,
+    pulse_map: PulseMap | PulseMapJacobian | None = None,
+    options: PulseMapOptions | None = None,
+) -> control.StateSpace:
+    """Φ linearised about ``point``: ``δ[k+1] = A δ[k] + B δu[k]``, dt = pulse period.
+
+    Parameters
+    ----------
+    model : the model Φ was (or is to be) built for.
+    point : operating point (:func:`trim_hover`, :func:`climb_point`).
+    coordinates : ``ERROR_STATE`` (minimal coordinates about the point, module
+        docstring) or ``FULL`` (A = ∂Φ/∂x on the 17 raw states).
+    states : entries kept, as slot names or ``slot[component]`` (default
+        :data:`REDUCED_STATES` for the error state, every state for ``FULL``). A
+        truncation: the others are held at zero, and their effect is dropped.
+    inputs : map-input entries kept (default all: pointing_L [m], focus [m], energy [J],
+        rcs_thrust [N] per thruster, motor_torque [N m] with a carrier).
+    pulse_map : Φ, or better its :func:`pulse_map_jacobian` to reuse across points.
+
+    Returns
+    -------
+    control.StateSpace with A (n, n), B (n, m), C = I, D = 0, ``dt`` the pulse period
+    [s]; state and output names ``r_L[east]``, ``theta_B[b2]``, ... (units: those of
+    the layouts, SI), input names ``pointing_L[east]``, ``energy``, ...
+    """
+    jac = _jacobian(model, pulse_map, options)
+    craft = model.craft
+    ulay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    if ulay.size != point.u.size:
+        raise ParameterError("point.u", f"needs {ulay.size} map inputs, got {point.u.size}")
+    x_next, A, B = jac(point.x, point.u, point.p, point.t)
+    wanted: Sequence[str] | None
+    if coordinates is Coordinates.ERROR_STATE:
+        _, retract_jac, local_jac = _chart()
+        E = np.asarray(retract_jac(point.x, np.zeros(ERROR_STATE.size)))
+        L = np.asarray(local_jac(x_next, x_next))
+        A, B = L @ A @ E, L @ B
+        layout = ERROR_STATE
+        wanted = REDUCED_STATES if states is None else states
+    elif coordinates is Coordinates.FULL:
+        layout, wanted = STATE, states
+    else:
+        allowed = [c.value for c in Coordinates]
+        raise ParameterError("coordinates", f"must be one of {allowed}, got {coordinates!r}")
+    keep = _select(layout, wanted, "states")
+    ukeep = _select(ulay, inputs, "inputs")
+    names = [_names(layout)[i] for i in keep]
+    A_k, B_k = A[np.ix_(keep, keep)], B[np.ix_(keep, ukeep)]
+    return control.ss(
+        A_k,
+        B_k,
+        np.eye(len(keep)),
+        np.zeros((len(keep), len(ukeep))),
+        jac.pulse_map.period,
+        states=names,
+        outputs=names,
+        inputs=[_names(ulay)[i] for i in ukeep],
+        name=f"{model.name} pulse map ({coordinates.value})",
+    )
