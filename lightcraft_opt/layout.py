@@ -37,6 +37,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.params import Model
 
 __all__ = [
+    "ERROR_STATE",
     "PARAMETERS",
     "PULSE_INPUT",
     "STATE",
@@ -184,6 +185,23 @@ STATE = VectorLayout(
         ("r_L", 3, "m", "L", ENU),
         ("v_L", 3, "m/s", "L", ENU),
         ("q_LB", 4, "-", "L<-B", ("w", "x", "y", "z")),
+        ("w_B", 3, "rad/s", "B", B123),
+        ("spin", 1, "rad/s", "B", ()),
+        ("liner_mass", 1, "kg", "", ()),
+        ("rcs_mass", 1, "kg", "", ()),
+        ("pulses", 1, "-", "", ()),
+    ],
+)
+
+#: The error state δ of linear models (16 entries): STATE with the quaternion q_LB
+#: replaced by theta_B, the small rotation of B from the operating attitude (B components;
+#: the chart is symbolic/error_state.py). Every other slot is additive.
+ERROR_STATE = VectorLayout(
+    "error state",
+    [
+        ("r_L", 3, "m", "L", ENU),
+        ("v_L", 3, "m/s", "L", ENU),
+        ("theta_B", 3, "rad", "B", B123),
         ("w_B", 3, "rad/s", "B", B123),
         ("spin", 1, "rad/s", "B", ()),
         ("liner_mass", 1, "kg", "", ()),

@@ -2,8 +2,9 @@
 
 The state vector (layout STATE, docs/frames.md) holds the attitude as a unit quaternion:
 four numbers for three degrees of freedom. Linear control theory (controllability,
-LQR) needs coordinates without that constraint. The error state δ (layout
-:data:`ERROR_STATE`, 16 entries) replaces the quaternion by a small rotation of B:
+LQR) needs coordinates without that constraint. The error state δ
+(:data:`lightcraft_opt.layout.ERROR_STATE`, 16 entries) replaces the quaternion by a
+small rotation of B:
 
     q_LB = q_LB,op ⊗ dq(theta_B),   dq(theta) = (1, theta/2) / sqrt(1 + |theta/2|^2),
 
@@ -27,29 +28,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-from lightcraft_opt.layout import STATE, VectorLayout
+from lightcraft_opt.layout import ERROR_STATE, STATE
 from lightcraft_opt.symbolic.assemble import assemble
 from lightcraft_opt.symbolic.rotation import conjugate, quat_multiply
 
-__all__ = ["ERROR_STATE", "build_error_state"]
-
-_ENU = ("east", "north", "up")
-_B123 = ("b1", "b2", "b3")
-
-#: The error state δ (16 entries): STATE with the quaternion replaced by theta_B (3).
-ERROR_STATE = VectorLayout(
-    "error state",
-    [
-        ("r_L", 3, "m", "L", _ENU),
-        ("v_L", 3, "m/s", "L", _ENU),
-        ("theta_B", 3, "rad", "B", _B123),
-        ("w_B", 3, "rad/s", "B", _B123),
-        ("spin", 1, "rad/s", "B", ()),
-        ("liner_mass", 1, "kg", "", ()),
-        ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
-    ],
-)
+__all__ = ["ERROR_STATE", "build_error_state"]  # ERROR_STATE re-exported from layout
 
 _ADDITIVE = ("r_L", "v_L", "w_B", "spin", "liner_mass", "rcs_mass", "pulses")
 
