@@ -1,0 +1,447 @@
+"""Solve an optimal control problem: multiple shooting over pulses, then an NLP solver.
+
+``solve(problem, options)`` answers one problem. :class:`CompiledOcp` builds the
+transcription and the solver once (the build, mostly the exact Hessian of Φ, takes far
+longer than a solve) and solves again for new initial states, parameters (wind ...),
+start times, previous inputs and references: the parametric solve of MPC (STYLE rule 2).
+Its :attr:`CompiledOcp.function` is the same solve as one casadi.Function.
+
+The initial guess, unless given, rolls Φ forward from x0 under a nominal policy: the
+flight's pulse energy, focus at the far end, the beam axis under the craft's mass centre,
+RCS and motor off, moved at most by the slew limits and clipped to the bounds (held
+inputs at their values).
+A failed or infeasible solve returns an :class:`~lightcraft_opt.ocp_results.OcpResult`
+with a readable status and the solver's last iterate; bad inputs raise
+:class:`~lightcraft_opt.errors.ParameterError` or :class:`~lightcraft_opt.errors.OptionError`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
+from lightcraft_opt.ocp_problem import OcpProblem
+from lightcraft_opt.ocp_results import OcpResult, OcpStatus
+from lightcraft_opt.options import HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.transcription import MultipleShooting
+
+__all__ = ["CompiledOcp", "rollout", "solve"]
+
+#: QP solver of each SQP choice.
+_QP = {OcpSolver.SQP_QRQP: "qrqp", OcpSolver.SQP_HPIPM: "hpipm", OcpSolver.SQP_OSQP: "osqp"}
+
+
+def rollout(
+    problem: OcpProblem,
+    phi: PulseMap,
+    u: np.ndarray | None = None,
+    *,
+    x0: np.ndarray | None = None,
+    p: np.ndarray | None = None,
+    t0: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """States at the nodes when Φ is rolled forward from x0.
+
+    Parameters
+    ----------
+    problem : gives the bounds, the nominal input and the defaults of x0, p, t0.
+    phi : the pulse map.
+    u : (N, map-input size) inputs; None for the nominal policy (module docstring).
+    x0, p, t0 : (STATE.size,) initial state, (PARAMETERS.size,) parameters, first pulse
+        time [s], if not the problem's.
+
+    Returns
+    -------
+    X : (N + 1, STATE.size) states at the nodes; once Φ returns a non-finite state (e.g.
+        a craft far outside its model) the last finite one is held.
+    U : (N, map-input size) the inputs applied.
+    """
+    N, lay = problem.horizon, problem.inputs
+    x_start = problem.x_start if x0 is None else x0
+    pv = problem.p if p is None else p
+    t_start = problem.t0 if t0 is None else t0
+    nominal = problem.nominal_input()
+    pointing = lay.index("pointing_L")
+    X, U = [np.asarray(x_start, dtype=float)], []
+    u_last = problem.u_before
+    for k in range(N):
+        if u is None:
+            uk = nominal.copy()
+            uk[pointing] = STATE.get("r_L", X[-1])[:2]
+            if u_last is not None:
+                uk = np.clip(uk, u_last - problem.slew, u_last + problem.slew)
+            uk = np.clip(uk, problem.lower, problem.upper)
+            u_last = uk
+        else:
+            uk = u[k]
+        x_next = np.asarray(phi.step(X[-1], uk, pv, t_start + k * phi.period)[0]).ravel()
+        X.append(x_next if np.all(np.isfinite(x_next)) else X[-1])
+        U.append(uk)
+    return np.array(X), np.array(U).reshape(N, lay.size)
+
+
+def _solver_options(opts: OcpOptions, equality: list[bool]) -> tuple[str, dict[str, Any]]:
+    """nlpsol plugin name and options for ``opts``."""
+    quiet = opts.print_level == 0
+    common: dict[str, Any] = {"print_time": not quiet, "error_on_fail": False}
+    exact = opts.hessian is HessianApproximation.EXACT
+    if opts.solver is OcpSolver.IPOPT:
+        ipopt: dict[str, Any] = {
+            "print_level": opts.print_level,
+            "sb": "yes",
+            "max_iter": opts.max_iter,
+            "tol": opts.tol,
+            "constr_viol_tol": opts.tol,
+            "bound_relax_factor": 0.0,
+        }
+        if not exact:
+            ipopt["hessian_approximation"] = "limited-memory"
+        return "ipopt", {**common, "ipopt": ipopt}
+    if opts.solver is OcpSolver.FATROP:
+        fatrop = {
+            "print_level": opts.print_level,
+            "max_iter": opts.max_iter,
+            "tol": opts.tol,
+            "constr_viol_tol": opts.tol,
+        }
+        return "fatrop", {
+            **common,
+            "structure_detection": "auto",
+            "equality": equality,
+            "fatrop": fatrop,
+        }
+    qp = _QP[opts.solver]
+    qp_opts: dict[str, Any] = {"error_on_fail": False}
+    if qp == "qrqp":
+        qp_opts.update(print_iter=False, print_header=False, print_info=False)
+    elif qp == "osqp":
+        qp_opts["osqp"] = {
+            "verbose": False,
+            "eps_abs": opts.tol * 1e-2,
+            "eps_rel": opts.tol * 1e-2,
+            "max_iter": 20000,
+            "polish": True,
+        }
+    else:
+        qp_opts["hpipm"] = {
+            "mode": "robust",
+            "iter_max": 200,
+            "res_g_max": 1e-10,
+            "res_b_max": 1e-10,
+            "res_d_max": 1e-10,
+            "res_m_max": 1e-10,
+        }
+    return "sqpmethod", {
+        **common,
+        "qpsol": qp,
+        "qpsol_options": qp_opts,
+        "hessian_approximation": "exact" if exact else "limited-memory",
+        "max_iter": opts.max_iter,
+        "tol_pr": opts.tol,
+        "tol_du": opts.tol,
+        "print_header": not quiet,
+        "print_iteration": not quiet,
+        "print_status": not quiet,
+    }
+
+
+def _stats(solver: ca.Function, opts: OcpOptions) -> tuple[OcpStatus, str, int]:
+    """OcpStatus, message and iteration count from the nlpsol statistics."""
+    name = opts.solver.value
+    try:
+        stats = solver.stats()
+    except RuntimeError:  # sqpmethod leaves no status when its QP fails without raising
+        return OcpStatus.FAILED, f"{name}: the QP solver failed (no status reported)", 0
+    raw = stats.get("return_status", "unknown")
+    iterations = int(stats.get("iter_count", 0))
+    unified = str(stats.get("unified_return_status", ""))
+    low = str(raw).lower()
+    if "acceptable" in low:
+        status = OcpStatus.ACCEPTABLE
+    elif stats.get("success", False):
+        status = OcpStatus.SOLVED
+    elif "infeasib" in low or unified == "SOLVER_RET_INFEASIBLE":
+        status = OcpStatus.INFEASIBLE
+    elif "maximum_iter" in low or unified == "SOLVER_RET_LIMITED" or iterations >= opts.max_iter:
+        status = OcpStatus.MAX_ITER
+    else:
+        status = OcpStatus.FAILED
+    if not isinstance(raw, str):  # fatrop reports a number
+        raw = f"return flag {raw}" + (" (converged)" if status is OcpStatus.SOLVED else "")
+    return status, f"{name}: {raw}", iterations
+
+
+class CompiledOcp:
+    """The transcription and NLP solver of one problem, built once and solved many times.
+
+    Parameters
+    ----------
+    problem : structure (model, horizon, terms, constraints, which inputs are free) and
+        default values of everything a solve may change.
+    options : solver, pulse-map options, tolerance, move blocking ...
+    pulse_map : a prebuilt Φ of ``problem.model`` to use instead of building one with
+        ``options.pulse_map``. Problems and solvers that share one Φ share the derivatives
+        casadi caches on it, so only the first build pays for the exact Hessian.
+
+    Attributes
+    ----------
+    pulse_map : the prediction map Φ: re-simulate with it to reproduce the predicted
+        trajectory.
+    transcription : the :class:`~lightcraft_opt.transcription.MultipleShooting` NLP.
+    solver : the casadi nlpsol Function.
+    function : casadi.Function ``ocp_solve(x0, p, t0, u_previous, reference, w0) ->
+        (U, X, cost)``: the parametric solve in one Function (U (size, N) map inputs,
+        X (STATE.size, N + 1) states, w0 a scaled initial guess, e.g. ``result.w``).
+    build_time : wall time of the build [s].
+    """
+
+    def __init__(
+        self,
+        problem: OcpProblem,
+        options: OcpOptions | None = None,
+        *,
+        pulse_map: PulseMap | None = None,
+    ) -> None:
+        if not isinstance(problem, OcpProblem):
+            raise ParameterError("problem", f"must be an OcpProblem, got {problem!r}")
+        opts = options or OcpOptions()
+        if not isinstance(opts, OcpOptions):
+            raise OptionError(f"options must be an OcpOptions, got {opts!r}")
+        start = time.perf_counter()
+        plugin = "sqpmethod" if opts.solver in _QP else opts.solver.value
+        if not ca.has_nlpsol(plugin) or (opts.solver in _QP and not ca.has_conic(_QP[opts.solver])):
+            raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
+        self.problem, self.options = problem, opts
+        self.pulse_map = pulse_map or build_pulse_map(problem.model, opts.pulse_map)
+        if self.pulse_map.step.size1_in(1) != problem.inputs.size:
+            raise ParameterError(
+                "pulse_map",
+                f"takes {self.pulse_map.step.size1_in(1)} inputs, the problem's "
+                f"model {problem.inputs.size}: build it from the problem's model",
+            )
+        blocks = opts.blocks(problem.horizon)
+        self.transcription = tr = MultipleShooting(
+            problem, self.pulse_map, blocks=blocks, threads=opts.threads
+        )
+        name, solver_opts = _solver_options(opts, tr.equality)
+        try:
+            self.solver = ca.nlpsol("ocp_nlp", name, tr.nlp, solver_opts)
+        except RuntimeError as err:
+            raise OptionError(
+                f"OcpOptions.solver {opts.solver.value!r} cannot take this problem's NLP: "
+                f"{str(err).strip().splitlines()[-1]}"
+            ) from None
+        lbx, ubx = tr.bounds()
+        names = ["x0", "p", "t0", "u_previous", "reference"]
+        syms = {n: ca.MX.sym(n, tr.parameters.slot(n).size) for n in names}
+        w0 = ca.MX.sym("w0", tr.n_w)
+        u_fixed = ca.DM(np.where(problem.free, 0.0, problem.lower))
+        P = ca.vertcat(*(syms[n] for n in names[:4]), u_fixed, syms["reference"])
+        sol = self.solver(x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg)
+        X, U, _ = tr.trajectory(sol["x"], P)
+        self.function = ca.Function(
+            "ocp_solve", [*syms.values(), w0], [U, X, sol["f"]], [*names, "w0"], ["U", "X", "cost"]
+        )
+        self._bounds = (lbx, ubx)
+        self._warm_solver: ca.Function | None = None
+        self._nlp_options = (name, solver_opts)
+        self.build_time = time.perf_counter() - start
+
+    def solve(
+        self,
+        *,
+        x0: np.ndarray | Sequence[float] | None = None,
+        p: np.ndarray | Sequence[float] | None = None,
+        t0: float | None = None,
+        u_previous: np.ndarray | Sequence[float] | None = None,
+        reference: np.ndarray | None = None,
+        initial_guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None = None,
+        warm_start: OcpResult | None = None,
+    ) -> OcpResult:
+        """Solve for new run-time values (each defaults to the compiled problem's).
+
+        Parameters
+        ----------
+        x0 : (STATE.size,) state at t0.
+        p : (PARAMETERS.size,) parameters (wind, aerodynamics ...).
+        t0 : time of the first pulse [s].
+        u_previous : (map-input size,) input of the pulse before t0 (only when the problem
+            had one: its presence is structure).
+        reference : (N + 1, width) TrackReference paths side by side.
+        initial_guess : (N, map-input size) inputs, rolled out from x0 through Φ; or a pair
+            (X (N + 1, STATE.size), U (N, map-input size)) used as is. Default: the
+            nominal policy's rollout.
+        warm_start : a previous result of this compiled problem: its primal and dual
+            solution start the solver (overrides ``initial_guess``); IPOPT then starts with
+            a barrier parameter of 1e-6 instead of 0.1 (a second IPOPT instance, built on
+            the first warm start).
+
+        Returns
+        -------
+        OcpResult with status, cost, iterations, solve time, optimal inputs and the
+        predicted trajectory; never raises for a failed or infeasible solve.
+        """
+        pr, tr = self.problem, self.transcription
+        nu = pr.inputs.size
+        x0v = checked_vector("x0", pr.x_start if x0 is None else x0, STATE.size)
+        pv = checked_vector("p", pr.p if p is None else p, PARAMETERS.size)
+        t0v = pr.t0 if t0 is None else float(checked_vector("t0", [t0], 1)[0])
+        if (u_previous is None) != (pr.u_previous is None) and u_previous is not None:
+            raise ParameterError("u_previous", "the compiled problem has no previous input")
+        u_prev = pr.u_before if u_previous is None else checked_vector("u_previous", u_previous, nu)
+        ref = pr.reference() if reference is None else np.asarray(reference, dtype=float)
+        if ref.shape != pr.reference().shape or not np.all(np.isfinite(ref)):
+            raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
+        u_fixed = np.where(pr.free, 0.0, pr.lower)
+        P = tr.parameter_vector(x0v, pv, t0v, u_prev, u_fixed, ref)
+        lam_x0, lam_g0 = np.zeros(tr.n_w), np.zeros(tr.lbg.size)
+        if warm_start is not None:
+            if not isinstance(warm_start, OcpResult) or warm_start.w.size != tr.n_w:
+                raise ParameterError("warm_start", "must be a result of this compiled problem")
+            w0, lam_x0, lam_g0 = warm_start.w, warm_start.lam_x, warm_start.lam_g
+        else:
+            w0 = tr.pack(*self._guess(x0v, pv, t0v, initial_guess), u_prev)
+        lbx, ubx = self._bounds
+        solver = self.solver if warm_start is None else self._warm_started()
+        start = time.perf_counter()
+        try:
+            sol = solver(
+                x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
+            )
+        except RuntimeError as err:  # e.g. an evaluation error the solver did not catch
+            status, message = OcpStatus.FAILED, f"{self.options.solver.value}: {err}"
+            w, lam_x, lam_g, iterations = w0, lam_x0, lam_g0, 0
+        else:
+            w = np.asarray(sol["x"], dtype=float).ravel()
+            lam_x = np.asarray(sol["lam_x"], dtype=float).ravel()
+            lam_g = np.asarray(sol["lam_g"], dtype=float).ravel()
+            status, message, iterations = _stats(solver, self.options)
+        solve_time = time.perf_counter() - start
+        if not np.all(np.isfinite(w)):
+            status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
+        return self._result(w, lam_x, lam_g, P, status, message, iterations, solve_time, t0v)
+
+    # ----------------------------------------------------------------- helpers
+    def _warm_started(self) -> ca.Function:
+        """The solver for warm starts: IPOPT told to start from the given primal and dual
+        point with a small barrier parameter (built once, on first use; it shares the
+        derivatives of the cold solver, so the build is quick); the others as they are."""
+        if self.options.solver is not OcpSolver.IPOPT:
+            return self.solver
+        if self._warm_solver is None:
+            name, opts = self._nlp_options
+            push = 1e-6
+            ipopt = {
+                **opts["ipopt"],
+                "warm_start_init_point": "yes",
+                "mu_init": push,
+                "warm_start_bound_push": push,
+                "warm_start_mult_bound_push": push,
+                "warm_start_slack_bound_push": push,
+            }
+            nlp = self.transcription.nlp
+            self._warm_solver = ca.nlpsol("ocp_nlp_warm", name, nlp, {**opts, "ipopt": ipopt})
+        return self._warm_solver
+
+    def _guess(
+        self,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        pr = self.problem
+        N, nu = pr.horizon, pr.inputs.size
+        X: np.ndarray | None = None
+        U: np.ndarray | None = None
+        if isinstance(guess, tuple):
+            X = np.asarray(guess[0], dtype=float)
+            U = np.asarray(guess[1], dtype=float)
+            if X.shape != (N + 1, STATE.size) or not np.all(np.isfinite(X)):
+                raise ParameterError("initial_guess", f"states need shape {(N + 1, STATE.size)}")
+        elif guess is not None:
+            U = np.asarray(guess, dtype=float)
+        if U is not None and (U.shape != (N, nu) or not np.all(np.isfinite(U))):
+            raise ParameterError("initial_guess", f"inputs need finite shape {(N, nu)}")
+        if X is None or U is None:
+            return rollout(pr, self.pulse_map, U, x0=x0, p=p, t0=t0)
+        return X, U
+
+    def _result(
+        self,
+        w: np.ndarray,
+        lam_x: np.ndarray,
+        lam_g: np.ndarray,
+        P: np.ndarray,
+        status: OcpStatus,
+        message: str,
+        iterations: int,
+        solve_time: float,
+        t0: float,
+    ) -> OcpResult:
+        tr, pr = self.transcription, self.problem
+        X, U, eng = (np.asarray(v, dtype=float) for v in tr.trajectory(w, P))
+        terms = np.asarray(tr.cost_terms(w, P), dtype=float).ravel()
+        g = np.asarray(tr.constraints(w, P), dtype=float).ravel()
+        lbx, ubx = self._bounds
+        excess = [tr.lbg - g, g - tr.ubg, lbx - w, w - ubx, np.zeros(1)]
+        viol = float(np.max(np.concatenate(excess)))
+        if status not in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE) and viol > self.options.tol:
+            message += f"; constraints violated by up to {viol:.3g} (scaled units) at the "
+            message += (
+                "returned iterate: the problem may be infeasible"
+                if iterations
+                else "initial guess, returned as is"
+            )
+        return OcpResult(
+            status=status,
+            message=message,
+            solver=self.options.solver.value,
+            cost=float(np.sum(terms)),
+            iterations=iterations,
+            solve_time=solve_time,
+            t=t0 + self.pulse_map.period * np.arange(pr.horizon + 1),
+            x=X.T,
+            u=U.T,
+            engine=eng.T,
+            inputs=pr.inputs,
+            build_time=self.build_time,
+            constraint_violation=viol,
+            cost_terms=terms,
+            w=w,
+            lam_x=lam_x,
+            lam_g=lam_g,
+        )
+
+
+def solve(
+    problem: OcpProblem,
+    options: OcpOptions | None = None,
+    *,
+    initial_guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None = None,
+    warm_start: OcpResult | None = None,
+    pulse_map: PulseMap | None = None,
+) -> OcpResult:
+    """Build and solve ``problem`` once (see :class:`CompiledOcp` to solve it repeatedly).
+
+    Parameters
+    ----------
+    problem : what to solve (ocp_problem.py).
+    options : how (default :class:`~lightcraft_opt.options.OcpOptions`: IPOPT, exact
+        Hessian, Φ with :data:`~lightcraft_opt.options.OCP_PULSE_MAP`).
+    initial_guess, warm_start : see :meth:`CompiledOcp.solve`.
+    pulse_map : a prebuilt Φ (see :class:`CompiledOcp`).
+
+    Returns
+    -------
+    OcpResult (status, cost, iterations, times, optimal inputs, predicted trajectory).
+    """
+    compiled = CompiledOcp(problem, options, pulse_map=pulse_map)
+    return compiled.solve(initial_guess=initial_guess, warm_start=warm_start)

@@ -1,0 +1,554 @@
+"""What an optimal control problem of a lightcraft flight asks for (STYLE rule 2).
+
+A problem states the model, the horizon in pulses, the per-pulse controls with their bounds
+and slew-rate limits, the path and terminal constraints and a weighted sum of objective
+terms; how it is transcribed and solved (:mod:`lightcraft_opt.transcription`,
+:mod:`lightcraft_opt.ocp`, :class:`~lightcraft_opt.options.OcpOptions`) is chosen
+separately. Everything is plain numpy and validated on creation: a bad value raises
+:class:`~lightcraft_opt.errors.ParameterError` naming the field.
+
+Nodes and pulses (docs/frames.md for frames and the state): node k is the state x_k just
+before pulse k at t_k = t0 + k T (T the pulse period), k = 0..N; pulse k (k = 0..N-1)
+fires the map input u_k (layout :func:`~lightcraft_opt.layout.map_input_layout`:
+``pointing_L`` (2) [m, L east/north], ``focus`` [m], ``energy`` [J], then
+``rcs_thrust`` [N] per thruster and ``motor_torque`` [N m] with a carrier), and the map Φ
+carries x_k to x_{k+1}. x_0 is given; node terms and constraints apply at k = 1..N,
+pulse terms and constraints at k = 0..N-1.
+
+Model parameters and wind are inputs: ``parameters`` overrides entries of the parameter
+vector p (:data:`~lightcraft_opt.layout.PARAMETERS`) by name, e.g.
+``{"wind_speed_ref": 4.0, "wind_direction_from": math.pi / 2}`` for a 4 m/s wind from the
+east at the reference height.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, cast
+
+import numpy as np
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import (
+    PARAMETERS,
+    STATE,
+    VectorLayout,
+    checked_vector,
+    initial_state,
+    map_input_layout,
+    parameter_values,
+)
+from lightcraft_opt.params import BeamSizeModel, Model
+
+__all__ = [
+    "CaptureFraction",
+    "Constraint",
+    "ControlBound",
+    "ControlEffort",
+    "ControlRate",
+    "EnergyBudget",
+    "FinalAltitude",
+    "LaserEnergy",
+    "LateralOffset",
+    "NoGroundContact",
+    "ObjectiveTerm",
+    "OcpProblem",
+    "OffsetFrom",
+    "TerminalAltitude",
+    "TerminalState",
+    "TiltLimit",
+    "TrackReference",
+]
+
+Values = float | Sequence[float]
+
+
+def _number(name: str, value: object, *, low: float = -math.inf, allow_inf: bool = False) -> float:
+    """``value`` as a float >= ``low``: finite (or +-inf when allowed), never NaN."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
+        raise ParameterError(name, f"must be a number, got {value!r}")
+    v = float(value)
+    if math.isnan(v) or (math.isinf(v) and not allow_inf):
+        raise ParameterError(name, f"must be {'a number' if allow_inf else 'finite'}, got {v!r}")
+    if v < low:
+        raise ParameterError(name, f"must be >= {low}, got {v!r}")
+    return v
+
+
+def _values(name: str, value: Values, size: int, *, allow_inf: bool = False) -> np.ndarray:
+    """A number (broadcast) or ``size`` numbers as a float array; NaN never passes."""
+    try:
+        v = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(name, f"must be a number or {size} numbers, got {value!r}") from None
+    if v.size == 1:
+        v = np.full(size, v[0])
+    if v.size != size:
+        raise ParameterError(name, f"needs 1 or {size} values, got {v.size}")
+    if np.any(np.isnan(v)) or (not allow_inf and not np.all(np.isfinite(v))):
+        raise ParameterError(name, "must not be NaN" if allow_inf else "must be finite")
+    return v
+
+
+def _set(obj: object, attr: str, value: object) -> None:
+    object.__setattr__(obj, attr, value)
+
+
+# --------------------------------------------------------------------------- objective terms
+class OffsetFrom(Enum):
+    """What a lateral offset is measured from."""
+
+    PAD = "pad"  # the craft's mass centre from the pad's vertical: r_L east/north at nodes
+    BEAM = "beam"  # the optic centre from the beam axis at each pulse (engine offset_L)
+
+
+@dataclass(frozen=True)
+class LaserEnergy:
+    """Laser energy fired: ``weight * sum_k E_k`` (E_k the pulse energies [J]).
+
+    weight : [1/J], >= 0.
+    """
+
+    weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        _set(self, "weight", _number("LaserEnergy.weight", self.weight, low=0.0))
+
+
+@dataclass(frozen=True)
+class FinalAltitude:
+    """Altitude reached, rewarded: ``-weight * r_L[up](t_N)`` [m] (maximise it).
+
+    weight : [1/m], >= 0.
+    """
+
+    weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        _set(self, "weight", _number("FinalAltitude.weight", self.weight, low=0.0))
+
+
+@dataclass(frozen=True, eq=False)
+class TrackReference:
+    """Follow a reference: ``sum_{k=1..N} sum_i weights_i (slot(x_k)_i - path[k, i])^2``.
+
+    path : (N + 1, slot size) reference at the nodes, in the slot's unit and frame (for the
+        default ``r_L``: positions [m], L frame); row 0 (the given x_0) is not used.
+    weights : one per component or one for all, >= 0 [1/unit^2].
+    slot : a state slot (:data:`~lightcraft_opt.layout.STATE`), default ``r_L``.
+
+    The path is a run-time input of a compiled solver: a new reference needs no rebuild.
+    """
+
+    path: np.ndarray
+    weights: Values = 1.0
+    slot: str = "r_L"
+
+    def __post_init__(self) -> None:
+        size = STATE.slot(self.slot).size
+        try:
+            path = np.array(self.path, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError("TrackReference.path", "must be an array of numbers") from None
+        if path.ndim == 1 and size == 1:
+            path = path[:, None]
+        if path.ndim != 2 or path.shape[1] != size:
+            raise ParameterError(
+                "TrackReference.path", f"must have shape (N + 1, {size}), got {path.shape}"
+            )
+        if not np.all(np.isfinite(path)):
+            raise ParameterError("TrackReference.path", "must be finite (got NaN or inf)")
+        path.setflags(write=False)
+        _set(self, "path", path)
+        w = _values("TrackReference.weights", self.weights, size)
+        if np.any(w < 0):
+            raise ParameterError("TrackReference.weights", "must not be negative")
+        _set(self, "weights", tuple(float(v) for v in w))
+
+
+@dataclass(frozen=True)
+class LateralOffset:
+    """Stay near the vertical: ``weight * sum |d_k|^2`` [m^2], d the east/north offset.
+
+    weight : [1/m^2], >= 0.
+    relative_to : ``PAD`` (the mass centre's drift from the pad's vertical, nodes 1..N; a
+        crosswind pushes it) or ``BEAM`` (the optic centre from the beam axis at each pulse).
+    """
+
+    weight: float = 1.0
+    relative_to: OffsetFrom = OffsetFrom.PAD
+
+    def __post_init__(self) -> None:
+        _set(self, "weight", _number("LateralOffset.weight", self.weight, low=0.0))
+        if not isinstance(self.relative_to, OffsetFrom):
+            raise ParameterError(
+                "LateralOffset.relative_to",
+                f"must be one of {[o.value for o in OffsetFrom]}, got {self.relative_to!r}",
+            )
+
+
+@dataclass(frozen=True)
+class ControlEffort:
+    """Control effort: ``weight * sum_k |u_k[slot] - reference|^2`` (slot units squared).
+
+    slot : a map-input slot (``pointing_L``, ``focus``, ``energy``, ``rcs_thrust``,
+        ``motor_torque``); reference : one value or one per component, in the slot's unit.
+    """
+
+    slot: str
+    weight: float = 1.0
+    reference: Values = 0.0
+
+    def __post_init__(self) -> None:
+        _set(self, "weight", _number("ControlEffort.weight", self.weight, low=0.0))
+        ref = np.atleast_1d(np.asarray(self.reference, dtype=float)).reshape(-1)
+        if not np.all(np.isfinite(ref)):
+            raise ParameterError("ControlEffort.reference", "must be finite")
+        _set(self, "reference", tuple(ref.tolist()))
+
+
+@dataclass(frozen=True)
+class ControlRate:
+    """Smooth controls: ``weight * sum_k |(u_k[slot] - u_{k-1}[slot]) / T|^2``, rates in the
+    slot's unit per second (from ``u_previous`` at k = 0 when the problem gives it)."""
+
+    slot: str
+    weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        _set(self, "weight", _number("ControlRate.weight", self.weight, low=0.0))
+
+
+ObjectiveTerm = (
+    LaserEnergy | FinalAltitude | TrackReference | LateralOffset | ControlEffort | ControlRate
+)
+OBJECTIVE_KINDS = (
+    LaserEnergy,
+    FinalAltitude,
+    TrackReference,
+    LateralOffset,
+    ControlEffort,
+    ControlRate,
+)
+
+
+# --------------------------------------------------------------------------- constraints
+@dataclass(frozen=True)
+class ControlBound:
+    """Bounds of one map-input slot, one value or one per component, in the slot's unit.
+
+    lower, upper : lower <= u_k[slot] <= upper at every pulse (equal: held at that value,
+        not a decision variable); +-inf for none.
+    slew_rate : |u_k - u_{k-1}| / T <= slew_rate [unit/s], > 0; inf for none (from
+        ``u_previous`` at k = 0 when the problem gives it).
+
+    A slot without a ControlBound keeps the model's limits: pointing within
+    +-``laser.pointing_limit``, focus within ``laser.focus_range`` (held at its far end for
+    a LINEAR beam, where it has no effect), energy within [0, ``laser.pulse_energy_max``],
+    each RCS thruster within [0, its ``max_thrust``], the motor torque held at 0 (the model
+    gives it no limit).
+    """
+
+    slot: str
+    lower: Values = -math.inf
+    upper: Values = math.inf
+    slew_rate: Values = math.inf
+
+
+@dataclass(frozen=True)
+class CaptureFraction:
+    """Keep the beam on the optic: at every pulse the optic centre's offset from the beam
+    axis stays within ``fraction`` of the capture radius, |offset_L| <= fraction R_c.
+
+    fraction : (0, 1].
+    """
+
+    fraction: float
+
+    def __post_init__(self) -> None:
+        v = _number("CaptureFraction.fraction", self.fraction)
+        if not 0 < v <= 1:
+            raise ParameterError("CaptureFraction.fraction", f"must lie in (0, 1], got {v!r}")
+        _set(self, "fraction", v)
+
+
+@dataclass(frozen=True)
+class TiltLimit:
+    """Angle between the craft axis b1 and L up at nodes 1..N at most ``max_tilt`` [rad],
+    in (0, pi)."""
+
+    max_tilt: float
+
+    def __post_init__(self) -> None:
+        v = _number("TiltLimit.max_tilt", self.max_tilt)
+        if not 0 < v < math.pi:
+            raise ParameterError("TiltLimit.max_tilt", f"must lie in (0, pi) rad, got {v!r}")
+        _set(self, "max_tilt", v)
+
+
+@dataclass(frozen=True)
+class NoGroundContact:
+    """Mass centre at least ``clearance`` [m] above the pad (r_L[up]) at nodes 1..N (not
+    checked between pulses)."""
+
+    clearance: float = 0.0
+
+    def __post_init__(self) -> None:
+        _set(self, "clearance", _number("NoGroundContact.clearance", self.clearance))
+
+
+@dataclass(frozen=True)
+class TerminalAltitude:
+    """``minimum <= r_L[up](t_N) <= maximum`` [m]; equal values pin it."""
+
+    minimum: float = -math.inf
+    maximum: float = math.inf
+
+    def __post_init__(self) -> None:
+        lo = _number("TerminalAltitude.minimum", self.minimum, allow_inf=True)
+        hi = _number("TerminalAltitude.maximum", self.maximum, allow_inf=True)
+        if lo > hi:
+            raise ParameterError("TerminalAltitude.minimum", f"{lo} exceeds maximum {hi}")
+        _set(self, "minimum", lo)
+        _set(self, "maximum", hi)
+
+
+@dataclass(frozen=True)
+class TerminalState:
+    """``lower <= x_N[slot] <= upper`` for a state slot, in its unit and frame."""
+
+    slot: str
+    lower: Values = -math.inf
+    upper: Values = math.inf
+
+    def __post_init__(self) -> None:
+        if self.slot not in STATE:
+            raise ParameterError(
+                "TerminalState.slot", f"no such state {self.slot!r}; states: {list(STATE.names)}"
+            )
+        size = STATE.slot(self.slot).size
+        lo = _values("TerminalState.lower", self.lower, size, allow_inf=True)
+        hi = _values("TerminalState.upper", self.upper, size, allow_inf=True)
+        if np.any(lo > hi):
+            raise ParameterError("TerminalState.lower", f"{lo} exceeds upper {hi}")
+        _set(self, "lower", tuple(lo.tolist()))
+        _set(self, "upper", tuple(hi.tolist()))
+
+
+@dataclass(frozen=True)
+class EnergyBudget:
+    """The laser fires at most ``total`` [J] over the horizon (>= 0)."""
+
+    total: float
+
+    def __post_init__(self) -> None:
+        _set(self, "total", _number("EnergyBudget.total", self.total, low=0.0))
+
+
+Constraint = (
+    CaptureFraction | TiltLimit | NoGroundContact | TerminalAltitude | TerminalState | EnergyBudget
+)
+CONSTRAINT_KINDS = (
+    CaptureFraction,
+    TiltLimit,
+    NoGroundContact,
+    TerminalAltitude,
+    TerminalState,
+    EnergyBudget,
+)
+
+
+# --------------------------------------------------------------------------- the problem
+@dataclass(frozen=True, eq=False)
+class OcpProblem:
+    """An optimal control problem over ``horizon`` pulses of ``model`` (module docstring).
+
+    Attributes
+    ----------
+    model : craft, laser, site, flight, environment (structure of Φ).
+    horizon : N, pulses, >= 1.
+    objective : terms summed into the cost (at least one).
+    constraints : path and terminal constraints.
+    controls : one :class:`ControlBound` per slot to change the model's limits.
+    x0 : (STATE.size,) state at t0 (default: on the pad, upright, spinning).
+    parameters : {PARAMETERS slot: value} overriding the model's p (wind, aerodynamics ...).
+    t0 : time of the first pulse [s] (gusts depend on time).
+    u_previous : (map-input size,) input of the pulse before t0, for slew limits and
+        control rates at k = 0 (default: none, pulse 0 is free of them).
+
+    Derived (read-only): ``p`` (PARAMETERS.size,) parameter vector; ``inputs`` the
+    map-input layout; ``lower``, ``upper``, ``slew`` (size of the map input,) bounds [unit]
+    and slew limits per pulse [unit] (slew_rate T); ``free`` entries that are decision
+    variables; ``period`` T [s].
+    """
+
+    model: Model
+    horizon: int
+    objective: tuple[ObjectiveTerm, ...]
+    constraints: tuple[Constraint, ...] = ()
+    controls: tuple[ControlBound, ...] = ()
+    x0: np.ndarray | Sequence[float] | None = None
+    parameters: Mapping[str, Values] | None = None
+    t0: float = 0.0
+    u_previous: np.ndarray | Sequence[float] | None = None
+    p: np.ndarray = field(init=False, repr=False)
+    inputs: VectorLayout = field(init=False, repr=False)
+    lower: np.ndarray = field(init=False, repr=False)
+    upper: np.ndarray = field(init=False, repr=False)
+    slew: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.model, Model):
+            raise ParameterError("model", f"must be a Model, got {type(self.model).__name__}")
+        n = self.horizon
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
+            raise ParameterError("horizon", f"must be an integer >= 1 (pulses), got {n!r}")
+        _set(self, "horizon", int(n))
+        craft = self.model.craft
+        n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+        _set(self, "inputs", map_input_layout(n_thr, craft.has_carrier))
+        _set(self, "objective", self._kinds("objective", self.objective, OBJECTIVE_KINDS))
+        if not self.objective:
+            raise ParameterError("objective", "needs at least one term")
+        _set(self, "constraints", self._kinds("constraints", self.constraints, CONSTRAINT_KINDS))
+        _set(self, "controls", self._kinds("controls", self.controls, (ControlBound,)))
+        _set(self, "parameters", dict(self.parameters or {}))
+        self._check_terms()
+        x0 = initial_state(self.model) if self.x0 is None else self.x0
+        _set(self, "x0", checked_vector("x0", x0, STATE.size))
+        _set(self, "t0", _number("t0", self.t0))
+        if self.u_previous is not None:
+            u_prev = checked_vector("u_previous", self.u_previous, self.inputs.size)
+            _set(self, "u_previous", u_prev)
+        _set(self, "p", self._parameter_vector())
+        self._set_bounds()
+        for name in ("x0", "p", "lower", "upper", "slew"):
+            getattr(self, name).setflags(write=False)
+
+    # ----------------------------------------------------------------- derived
+    @property
+    def x_start(self) -> np.ndarray:
+        """(STATE.size,) the validated x0 (a read-only array)."""
+        return cast(np.ndarray, self.x0)
+
+    @property
+    def u_before(self) -> np.ndarray | None:
+        """(map-input size,) the validated u_previous, or None."""
+        return cast("np.ndarray | None", self.u_previous)
+
+    @property
+    def period(self) -> float:
+        """Pulse period T [s]."""
+        return 1.0 / self.model.flight.pulse_rate
+
+    @property
+    def free(self) -> np.ndarray:
+        """(map-input size,) bool: entries that are decision variables (lower < upper)."""
+        return self.lower < self.upper
+
+    def nominal_input(self) -> np.ndarray:
+        """The flight's own map input (beam on the pad axis, focus at the far end, the
+        flight's pulse energy, RCS and motor off) clipped to the bounds."""
+        lay = self.inputs
+        u = np.zeros(lay.size)
+        u[lay.index("focus")] = self.model.laser.focus_range[1]
+        u[lay.index("energy")] = self.model.flight.pulse_energy
+        return np.clip(u, self.lower, self.upper)
+
+    def reference(self) -> np.ndarray:
+        """(N + 1, size) path of the TrackReference terms side by side (size 0 if none)."""
+        paths = [t.path for t in self.objective if isinstance(t, TrackReference)]
+        return np.hstack(paths) if paths else np.zeros((self.horizon + 1, 0))
+
+    # ----------------------------------------------------------------- checks
+    @staticmethod
+    def _kinds(name: str, items: Any, kinds: tuple[type, ...]) -> tuple[Any, ...]:
+        if isinstance(items, kinds):
+            items = (items,)
+        try:
+            out = tuple(items)
+        except TypeError:
+            raise ParameterError(name, f"must be a sequence of terms, got {items!r}") from None
+        allowed = [k.__name__ for k in kinds]
+        for i, item in enumerate(out):
+            if not isinstance(item, kinds):
+                raise ParameterError(
+                    f"{name}[{i}]", f"unknown kind {type(item).__name__}; allowed: {allowed}"
+                )
+        return out
+
+    def _control_slot(self, name: str, slot: str) -> int:
+        if slot not in self.inputs:
+            raise ParameterError(name, f"no such input {slot!r}; inputs: {list(self.inputs.names)}")
+        return self.inputs.slot(slot).size
+
+    def _check_terms(self) -> None:
+        n = self.horizon
+        for i, term in enumerate(self.objective):
+            where = f"objective[{i}]"
+            if isinstance(term, ControlEffort):
+                size = self._control_slot(f"{where}.slot", term.slot)
+                if np.size(term.reference) not in (1, size):
+                    raise ParameterError(
+                        f"{where}.reference", f"needs 1 or {size} values, got {term.reference}"
+                    )
+            elif isinstance(term, ControlRate):
+                self._control_slot(f"{where}.slot", term.slot)
+            elif isinstance(term, TrackReference) and term.path.shape[0] != n + 1:
+                raise ParameterError(
+                    f"{where}.path", f"needs N + 1 = {n + 1} rows, got {term.path.shape[0]}"
+                )
+
+    def _parameter_vector(self) -> np.ndarray:
+        p = parameter_values(self.model)
+        for name, value in (self.parameters or {}).items():
+            if name not in PARAMETERS:
+                raise ParameterError(
+                    f"parameters.{name}", f"no such parameter; see {list(PARAMETERS.names)}"
+                )
+            size = PARAMETERS.slot(name).size
+            p[PARAMETERS.index(name)] = _values(f"parameters.{name}", value, size)
+        return p
+
+    def _set_bounds(self) -> None:
+        lay, laser, craft = self.inputs, self.model.laser, self.model.craft
+        lower, upper = np.zeros(lay.size), np.zeros(lay.size)
+        lower[lay.index("pointing_L")] = -laser.pointing_limit
+        upper[lay.index("pointing_L")] = laser.pointing_limit
+        focus = (
+            laser.focus_range if laser.size_model is BeamSizeModel.WAIST else laser.focus_range[1:]
+        )
+        lower[lay.index("focus")], upper[lay.index("focus")] = focus[0], focus[-1]
+        upper[lay.index("energy")] = laser.pulse_energy_max
+        if craft.rcs:
+            upper[lay.index("rcs_thrust")] = [t.max_thrust for t in craft.rcs.thrusters]
+        slew = np.full(lay.size, math.inf)
+        seen: set[str] = set()
+        for i, bound in enumerate(self.controls):
+            where = f"controls[{i}]"
+            size = self._control_slot(f"{where}.slot", bound.slot)
+            if bound.slot in seen:
+                raise ParameterError(f"{where}.slot", f"{bound.slot!r} is bounded twice")
+            seen.add(bound.slot)
+            lo = _values(f"{where}.lower", bound.lower, size, allow_inf=True)
+            hi = _values(f"{where}.upper", bound.upper, size, allow_inf=True)
+            rate = _values(f"{where}.slew_rate", bound.slew_rate, size, allow_inf=True)
+            if np.any(lo > hi):
+                raise ParameterError(f"{where}.lower", f"{lo} exceeds upper {hi}")
+            if np.any(rate <= 0):
+                raise ParameterError(f"{where}.slew_rate", f"must be positive, got {rate}")
+            if bound.slot == "energy" and (lo[0] < 0 or hi[0] > laser.pulse_energy_max):
+                raise ParameterError(
+                    f"{where}.lower" if lo[0] < 0 else f"{where}.upper",
+                    f"pulse energy must lie in [0, {laser.pulse_energy_max}] J (the laser's)",
+                )
+            if np.any(np.isinf(lo) & (lo == hi)):
+                raise ParameterError(f"{where}.lower", "an input cannot be held at infinity")
+            idx = lay.index(bound.slot)
+            lower[idx], upper[idx], slew[idx] = lo, hi, rate * self.period
+        _set(self, "lower", lower)
+        _set(self, "upper", upper)
+        _set(self, "slew", slew)

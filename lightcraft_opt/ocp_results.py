@@ -1,0 +1,97 @@
+"""The result of an optimal control solve: numpy only, with a status (STYLE rule 9).
+
+A failed or infeasible solve is a result too: its status says so in words and it carries
+the solver's last iterate, never a raw exception.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from lightcraft_opt.layout import STATE, VectorLayout
+
+__all__ = ["OcpResult", "OcpStatus"]
+
+
+class OcpStatus(Enum):
+    """How an optimal control solve ended."""
+
+    SOLVED = "solved"  # converged to the requested tolerance
+    ACCEPTABLE = "acceptable"  # converged to the solver's looser acceptable level
+    MAX_ITER = "max_iter"  # iteration limit reached first
+    INFEASIBLE = "infeasible"  # the solver found the constraints (locally) infeasible
+    FAILED = "failed"  # anything else: evaluation error, line search or QP failure ...
+
+
+@dataclass(frozen=True, eq=False)
+class OcpResult:
+    """An optimal control solve: optimal inputs, predicted trajectory, how it went.
+
+    Attributes
+    ----------
+    status, message : how it ended, and the solver's own words.
+    solver : the solver used (``OcpSolver`` value).
+    cost : objective value at the returned iterate [cost units of the terms].
+    cost_terms : (n_terms,) each objective term's value, in the problem's order.
+    iterations : NLP iterations.
+    solve_time : wall time of the solve [s] (the NLP build is ``build_time``).
+    build_time : wall time to build the transcription and solver, 0 when reused [s].
+    constraint_violation : largest violation of any constraint or bound at the returned
+        iterate, in the NLP's scaled units (gaps: states over their natural size).
+    t : (N + 1,) node times [s]; pulse k fires at t[k].
+    x : (N + 1, STATE.size) predicted states at the nodes (docs/frames.md), x[0] = x0.
+    u : (N, map-input size) optimal map inputs, one row per pulse; labels in ``inputs``.
+    engine : (N, 11) Φ's engine outputs per pulse (pulse_map.ENGINE_OUTPUTS): captured
+        energy [J], impulse_B [N s, B], angular_impulse_B [N m s, B], offset_L [m, L],
+        liner_loss [kg], health [-].
+    inputs : layout of a row of ``u``.
+    w, lam_x, lam_g : the NLP's (scaled) primal and dual solution, for a warm start.
+    """
+
+    status: OcpStatus
+    message: str
+    solver: str
+    cost: float
+    iterations: int
+    solve_time: float
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    engine: np.ndarray
+    inputs: VectorLayout
+    build_time: float = 0.0
+    constraint_violation: float = float("nan")
+    cost_terms: np.ndarray = field(default_factory=lambda: np.empty(0))
+    w: np.ndarray = field(default_factory=lambda: np.empty(0))
+    lam_x: np.ndarray = field(default_factory=lambda: np.empty(0))
+    lam_g: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+    @property
+    def success(self) -> bool:
+        """True when the solver converged (SOLVED or ACCEPTABLE)."""
+        return self.status in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE)
+
+    @property
+    def horizon(self) -> int:
+        """N, pulses."""
+        return int(self.u.shape[0])
+
+    def state(self, name: str) -> np.ndarray:
+        """State slot ``name`` at the nodes: (N + 1,) or (N + 1, size)."""
+        s = STATE.slot(name)
+        col = self.x[:, s.start : s.stop]
+        return col[:, 0] if s.size == 1 else col
+
+    def input(self, name: str) -> np.ndarray:
+        """Map-input slot ``name`` per pulse: (N,) or (N, size)."""
+        s = self.inputs.slot(name)
+        col = self.u[:, s.start : s.stop]
+        return col[:, 0] if s.size == 1 else col
+
+    @property
+    def laser_energy(self) -> float:
+        """Total energy the laser fires over the horizon [J]."""
+        return float(np.sum(self.input("energy")))

@@ -1,0 +1,341 @@
+"""Multiple shooting over pulses: one node per pulse, the pulse map Φ as the dynamics.
+
+The NLP of an :class:`~lightcraft_opt.ocp_problem.OcpProblem` (module docstring there for
+nodes, pulses and units). Decision variables, stage by stage (k = 0..N-1, then N)::
+
+    w = [x_0, a_0, v_0,  x_1, a_1, v_1,  ...,  x_N, a_N]
+
+x_k the state at node k, v_k the free entries of the map input u_k (entries whose bounds
+are equal are held, not variables), and a_k, present only when a term couples consecutive
+pulses (slew limits, control rates, move blocking), a memory of the previous pulse's free
+inputs: a_{k+1} = v_k. With it every constraint and cost term involves one stage only, so
+the NLP has the stage structure that fatrop and hpipm exploit. Constraints, in order::
+
+    for k in 0..N-1:  x_{k+1} - Φ(x_k, u_k, p, t_k) = 0,  a_{k+1} - v_k = 0   (gaps)
+                      stage k: x_0 = x0 (k = 0), path constraints at node k (k >= 1),
+                      at pulse k, slew or hold of v_k - a_k
+    then:             path and terminal constraints at node N
+
+Φ enters through one ``map`` over the horizon: the jump is exact and every derivative is
+the AD derivative of Φ (no finite differences). Variables are scaled (state slots by their
+natural size, inputs by their bounds) so the gaps have unit coefficients on x_{k+1}.
+
+The run-time inputs of the NLP, its parameter vector (:attr:`MultipleShooting.parameters`):
+``x0`` (STATE.size,), ``p`` (PARAMETERS.size,), ``t0`` [s], ``u_previous`` and
+``u_fixed`` (map-input size,), ``reference`` ((N + 1) x reference width, row by row).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.ocp_problem import (
+    CaptureFraction,
+    ControlEffort,
+    ControlRate,
+    EnergyBudget,
+    FinalAltitude,
+    LaserEnergy,
+    LateralOffset,
+    NoGroundContact,
+    OcpProblem,
+    OffsetFrom,
+    TerminalAltitude,
+    TerminalState,
+    TiltLimit,
+    TrackReference,
+)
+from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_pulse_measures
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+
+__all__ = ["MultipleShooting", "state_scale"]
+
+
+def state_scale(problem: OcpProblem) -> np.ndarray:
+    """(STATE.size,) natural size of each state entry: 1 m, 1 m/s, 1, 1 rad/s, the launch
+    spin, the craft mass for the propellant masses, the horizon for the pulse counter."""
+    spin = abs(float(STATE.get("spin", problem.x_start)))
+    mass = problem.model.craft.mass
+    natural = {
+        "r_L": 1.0,
+        "v_L": 1.0,
+        "q_LB": 1.0,
+        "w_B": 1.0,
+        "spin": max(1.0, spin),
+        "liner_mass": mass,
+        "rcs_mass": mass,
+        "pulses": float(problem.horizon),
+    }
+    return STATE.pack({k: np.full(STATE.slot(k).size, v) for k, v in natural.items()})
+
+
+@dataclass(frozen=True)
+class _Stages:
+    """The NLP's symbols and the per-node and per-pulse quantities built from them."""
+
+    xs: list[ca.MX]  # scaled states x_k, k = 0..N
+    as_: list[ca.MX]  # scaled memories a_k of the previous free inputs, k = 0..N
+    vs: list[ca.MX]  # scaled free inputs v_k, k = 0..N-1
+    X: ca.MX  # (STATE.size, N + 1) physical states
+    A: ca.MX  # (n_free or 0, N + 1) physical memories
+    V: ca.MX  # (n_free, N) physical free inputs
+    U: ca.MX  # (map-input size, N) physical map inputs, held entries included
+    x_next: ca.MX  # (STATE.size, N) Φ(x_k, u_k, p, t_k)
+    engine: ca.MX  # (11, N) Φ's engine outputs
+    nodes: tuple[ca.MX, ...]  # altitude, drift_L, cos_tilt, energy_fired: (., N + 1)
+    pulses: tuple[ca.MX, ...]  # offset_L, capture_use: (., N)
+
+
+class MultipleShooting:
+    """The multiple-shooting NLP of one problem (module docstring).
+
+    Parameters
+    ----------
+    problem : what to solve; its structure (horizon, terms, which inputs are free) is fixed
+        here, its values x0, p, t0, u_previous, the held inputs and the reference are
+        run-time parameters.
+    phi : the pulse map Φ of ``problem.model``.
+    blocks : move blocking, lengths [pulses] summing to the horizon; () or all 1: none.
+    threads : evaluate Φ over the horizon on this many threads.
+
+    Attributes
+    ----------
+    nlp : {"x", "f", "g", "p"} casadi MX expressions for ``nlpsol``.
+    lbg, ubg : bounds of g; ``equality`` marks lbg == ubg (fatrop's structure detection).
+    parameters : layout of the parameter vector.
+    trajectory : casadi.Function ``ocp_trajectory(w, P) -> (X, U, engine)``: physical
+        states (STATE.size, N + 1), map inputs (size, N) and engine outputs (11, N).
+    cost_terms : casadi.Function ``ocp_cost_terms(w, P) -> terms``, one value per objective
+        term in order.
+    constraints : casadi.Function ``ocp_constraints(w, P) -> g``.
+    x_scale, u_scale : (STATE.size,) and (n_free,) scales: physical = scale * scaled.
+    x_index, a_index, v_index : positions of x_k, a_k, v_k in w.
+    coupled : whether the previous-input memory a_k is in the NLP.
+    """
+
+    def __init__(
+        self,
+        problem: OcpProblem,
+        phi: PulseMap,
+        *,
+        blocks: tuple[int, ...] = (),
+        threads: int = 1,
+    ) -> None:
+        self.problem, self.period = problem, phi.period
+        N, nu = problem.horizon, problem.inputs.size
+        free = np.flatnonzero(problem.free)
+        self.free, nf = free, free.size
+        self.starts = set(np.cumsum((0, *blocks))[:-1].tolist()) if blocks else set(range(N))
+        rated = any(isinstance(t, ControlRate) for t in problem.objective)
+        slewed = bool(np.any(np.isfinite(problem.slew[free])))
+        self.coupled = bool(nf and (slewed or rated or len(self.starts) < N))
+        na = nf if self.coupled else 0
+        self.parameters = VectorLayout(
+            "ocp parameters",
+            [
+                ("x0", STATE.size, "", "", ()),
+                ("p", PARAMETERS.size, "", "", ()),
+                ("t0", 1, "s", "", ()),
+                ("u_previous", nu, "", "", ()),
+                ("u_fixed", nu, "", "", ()),
+                ("reference", (N + 1) * problem.reference().shape[1], "", "", ()),
+            ],
+        )
+        self.P = ca.MX.sym("P", self.parameters.size)
+        self.x_scale = state_scale(problem)
+        span = np.maximum(np.abs(problem.lower[free]), np.abs(problem.upper[free]))
+        self.u_scale = np.where(np.isfinite(span) & (span > 0), span, 1.0)
+
+        xs = [ca.MX.sym(f"x_{k}", STATE.size) for k in range(N + 1)]
+        as_ = [ca.MX.sym(f"a_{k}", na) for k in range(N + 1)]
+        vs = [ca.MX.sym(f"v_{k}", nf) for k in range(N)]
+        parts: list[ca.MX] = []
+        for k in range(N):
+            parts += [xs[k], as_[k], vs[k]]
+        parts += [xs[N], as_[N]]
+        w = ca.vertcat(*parts)
+        ends = np.cumsum([0] + [b.numel() for b in parts])
+        self.x_index = [np.arange(ends[3 * k], ends[3 * k] + STATE.size) for k in range(N + 1)]
+        self.a_index = [np.arange(ends[3 * k + 1], ends[3 * k + 2]) for k in range(N + 1)]
+        self.v_index = [np.arange(ends[3 * k + 2], ends[3 * k + 3]) for k in range(N)]
+        self.n_w = int(ends[-1])
+
+        st = self._stages(phi, xs, as_, vs, threads)
+        g, lbg, ubg = self._constraints(st)
+        terms = self._objective(st)
+        self.nlp = {"x": w, "f": ca.sum1(terms), "g": g, "p": self.P}
+        self.lbg, self.ubg = lbg, ubg
+        self.equality = [bool(v) for v in lbg == ubg]
+        names = (["w", "P"], ["X", "U", "engine"])
+        self.trajectory = ca.Function(
+            "ocp_trajectory", [w, self.P], [st.X, st.U, st.engine], *names
+        )
+        self.cost_terms = ca.Function("ocp_cost_terms", [w, self.P], [terms], ["w", "P"], ["terms"])
+        self.constraints = ca.Function("ocp_constraints", [w, self.P], [g], ["w", "P"], ["g"])
+
+    # ----------------------------------------------------------------- symbols
+    def _stages(
+        self,
+        phi: PulseMap,
+        xs: list[ca.MX],
+        as_: list[ca.MX],
+        vs: list[ca.MX],
+        threads: int,
+    ) -> _Stages:
+        pr, P, N = self.problem, self.P, self.problem.horizon
+        sx, su = ca.DM(self.x_scale), ca.DM(self.u_scale)
+        p = self.parameters.get("p", P)
+        X = ca.horzcat(*[sx * x for x in xs])
+        A = ca.horzcat(*[su * a for a in as_]) if self.coupled else ca.MX(0, N + 1)
+        V = ca.horzcat(*[su * v for v in vs]) if self.free.size else ca.MX(0, N)
+        select = np.zeros((pr.inputs.size, self.free.size))
+        select[self.free, np.arange(self.free.size)] = 1.0
+        held = ca.DM((~pr.free).astype(float)) * self.parameters.get("u_fixed", P)
+        U = ca.repmat(held, 1, N) + ca.mtimes(ca.DM(select), V)
+        step = phi.step.map(N, "thread", threads) if threads > 1 else phi.step.map(N)
+        t_k = self.parameters.get("t0", P) + ca.DM(self.period * np.arange(N)).T
+        x_next, engine = step(X[:, :N], U, p, t_k)
+        nodes = tuple(build_node_measures().map(N + 1)(X, p))
+        pulses = tuple(build_pulse_measures().map(N)(engine, p))
+        return _Stages(xs, as_, vs, X, A, V, U, x_next, engine, nodes, pulses)
+
+    def _constraints(self, st: _Stages) -> tuple[ca.MX, np.ndarray, np.ndarray]:
+        """g with its bounds, stage by stage (module docstring)."""
+        pr, P, N = self.problem, self.P, self.problem.horizon
+        sx, su = ca.DM(self.x_scale), ca.DM(self.u_scale)
+        x0, p = self.parameters.get("x0", P), self.parameters.get("p", P)
+        altitude, _, cos_tilt, fired = st.nodes
+        _, use = st.pulses
+        g: list[ca.MX] = []
+        bounds: list[tuple[np.ndarray, np.ndarray]] = []
+
+        def add(expr: ca.MX, lo: float | np.ndarray, hi: float | np.ndarray) -> None:
+            g.append(expr)
+            n = expr.numel()
+            bounds.append((np.broadcast_to(lo, (n,)), np.broadcast_to(hi, (n,))))
+
+        def node_path(k: int) -> None:
+            for con in pr.constraints:
+                if isinstance(con, NoGroundContact):
+                    add(altitude[k], con.clearance, math.inf)
+                elif isinstance(con, TiltLimit):
+                    add(cos_tilt[k], math.cos(con.max_tilt), math.inf)
+
+        fractions = [c.fraction for c in pr.constraints if isinstance(c, CaptureFraction)]
+        slew_rows = np.flatnonzero(np.isfinite(pr.slew[self.free]))
+        limit = pr.slew[self.free][slew_rows]
+        has_previous = pr.u_before is not None
+        for k in range(N):
+            add(st.xs[k + 1] - st.x_next[:, k] / sx, 0.0, 0.0)  # gap
+            if self.coupled:
+                add(st.as_[k + 1] - st.vs[k], 0.0, 0.0)  # memory of the inputs
+            if k == 0:
+                add(st.xs[0] - x0 / sx, 0.0, 0.0)
+                if self.coupled and has_previous:
+                    u_prev = self.parameters.get("u_previous", P)[self.free.tolist()]
+                    add(st.as_[0] - u_prev / su, 0.0, 0.0)
+                elif self.coupled:
+                    add(st.as_[0] - st.vs[0], 0.0, 0.0)  # no previous input: no slew at 0
+            else:
+                node_path(k)
+            if fractions:
+                add(use[k], -math.inf, min(fractions) ** 2)
+            if self.coupled and k not in self.starts:
+                add(st.vs[k] - st.as_[k], 0.0, 0.0)  # held by move blocking
+            elif self.coupled and slew_rows.size and (k > 0 or has_previous):
+                add((st.V[:, k] - st.A[:, k])[slew_rows.tolist()], -limit, limit)
+        node_path(N)
+        fired0 = build_node_measures()(x0, p)[3]
+        for con in pr.constraints:
+            if isinstance(con, TerminalAltitude):
+                add(altitude[N], con.minimum, con.maximum)
+            elif isinstance(con, TerminalState):
+                add(st.X[STATE.index(con.slot), N], np.array(con.lower), np.array(con.upper))
+            elif isinstance(con, EnergyBudget):
+                add(fired[N] - fired0, -math.inf, con.total)
+        lbg = np.concatenate([b[0] for b in bounds]).astype(float)
+        ubg = np.concatenate([b[1] for b in bounds]).astype(float)
+        return ca.vertcat(*g), lbg, ubg
+
+    def _objective(self, st: _Stages) -> ca.MX:
+        """(n_terms,) the objective terms, in the problem's order."""
+        pr, lay, N = self.problem, self.problem.inputs, self.problem.horizon
+        width = pr.reference().shape[1]
+        ref = ca.reshape(self.parameters.get("reference", self.P), width, N + 1)
+        altitude, drift, _, _ = st.nodes
+        offset, _ = st.pulses
+        terms: list[ca.MX] = []
+        col = 0
+        for term in pr.objective:
+            if isinstance(term, LaserEnergy):
+                terms.append(term.weight * ca.sum2(st.U[lay.index("energy"), :]))
+            elif isinstance(term, FinalAltitude):
+                terms.append(-term.weight * altitude[N])
+            elif isinstance(term, TrackReference):
+                size = STATE.slot(term.slot).size
+                err = st.X[STATE.index(term.slot), 1:] - ref[col : col + size, 1:]
+                col += size
+                terms.append(ca.sum2(ca.mtimes(ca.DM(term.weights).T, err**2)))
+            elif isinstance(term, LateralOffset):
+                d = drift[:, 1:] if term.relative_to is OffsetFrom.PAD else offset
+                terms.append(term.weight * ca.sumsqr(d))
+            elif isinstance(term, ControlEffort):
+                du = st.U[lay.index(term.slot), :] - ca.DM(term.reference)
+                terms.append(term.weight * ca.sumsqr(du))
+            else:  # ControlRate: on the free entries of the slot (held ones do not change)
+                slot = lay.slot(term.slot)
+                rows = [i for i, e in enumerate(self.free) if slot.start <= e < slot.stop]
+                rate = (st.V[rows, :] - st.A[rows, :N]) / self.period if rows else ca.MX(0, 1)
+                terms.append(term.weight * ca.sumsqr(rate))
+        return ca.vertcat(*terms)
+
+    # ----------------------------------------------------------------- numbers
+    def parameter_vector(
+        self,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        u_previous: np.ndarray | None,
+        u_fixed: np.ndarray,
+        reference: np.ndarray,
+    ) -> np.ndarray:
+        """The NLP's parameter vector from its parts (shapes in the module docstring)."""
+        nu = self.problem.inputs.size
+        return self.parameters.pack(
+            {
+                "x0": x0,
+                "p": p,
+                "t0": t0,
+                "u_previous": np.zeros(nu) if u_previous is None else u_previous,
+                "u_fixed": u_fixed,
+                "reference": np.asarray(reference, dtype=float).reshape(-1),
+            }
+        )
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lbx, ubx) of the scaled decision vector: input bounds on v_k, none elsewhere."""
+        lbx, ubx = np.full(self.n_w, -np.inf), np.full(self.n_w, np.inf)
+        lo = self.problem.lower[self.free] / self.u_scale
+        hi = self.problem.upper[self.free] / self.u_scale
+        for idx in self.v_index:
+            lbx[idx], ubx[idx] = lo, hi
+        return lbx, ubx
+
+    def pack(self, X: np.ndarray, U: np.ndarray, u_previous: np.ndarray | None) -> np.ndarray:
+        """Scaled decision vector from states (N + 1, STATE.size) and map inputs (N, size)."""
+        w = np.zeros(self.n_w)
+        free = U[:, self.free] / self.u_scale
+        first = free[0] if u_previous is None else u_previous[self.free] / self.u_scale
+        for k, idx in enumerate(self.x_index):
+            w[idx] = X[k] / self.x_scale
+        for k, idx in enumerate(self.v_index):
+            w[idx] = free[k]
+        for k, idx in enumerate(self.a_index):
+            if idx.size:
+                w[idx] = first if k == 0 else free[k - 1]
+        return w
