@@ -28,6 +28,7 @@ more memory than -O2 on this straight-line code.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import os
 import shutil
@@ -184,7 +185,7 @@ def compile_pulse_map(
         phi.step.name_in(),
         phi.step.name_out(),
     )
-    return PulseMap(step=step, dense=dense, period=phi.period)
+    return dataclasses.replace(phi, step=step, dense=dense)
 
 
 def _build(f: ca.Function, path: Path, cc: str, flags: Sequence[str]) -> None:

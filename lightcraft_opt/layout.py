@@ -22,6 +22,9 @@ pulses         1     -        laser pulses fired so far (engine health)
 Per-pulse inputs (:data:`PULSE_INPUT`): ``pointing_L`` (2) [m], lateral offset of the
 vertical beam axis from the pad, east and north; ``focus`` [m], focus distance (waist
 beam model); ``energy`` [J], pulse energy.
+
+The RCS inputs of the pulse map depend on :class:`~lightcraft_opt.options.RcsProfile`
+(:func:`map_input_layout`; docs/frames.md, "RCS thrust over a pulse interval").
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.params import Model
 
 __all__ = [
@@ -49,6 +53,7 @@ __all__ = [
     "map_input_layout",
     "parameter_values",
     "quaternion_from_tilt",
+    "rcs_levels",
 ]
 
 T = TypeVar("T")
@@ -101,6 +106,14 @@ class VectorLayout:
 
     def __repr__(self) -> str:
         return f"VectorLayout({self.name!r}, {[s.name for s in self.slots]}, size={self.size})"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, VectorLayout):
+            return NotImplemented
+        return (self.name, self.slots) == (other.name, other.slots)
+
+    def __hash__(self) -> int:
+        return hash((self.name, self.slots))
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -221,15 +234,78 @@ PULSE_INPUT = VectorLayout(
 )
 
 
-def map_input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:
-    """Inputs u[k] of the pulse map: the pulse (:data:`PULSE_INPUT` slots) followed by
-    the continuous inputs held over the interval (:func:`input_layout` slots)."""
+def map_input_layout(
+    n_thrusters: int,
+    has_carrier: bool,
+    rcs_profile: RcsProfile = RcsProfile.HOLD,
+    rcs_subintervals: int = 1,
+) -> VectorLayout:
+    """Inputs u[k] of the pulse map: the pulse (:data:`PULSE_INPUT` slots), then the RCS
+    thrust over the interval, then the motor torque held over the interval (a gyrostat).
+
+    Parameters
+    ----------
+    n_thrusters : RCS thrusters of the craft (0: no RCS slots).
+    has_carrier : the craft has a despun carrier (adds ``motor_torque`` [N m]).
+    rcs_profile : how the thrust varies over the interval (τ = t - t_k, time since the
+        pulse [s]; thruster i fires along its fixed direction in B):
+
+        - ``HOLD``: ``rcs_thrust`` (n) [N], level i held for the whole interval.
+        - ``SUBINTERVALS``: ``rcs_thrust`` (n * m) [N], m = ``rcs_subintervals`` equal
+          sub-intervals, **sub-interval-major**: entry j n + i is thruster i on
+          sub-interval j, i.e. on τ in [j T / m, (j + 1) T / m) (T the pulse period);
+          :func:`rcs_levels` gives the slice of sub-interval j.
+        - ``PHASE_LOCKED``: ``rcs_thrust`` (n) [N], the mean levels, then ``rcs_cos`` (n)
+          and ``rcs_sin`` (n) [N]: thrust_i(τ) = rcs_thrust_i + rcs_cos_i cos(ω τ)
+          + rcs_sin_i sin(ω τ), ω the coning rate in B right after the pulse
+          (:func:`lightcraft_opt.symbolic.coast.coning_rate_B`).
+
+        Φ does not clip the thrust (a smooth map for the optimiser): whoever sets the
+        inputs keeps 0 <= thrust_i(τ) <= max_thrust_i at every τ, e.g. for
+        ``PHASE_LOCKED`` sqrt(cos_i^2 + sin_i^2) <= min(mean_i, max_i - mean_i)
+        (:class:`lightcraft_opt.ocp_problem.RcsEnvelope`).
+    rcs_subintervals : m >= 1; more than 1 only with ``SUBINTERVALS``.
+    """
+    if not isinstance(rcs_profile, RcsProfile):
+        raise ParameterError(
+            "rcs_profile", f"must be one of {[r.value for r in RcsProfile]}, got {rcs_profile!r}"
+        )
+    m = rcs_subintervals
+    if isinstance(m, bool) or not isinstance(m, int) or m < 1:
+        raise ParameterError("rcs_subintervals", f"must be a positive integer, got {m!r}")
+    if m > 1 and rcs_profile is not RcsProfile.SUBINTERVALS:
+        raise ParameterError(
+            "rcs_subintervals", f"must be 1 with rcs_profile {rcs_profile.value!r}, got {m}"
+        )
     spec = [(s.name, s.size, s.unit, s.frame, s.components) for s in PULSE_INPUT.slots]
-    spec += [
-        (s.name, s.size, s.unit, s.frame, s.components)
-        for s in input_layout(n_thrusters, has_carrier).slots
-    ]
+    if n_thrusters and rcs_profile is RcsProfile.SUBINTERVALS:
+        comps = tuple(f"sub{j}.thr{i}" for j in range(m) for i in range(n_thrusters))
+        spec.append(("rcs_thrust", n_thrusters * m, "N", "", comps))
+    elif n_thrusters:
+        spec.append(("rcs_thrust", n_thrusters, "N", "", ()))
+        if rcs_profile is RcsProfile.PHASE_LOCKED:
+            spec.append(("rcs_cos", n_thrusters, "N", "", ()))
+            spec.append(("rcs_sin", n_thrusters, "N", "", ()))
+    if has_carrier:
+        spec.append(("motor_torque", 1, "N m", "B", ()))
     return VectorLayout("map input", spec)
+
+
+def rcs_levels(layout: VectorLayout, n_thrusters: int, subinterval: int = 0) -> slice:
+    """Where the n thrust levels [N] of sub-interval ``subinterval`` sit in a map input of
+    ``layout`` (sub-interval-major ``rcs_thrust``, :func:`map_input_layout`); for HOLD
+    and PHASE_LOCKED layouts sub-interval 0 is the whole ``rcs_thrust`` slot."""
+    slot = layout.slot("rcs_thrust")
+    if n_thrusters < 1 or slot.size % n_thrusters:
+        raise ParameterError(
+            "n_thrusters", f"{n_thrusters} does not split rcs_thrust of size {slot.size}"
+        )
+    if not 0 <= subinterval < slot.size // n_thrusters:
+        raise ParameterError(
+            "subinterval", f"must lie in [0, {slot.size // n_thrusters}), got {subinterval}"
+        )
+    start = slot.start + subinterval * n_thrusters
+    return slice(start, start + n_thrusters)
 
 
 def input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:

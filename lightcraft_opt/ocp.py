@@ -187,8 +187,9 @@ class CompiledOcp:
         default values of everything a solve may change.
     options : solver, pulse-map options, tolerance, move blocking ...
     pulse_map : a prebuilt Φ of ``problem.model`` to use instead of building one with
-        ``options.pulse_map``. Problems and solvers that share one Φ share the derivatives
-        casadi caches on it, so only the first build pays for the exact Hessian.
+        ``problem.pulse_map_options(options.pulse_map)`` (the problem's RCS profile).
+        Problems and solvers that share one Φ share the derivatives casadi caches on it,
+        so only the first build pays for the exact Hessian.
 
     Attributes
     ----------
@@ -219,12 +220,17 @@ class CompiledOcp:
         if not ca.has_nlpsol(plugin) or (opts.solver in _QP and not ca.has_conic(_QP[opts.solver])):
             raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
         self.problem, self.options = problem, opts
-        self.pulse_map = pulse_map or build_pulse_map(problem.model, opts.pulse_map)
-        if self.pulse_map.step.size1_in(1) != problem.inputs.size:
+        self.pulse_map = pulse_map or build_pulse_map(
+            problem.model, problem.pulse_map_options(opts.pulse_map)
+        )
+        if self.pulse_map.step.size1_in(1) != problem.inputs.size or (
+            self.pulse_map.inputs is not None and self.pulse_map.inputs != problem.inputs
+        ):
             raise ParameterError(
                 "pulse_map",
-                f"takes {self.pulse_map.step.size1_in(1)} inputs, the problem's "
-                f"model {problem.inputs.size}: build it from the problem's model",
+                f"takes inputs {self.pulse_map.inputs or self.pulse_map.step.size1_in(1)}, "
+                f"the problem {problem.inputs}: build it from the problem's model with "
+                "problem.pulse_map_options(...)",
             )
         blocks = opts.blocks(problem.horizon)
         self.transcription = tr = MultipleShooting(

@@ -10,10 +10,18 @@ separately. Everything is plain numpy and validated on creation: a bad value rai
 Nodes and pulses (docs/frames.md for frames and the state): node k is the state x_k just
 before pulse k at t_k = t0 + k T (T the pulse period), k = 0..N; pulse k (k = 0..N-1)
 fires the map input u_k (layout :func:`~lightcraft_opt.layout.map_input_layout`:
-``pointing_L`` (2) [m, L east/north], ``focus`` [m], ``energy`` [J], then
-``rcs_thrust`` [N] per thruster and ``motor_torque`` [N m] with a carrier), and the map Φ
-carries x_k to x_{k+1}. x_0 is given; node terms and constraints apply at k = 1..N,
-pulse terms and constraints at k = 0..N-1.
+``pointing_L`` (2) [m, L east/north], ``focus`` [m], ``energy`` [J], then the RCS thrust
+[N] over the interval and ``motor_torque`` [N m] with a carrier), and the map Φ carries
+x_k to x_{k+1}. x_0 is given; node terms and constraints apply at k = 1..N, pulse terms
+and constraints at k = 0..N-1.
+
+How the RCS thrust varies over a pulse interval is part of what the problem asks
+(``rcs_profile``, ``rcs_subintervals``; :class:`~lightcraft_opt.options.RcsProfile`): it
+fixes the decision variables. ``HOLD``: one level per thruster; ``SUBINTERVALS``: one per
+thruster and sub-interval; ``PHASE_LOCKED``: mean levels ``rcs_thrust`` with cosine and
+sine amplitudes ``rcs_cos``, ``rcs_sin`` at the coning rate. Φ does not clip the thrust:
+levels are bounded to [0, max_thrust] and, for PHASE_LOCKED, :class:`RcsEnvelope` keeps
+the thrust in [0, max_thrust] at every phase.
 
 Model parameters and wind are inputs: ``parameters`` overrides entries of the parameter
 vector p (:data:`~lightcraft_opt.layout.PARAMETERS`) by name, e.g.
@@ -25,13 +33,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import Enum
 from typing import Any, cast
 
 import numpy as np
 
-from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
@@ -41,6 +49,7 @@ from lightcraft_opt.layout import (
     map_input_layout,
     parameter_values,
 )
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import BeamSizeModel, Model
 
 __all__ = [
@@ -57,6 +66,7 @@ __all__ = [
     "ObjectiveTerm",
     "OcpProblem",
     "OffsetFrom",
+    "RcsEnvelope",
     "TerminalAltitude",
     "TerminalState",
     "TiltLimit",
@@ -248,8 +258,10 @@ class ControlBound:
     A slot without a ControlBound keeps the model's limits: pointing within
     +-``laser.pointing_limit``, focus within ``laser.focus_range`` (held at its far end for
     a LINEAR beam, where it has no effect), energy within [0, ``laser.pulse_energy_max``],
-    each RCS thruster within [0, its ``max_thrust``], the motor torque held at 0 (the model
-    gives it no limit).
+    each RCS level (``rcs_thrust``: held, per sub-interval, or the phase-locked mean)
+    within [0, its thruster's ``max_thrust``], the phase-locked amplitudes ``rcs_cos`` and
+    ``rcs_sin`` within +-``max_thrust`` / 2, the motor torque held at 0 (the model gives it
+    no limit).
     """
 
     slot: str
@@ -348,8 +360,28 @@ class EnergyBudget:
         _set(self, "total", _number("EnergyBudget.total", self.total, low=0.0))
 
 
+@dataclass(frozen=True)
+class RcsEnvelope:
+    """Every RCS thruster within [0, its ``max_thrust``] at every instant of every pulse
+    interval, not only its levels.
+
+    For ``PHASE_LOCKED`` (thrust_i(τ) = mean_i + cos_i cos(ω τ) + sin_i sin(ω τ)) this is
+    sqrt(cos_i^2 + sin_i^2) <= min(mean_i, max_i - mean_i), posed per pulse and thruster
+    in the smooth form (cos_i^2 + sin_i^2) / max_i^2 <= (mean_i / max_i)^2 and
+    <= ((max_i - mean_i) / max_i)^2, with the mean within [0, max_i] by its bounds. For
+    ``HOLD`` and ``SUBINTERVALS`` the bounds of the levels already say it. In every case
+    the problem checks that the ``rcs_thrust`` bounds lie within [0, max_thrust].
+    """
+
+
 Constraint = (
-    CaptureFraction | TiltLimit | NoGroundContact | TerminalAltitude | TerminalState | EnergyBudget
+    CaptureFraction
+    | TiltLimit
+    | NoGroundContact
+    | TerminalAltitude
+    | TerminalState
+    | EnergyBudget
+    | RcsEnvelope
 )
 CONSTRAINT_KINDS = (
     CaptureFraction,
@@ -358,6 +390,7 @@ CONSTRAINT_KINDS = (
     TerminalAltitude,
     TerminalState,
     EnergyBudget,
+    RcsEnvelope,
 )
 
 
@@ -378,11 +411,17 @@ class OcpProblem:
     t0 : time of the first pulse [s] (gusts depend on time).
     u_previous : (map-input size,) input of the pulse before t0, for slew limits and
         control rates at k = 0 (default: none, pulse 0 is free of them).
+    rcs_profile : how the RCS thrust varies over a pulse interval (module docstring); a
+        profile other than HOLD needs a craft with an RCS.
+    rcs_subintervals : sub-intervals of ``SUBINTERVALS`` (1 for the other profiles); the
+        pulse map's substeps must be a multiple (checked when Φ is built).
 
     Derived (read-only): ``p`` (PARAMETERS.size,) parameter vector; ``inputs`` the
     map-input layout; ``lower``, ``upper``, ``slew`` (size of the map input,) bounds [unit]
     and slew limits per pulse [unit] (slew_rate T); ``free`` entries that are decision
-    variables; ``period`` T [s].
+    variables; ``period`` T [s]. Default bounds of the RCS slots: each level
+    (``rcs_thrust``, the mean for PHASE_LOCKED) in [0, max_thrust], ``rcs_cos`` and
+    ``rcs_sin`` in [-max_thrust / 2, max_thrust / 2].
     """
 
     model: Model
@@ -394,6 +433,8 @@ class OcpProblem:
     parameters: Mapping[str, Values] | None = None
     t0: float = 0.0
     u_previous: np.ndarray | Sequence[float] | None = None
+    rcs_profile: RcsProfile = RcsProfile.HOLD
+    rcs_subintervals: int = 1
     p: np.ndarray = field(init=False, repr=False)
     inputs: VectorLayout = field(init=False, repr=False)
     lower: np.ndarray = field(init=False, repr=False)
@@ -407,9 +448,7 @@ class OcpProblem:
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
             raise ParameterError("horizon", f"must be an integer >= 1 (pulses), got {n!r}")
         _set(self, "horizon", int(n))
-        craft = self.model.craft
-        n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
-        _set(self, "inputs", map_input_layout(n_thr, craft.has_carrier))
+        _set(self, "inputs", self._input_layout())
         _set(self, "objective", self._kinds("objective", self.objective, OBJECTIVE_KINDS))
         if not self.objective:
             raise ParameterError("objective", "needs at least one term")
@@ -425,6 +464,7 @@ class OcpProblem:
             _set(self, "u_previous", u_prev)
         _set(self, "p", self._parameter_vector())
         self._set_bounds()
+        self._check_envelope()
         for name in ("x0", "p", "lower", "upper", "slew"):
             getattr(self, name).setflags(write=False)
 
@@ -443,6 +483,33 @@ class OcpProblem:
     def period(self) -> float:
         """Pulse period T [s]."""
         return 1.0 / self.model.flight.pulse_rate
+
+    @property
+    def n_thrusters(self) -> int:
+        """RCS thrusters of the craft (0 without an RCS)."""
+        rcs = self.model.craft.rcs
+        return len(rcs.thrusters) if rcs else 0
+
+    def max_thrust(self) -> np.ndarray:
+        """(n_thrusters,) each thruster's max_thrust [N]."""
+        rcs = self.model.craft.rcs
+        return np.array([t.max_thrust for t in rcs.thrusters] if rcs else [], dtype=float)
+
+    def pulse_map_options(self, base: PulseMapOptions) -> PulseMapOptions:
+        """``base`` (scheme, substeps, dense) with this problem's RCS profile: the options
+        of the Φ this problem needs. Raises OptionError when ``base`` asks for another
+        RCS profile, or when ``rcs_subintervals`` does not divide its substeps."""
+        if (base.rcs_profile, base.rcs_subintervals) not in (
+            (RcsProfile.HOLD, 1),
+            (self.rcs_profile, self.rcs_subintervals),
+        ):
+            raise OptionError(
+                f"PulseMapOptions.rcs_profile {base.rcs_profile.value!r} "
+                f"(rcs_subintervals {base.rcs_subintervals}) differs from the problem's "
+                f"{self.rcs_profile.value!r} ({self.rcs_subintervals}): the problem's "
+                "rcs_profile decides (leave the pulse map's at 'hold')"
+            )
+        return replace(base, rcs_profile=self.rcs_profile, rcs_subintervals=self.rcs_subintervals)
 
     @property
     def free(self) -> np.ndarray:
@@ -464,6 +531,35 @@ class OcpProblem:
         return np.hstack(paths) if paths else np.zeros((self.horizon + 1, 0))
 
     # ----------------------------------------------------------------- checks
+    def _input_layout(self) -> VectorLayout:
+        """The map-input layout of the model and the RCS profile (checked here)."""
+        craft = self.model.craft
+        if not isinstance(self.rcs_profile, RcsProfile):
+            raise ParameterError(
+                "rcs_profile",
+                f"must be one of {[r.value for r in RcsProfile]} (RcsProfile), "
+                f"got {self.rcs_profile!r}",
+            )
+        m = self.rcs_subintervals
+        if isinstance(m, bool) or not isinstance(m, int | np.integer) or m < 1:
+            raise ParameterError("rcs_subintervals", f"must be a positive integer, got {m!r}")
+        _set(self, "rcs_subintervals", int(m))
+        if m > 1 and self.rcs_profile is not RcsProfile.SUBINTERVALS:
+            raise ParameterError(
+                "rcs_subintervals",
+                f"must be 1 unless rcs_profile is 'subintervals' (got {m} with "
+                f"{self.rcs_profile.value!r})",
+            )
+        if self.rcs_profile is not RcsProfile.HOLD and not self.n_thrusters:
+            raise ParameterError(
+                "rcs_profile",
+                f"{self.rcs_profile.value!r} needs a craft with an RCS; "
+                f"{self.model.name!r} has none",
+            )
+        return map_input_layout(
+            self.n_thrusters, craft.has_carrier, self.rcs_profile, self.rcs_subintervals
+        )
+
     @staticmethod
     def _kinds(name: str, items: Any, kinds: tuple[type, ...]) -> tuple[Any, ...]:
         if isinstance(items, kinds):
@@ -524,7 +620,11 @@ class OcpProblem:
         lower[lay.index("focus")], upper[lay.index("focus")] = focus[0], focus[-1]
         upper[lay.index("energy")] = laser.pulse_energy_max
         if craft.rcs:
-            upper[lay.index("rcs_thrust")] = [t.max_thrust for t in craft.rcs.thrusters]
+            top = self.max_thrust()
+            upper[lay.index("rcs_thrust")] = np.tile(top, self.rcs_subintervals)
+            for name in ("rcs_cos", "rcs_sin"):
+                if name in lay:
+                    lower[lay.index(name)], upper[lay.index(name)] = -top / 2, top / 2
         slew = np.full(lay.size, math.inf)
         seen: set[str] = set()
         for i, bound in enumerate(self.controls):
@@ -552,3 +652,40 @@ class OcpProblem:
         _set(self, "lower", lower)
         _set(self, "upper", upper)
         _set(self, "slew", slew)
+
+    def _check_envelope(self) -> None:
+        """RcsEnvelope: an RCS, level bounds within [0, max_thrust], and thrusters whose
+        phase-locked inputs are all held must hold them inside the envelope."""
+        where = [i for i, c in enumerate(self.constraints) if isinstance(c, RcsEnvelope)]
+        if not where:
+            return
+        name = f"constraints[{where[0]}]"
+        if not self.n_thrusters:
+            raise ParameterError(
+                name, f"RcsEnvelope needs a craft with an RCS; {self.model.name!r} has none"
+            )
+        lay, top = self.inputs, np.tile(self.max_thrust(), self.rcs_subintervals)
+        idx = lay.index("rcs_thrust")
+        if np.any(self.lower[idx] < 0) or np.any(self.upper[idx] > top):
+            raise ParameterError(
+                name,
+                "RcsEnvelope needs the rcs_thrust bounds within [0, max_thrust]; got "
+                f"[{self.lower[idx]}, {self.upper[idx]}]",
+            )
+        if self.rcs_profile is not RcsProfile.PHASE_LOCKED:
+            return
+        held = ~self.free
+        mean, c, s = (
+            lay.slot(n).start + np.arange(self.n_thrusters)
+            for n in ("rcs_thrust", "rcs_cos", "rcs_sin")
+        )
+        for i in range(self.n_thrusters):
+            if held[mean[i]] and held[c[i]] and held[s[i]]:
+                amp = math.hypot(self.lower[c[i]], self.lower[s[i]])
+                m, mx = self.lower[mean[i]], top[i]
+                if amp > min(m, mx - m):
+                    raise ParameterError(
+                        name,
+                        f"thruster {i}'s held inputs (mean {m}, amplitude {amp:.6g} N) leave "
+                        f"[0, {mx}] N over a coning period",
+                    )

@@ -15,6 +15,7 @@ __all__ = [
     "OcpOptions",
     "OcpSolver",
     "PulseMapOptions",
+    "RcsProfile",
     "SimulationOptions",
 ]
 
@@ -27,6 +28,21 @@ class CoastScheme(Enum):
     SPLIT4 = "split4"  # Yoshida composition of SPLIT (4th order)
 
 
+class RcsProfile(Enum):
+    """How the RCS thrust varies over one pulse interval (layout.map_input_layout).
+
+    ``HOLD``: one level per thruster, held from pulse to pulse. ``SUBINTERVALS``: one
+    level per thruster on each of ``rcs_subintervals`` equal sub-intervals of the
+    interval. ``PHASE_LOCKED``: a mean level plus a cosine and a sine at the coning
+    (nutation) rate seen in B, so the torque can turn with the ~216 Hz coning mode
+    (docs/frames.md, "RCS thrust over a pulse interval").
+    """
+
+    HOLD = "hold"
+    SUBINTERVALS = "subintervals"
+    PHASE_LOCKED = "phase_locked"
+
+
 @dataclass(frozen=True)
 class PulseMapOptions:
     """How Φ integrates one pulse interval.
@@ -37,11 +53,18 @@ class PulseMapOptions:
     substeps : fixed steps per pulse interval.
     dense : states returned inside each interval by the dense-output Function;
         must divide ``substeps``.
+    rcs_profile : how the RCS thrust varies over the interval (:class:`RcsProfile`);
+        it sets the map input layout.
+    rcs_subintervals : equal sub-intervals of the interval, each with its own RCS
+        levels; must divide ``substeps`` (a substep never straddles two levels) and be 1
+        unless ``rcs_profile`` is ``SUBINTERVALS``.
     """
 
     scheme: CoastScheme = CoastScheme.SPLIT4
     substeps: int = 32
     dense: int = 8
+    rcs_profile: RcsProfile = RcsProfile.HOLD
+    rcs_subintervals: int = 1
 
     def __post_init__(self) -> None:
         if not isinstance(self.scheme, CoastScheme):
@@ -49,13 +72,29 @@ class PulseMapOptions:
             raise OptionError(
                 f"PulseMapOptions.scheme must be one of {allowed}, got {self.scheme!r}"
             )
-        for name in ("substeps", "dense"):
+        if not isinstance(self.rcs_profile, RcsProfile):
+            allowed = [s.value for s in RcsProfile]
+            raise OptionError(
+                f"PulseMapOptions.rcs_profile must be one of {allowed} (RcsProfile), "
+                f"got {self.rcs_profile!r}"
+            )
+        for name in ("substeps", "dense", "rcs_subintervals"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise OptionError(f"PulseMapOptions.{name} must be a positive integer, got {v!r}")
         if self.substeps % self.dense:
             raise OptionError(
                 f"PulseMapOptions.dense ({self.dense}) must divide substeps ({self.substeps})"
+            )
+        if self.rcs_subintervals > 1 and self.rcs_profile is not RcsProfile.SUBINTERVALS:
+            raise OptionError(
+                f"PulseMapOptions.rcs_subintervals ({self.rcs_subintervals}) must be 1 unless "
+                f"rcs_profile is 'subintervals' (got {self.rcs_profile.value!r})"
+            )
+        if self.substeps % self.rcs_subintervals:
+            raise OptionError(
+                f"PulseMapOptions.rcs_subintervals ({self.rcs_subintervals}) must divide "
+                f"substeps ({self.substeps}): a substep may not straddle two RCS levels"
             )
 
 

@@ -21,6 +21,7 @@ from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
+    VectorLayout,
     checked_vector,
     initial_state,
     map_input_layout,
@@ -42,11 +43,14 @@ CHUNK_SECONDS = 1.0  # open-loop inputs: pulses per mapaccum call, in seconds of
 _Z_UP = STATE.slot("r_L").start + 2  # altitude above the pad in x
 
 
-def nominal_inputs(model: Model) -> np.ndarray:
+def nominal_inputs(model: Model, layout: VectorLayout | None = None) -> np.ndarray:
     """The map input of an unsteered flight: beam on the pad axis, focus at the far end of
-    the laser's range, the flight's pulse energy, RCS and motor off."""
+    the laser's range, the flight's pulse energy, RCS and motor off. ``layout``: the map
+    input layout (a pulse map's ``inputs``); default the model's with held RCS levels."""
     craft = model.craft
-    lay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    lay = layout or map_input_layout(
+        len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
+    )
     values: dict[str, object] = {
         "pointing_L": (0.0, 0.0),
         "focus": model.laser.focus_range[1],
@@ -57,11 +61,12 @@ def nominal_inputs(model: Model) -> np.ndarray:
 
 
 def _input_rows(
-    model: Model, inputs: np.ndarray | Sequence[float] | None, size: int, n: int
+    model: Model, inputs: np.ndarray | Sequence[float] | None, lay: VectorLayout, n: int
 ) -> np.ndarray:
     """(n, size) map inputs of an open-loop flight, one row per pulse."""
+    size = lay.size
     if inputs is None:
-        return np.tile(nominal_inputs(model), (n, 1))
+        return np.tile(nominal_inputs(model, lay), (n, 1))
     arr = np.asarray(inputs, dtype=float)
     if arr.ndim == 1:
         arr = arr[None, :]
@@ -115,11 +120,13 @@ def simulate(
         raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
     if not 0.0 <= dropout_rate < 1.0:
         raise ParameterError("dropout_rate", f"must lie in [0, 1), got {dropout_rate!r}")
-    craft = model.craft
-    lay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
     phi = pulse_map or build_pulse_map(model, options)
     if compiled:
         phi = compile_pulse_map(phi)
+    craft = model.craft
+    lay = phi.inputs or map_input_layout(
+        len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
+    )
     xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     pk = checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)
     n_pulses = int(np.ceil(duration / phi.period - 1e-9))
@@ -138,7 +145,7 @@ def simulate(
                 break
             xk = X[:, -1]
     else:
-        U = _input_rows(model, inputs, lay.size, n_pulses)
+        U = _input_rows(model, inputs, lay, n_pulses)
         U[dropped, i_energy] = 0.0
         _step_in_chunks(phi, U, xk, pk, flight, max(1, round(CHUNK_SECONDS / phi.period)))
     record = PulseRecord(

@@ -13,8 +13,14 @@ the NLP has the stage structure that fatrop and hpipm exploit. Constraints, in o
 
     for k in 0..N-1:  x_{k+1} - Φ(x_k, u_k, p, t_k) = 0,  a_{k+1} - v_k = 0   (gaps)
                       stage k: x_0 = x0 (k = 0), path constraints at node k (k >= 1),
-                      at pulse k, slew or hold of v_k - a_k
+                      at pulse k (capture, RCS envelope), slew or hold of v_k - a_k
     then:             path and terminal constraints at node N
+
+The RCS envelope of a PHASE_LOCKED problem (:class:`~lightcraft_opt.ocp_problem.RcsEnvelope`)
+is two rows per pulse and thruster (those with a free input),
+(c_i^2 + s_i^2 - m_i^2) / max_i^2 <= 0 and (c_i^2 + s_i^2 - (max_i - m_i)^2) / max_i^2 <= 0,
+m_i the mean level and c_i, s_i the cosine and sine amplitudes: the thrust then stays in
+[0, max_i] at every phase (the mean's own bounds keep it in [0, max_i]).
 
 Φ enters through one ``map`` over the horizon: the jump is exact and every derivative is
 the AD derivative of Φ (no finite differences). Variables are scaled (state slots by their
@@ -45,11 +51,13 @@ from lightcraft_opt.ocp_problem import (
     NoGroundContact,
     OcpProblem,
     OffsetFrom,
+    RcsEnvelope,
     TerminalAltitude,
     TerminalState,
     TiltLimit,
     TrackReference,
 )
+from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 
@@ -227,6 +235,7 @@ class MultipleShooting:
                     add(cos_tilt[k], math.cos(con.max_tilt), math.inf)
 
         fractions = [c.fraction for c in pr.constraints if isinstance(c, CaptureFraction)]
+        envelope = self._rcs_envelope()
         slew_rows = np.flatnonzero(np.isfinite(pr.slew[self.free]))
         limit = pr.slew[self.free][slew_rows]
         has_previous = pr.u_before is not None
@@ -245,6 +254,8 @@ class MultipleShooting:
                 node_path(k)
             if fractions:
                 add(use[k], -math.inf, min(fractions) ** 2)
+            if envelope is not None:
+                add(envelope(st.U[:, k]), -math.inf, 0.0)
             if self.coupled and k not in self.starts:
                 add(st.vs[k] - st.as_[k], 0.0, 0.0)  # held by move blocking
             elif self.coupled and slew_rows.size and (k > 0 or has_previous):
@@ -261,6 +272,30 @@ class MultipleShooting:
         lbg = np.concatenate([b[0] for b in bounds]).astype(float)
         ubg = np.concatenate([b[1] for b in bounds]).astype(float)
         return ca.vertcat(*g), lbg, ubg
+
+    def _rcs_envelope(self) -> ca.Function | None:
+        """``rcs_envelope(u) -> g`` (module docstring) for the thrusters with a free
+        phase-locked input, or None (no RcsEnvelope, not PHASE_LOCKED, nothing free)."""
+        pr, lay = self.problem, self.problem.inputs
+        if pr.rcs_profile is not RcsProfile.PHASE_LOCKED or not any(
+            isinstance(c, RcsEnvelope) for c in pr.constraints
+        ):
+            return None
+        n = pr.n_thrusters
+        rows = {
+            name: lay.slot(name).start + np.arange(n)
+            for name in ("rcs_thrust", "rcs_cos", "rcs_sin")
+        }
+        free = pr.free
+        live = [i for i in range(n) if any(free[r[i]] for r in rows.values())]
+        if not live:
+            return None
+        u = ca.MX.sym("u", lay.size)
+        top = ca.DM(pr.max_thrust()[live])
+        mean, c, s = (u[rows[name][live].tolist()] for name in ("rcs_thrust", "rcs_cos", "rcs_sin"))
+        amp2 = c**2 + s**2
+        g = ca.vertcat((amp2 - mean**2) / top**2, (amp2 - (top - mean) ** 2) / top**2)
+        return ca.Function("rcs_envelope", [u], [g], ["u"], ["g"])
 
     def _objective(self, st: _Stages) -> ca.MX:
         """(n_terms,) the objective terms, in the problem's order."""

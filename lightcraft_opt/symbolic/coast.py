@@ -17,11 +17,18 @@ angular momentum, I_t the transverse and J the rotor axial moment,
 torques, Earth rate) is smooth on the pulse time scale and is stepped by RK4:
 slow(h/2), fast(h), slow(h/2). The fast part needs an axisymmetric mass
 distribution about S* (no carrier, RCS tank on the axis): the builder checks it.
+
+Time-varying inputs (RCS thrust over the interval, layout.map_input_layout): every
+scheme evaluates the right-hand side only at its stage times, so a smooth input
+(PHASE_LOCKED) is sampled where the scheme samples its slow forces and the order is
+kept (time is the slow flow's extra state; Yoshida's backward slow step stays inside
+its substep). Inputs that jump (SUBINTERVALS) come as one right-hand side per substep,
+constant on it: the substeps must align with the jumps.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import casadi as ca
 
@@ -33,24 +40,37 @@ from lightcraft_opt.symbolic.gyrostat import angular_momentum, gyrostat_accelera
 from lightcraft_opt.symbolic.mass_properties import mass_properties
 from lightcraft_opt.symbolic.rotation import dcm, quat_derivative, quat_multiply
 
-__all__ = ["exact_spin_flow", "rk4_coast", "split_coast"]
+__all__ = ["coning_rate_B", "exact_spin_flow", "rk4_coast", "split_coast"]
 
 Rhs = Callable[[ca.SX, ca.SX], ca.SX]  # (t, x) -> xdot
+#: One right-hand side for the whole coast, or one per substep (inputs constant on each).
+Rhses = Rhs | Sequence[Rhs]
 
 
-def rk4_coast(rhs: Rhs, t0: ca.SX, x0: ca.SX, dt: ca.SX, steps: int) -> list[ca.SX]:
+def _on_step(rhs: Rhses, k: int, steps: int) -> Rhs:
+    """The right-hand side of substep k."""
+    if callable(rhs):
+        return rhs
+    if len(rhs) != steps:
+        raise ValueError(f"{len(rhs)} right-hand sides for {steps} substeps")
+    return rhs[k]
+
+
+def rk4_coast(rhs: Rhses, t0: ca.SX, x0: ca.SX, dt: ca.SX, steps: int) -> list[ca.SX]:
     """Classical RK4 with ``steps`` equal steps over [t0, t0 + dt].
 
-    Returns the state after every step (``steps`` entries, the last is x(t0 + dt)).
+    ``rhs`` is one (t, x) -> xdot, or one per step. Returns the state after every step
+    (``steps`` entries, the last is x(t0 + dt)).
     """
     h = dt / steps
     x, out = x0, []
     for k in range(steps):
         t = t0 + k * h
-        k1 = rhs(t, x)
-        k2 = rhs(t + h / 2, x + h / 2 * k1)
-        k3 = rhs(t + h / 2, x + h / 2 * k2)
-        k4 = rhs(t + h, x + h * k3)
+        f = _on_step(rhs, k, steps)
+        k1 = f(t, x)
+        k2 = f(t + h / 2, x + h / 2 * k1)
+        k3 = f(t + h / 2, x + h / 2 * k2)
+        k4 = f(t + h, x + h * k3)
         x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         out.append(x)
     return out
@@ -65,10 +85,52 @@ def _axis_angle_quaternion(phi: ca.SX) -> ca.SX:
     return ca.vertcat(ca.cos(theta / 2), half_sinc * phi)
 
 
+def coning_rate_B(x: ca.SX, p: ca.SX) -> ca.SX:
+    """Rate [rad/s] at which the transverse angular momentum H_⊥ (and w_⊥) turns in the
+    despun frame B about +b1 during torque-free motion: the coning (nutation) rate seen
+    in B, the ω of the PHASE_LOCKED RCS profile.
+
+    Derivation (axisymmetric craft: every particle of I_B on b1, so I_B is diagonal with
+    I_B22 = I_B33): H_B = (C w1 + J ψ̇, A w2, A w3) with C = I_B11 + J and
+    A = I_B22 + I (gyrostat.py; physics.md section 2). Torque-free, in B,
+    dH_B/dt = -w_B × H_B gives dH1/dt = 0 and
+
+        dH2/dt = -(H1 - A w1)/A H3,    dH3/dt = +(H1 - A w1)/A H2,
+
+    so H_⊥ turns about +b1 at ω = (H1 - A w1) / A, constant (w1 is constant in the
+    gauge of docs/frames.md). In the gauge's usual state w1 = 0 this is ω = H1 / A
+    = J ψ̇ / A; in general ω = (J (w1 + ψ̇) + (I_B11 - A) w1) / A. It is the rate of
+    :func:`exact_spin_flow`'s rotation of w_B (same formula), and for Flight 5
+    at 10,000 RPM (J = 602.7, A = I = 465.3 g cm^2) 1356.43 rad/s (216 Hz), physics.md's
+    J spin / (I cos θ) at small cone angle θ. It differs from the rate at which b1 cones
+    about H in N, |H| / A, by the factor cos θ only.
+
+    Parameters
+    ----------
+    x : state (layout.STATE).
+    p : parameters (layout.PARAMETERS).
+
+    Returns
+    -------
+    ω [rad/s], positive for a positive rotor spin.
+    """
+    mp = mass_properties(x, p)
+    I_t = mp.I + mp.I_B[1, 1]
+    w = STATE.get("w_B", x)
+    H_B = angular_momentum(w, STATE.get("spin", x), mp.I_B, mp.J, mp.I)
+    return _coning_rate(H_B, w, I_t)
+
+
+def _coning_rate(H_B: ca.SX, w_B: ca.SX, I_t: ca.SX) -> ca.SX:
+    """ω = (H1 - A w1) / A (:func:`coning_rate_B`), from quantities already built."""
+    return (H_B[0] - I_t * w_B[0]) / I_t
+
+
 def exact_spin_flow(x: ca.SX, p: ca.SX, h: ca.SX) -> ca.SX:
     """Torque-free motion of the axisymmetric spinning body over h [s], in closed form.
 
-    Changes only q_LB and w_B (B frame); everything else is held.
+    Changes only q_LB and w_B (B frame); everything else is held. w_B turns about b1 at
+    :func:`coning_rate_B`.
     """
     mp = mass_properties(x, p)
     I_t = mp.I + mp.I_B[1, 1]
@@ -76,7 +138,7 @@ def exact_spin_flow(x: ca.SX, p: ca.SX, h: ca.SX) -> ca.SX:
     spin = STATE.get("spin", x)
     q = STATE.get("q_LB", x)
     H_B = angular_momentum(w, spin, mp.I_B, mp.J, mp.I)
-    omega_n = (H_B[0] - I_t * w[0]) / I_t
+    omega_n = _coning_rate(H_B, w, I_t)
     c, s = ca.cos(omega_n * h), ca.sin(omega_n * h)
     w_new = ca.vertcat(w[0], c * w[1] - s * w[2], s * w[1] + c * w[2])
     H_L = ca.mtimes(dcm(q), H_B)
@@ -109,7 +171,7 @@ def check_splitting_applies(model: Model) -> None:
 
 
 def split_coast(
-    rhs: Rhs,
+    rhs: Rhses,
     p: ca.SX,
     model: Model,
     t0: ca.SX,
@@ -118,16 +180,21 @@ def split_coast(
     steps: int,
     order: int = 2,
 ) -> list[ca.SX]:
-    """Strang splitting: RK4 on f - f_fast for h/2, exact fast flow for h, RK4 for h/2.
+    """Strang splitting: RK4 on f - f_fast for h/2, exact fast flow for h, RK4 for h/2
+    (``order`` 2), or Yoshida's composition of it (``order`` 4).
 
-    Returns the state after every step, like :func:`rk4_coast`.
+    ``rhs`` is one (t, x) -> xdot, or one per step. Returns the state after every step,
+    like :func:`rk4_coast`.
     """
     check_splitting_applies(model)
 
-    def slow(t: ca.SX, x: ca.SX) -> ca.SX:
-        return rhs(t, x) - _fast_rhs(x, p, model)
+    def slow_of(f: Rhs) -> Rhs:
+        def slow(t: ca.SX, x: ca.SX) -> ca.SX:
+            return f(t, x) - _fast_rhs(x, p, model)
 
-    def strang(t: ca.SX, x: ca.SX, h: ca.SX) -> ca.SX:
+        return slow
+
+    def strang(slow: Rhs, t: ca.SX, x: ca.SX, h: ca.SX) -> ca.SX:
         x = rk4_coast(slow, t, x, h / 2, 1)[-1]
         x = exact_spin_flow(x, p, h)
         return rk4_coast(slow, t + h / 2, x, h / 2, 1)[-1]
@@ -136,7 +203,8 @@ def split_coast(
     x, out = x0, []
     for k in range(steps):
         t = t0 + k * h
-        x = strang(t, x, h) if order == 2 else _yoshida(slow, p, t, x, h)
+        slow = slow_of(_on_step(rhs, k, steps))
+        x = strang(slow, t, x, h) if order == 2 else _yoshida(slow, p, t, x, h)
         out.append(x)
     return out
 

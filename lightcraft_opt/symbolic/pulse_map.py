@@ -1,9 +1,12 @@
 """The hybrid pulse-to-pulse map Φ: x[k+1] = Φ(x[k], u[k], p, t_k).
 
 At t_k the laser pulse jumps the state (pulse_jump.py); then the craft coasts for
-one pulse period with the inputs held (coast.py), so no integrator ever steps
-through a pulse. One Function serves simulation, optimal control, MPC,
-linearisation, calibration and Monte Carlo (STYLE rule 1).
+one pulse period (coast.py), so no integrator ever steps through a pulse. The motor
+torque is held over the coast; the RCS thrust follows the options' profile (held,
+piecewise constant on sub-intervals, or phase-locked to the coning mode; layout
+``map_input_layout``), evaluated at the coast scheme's stage times. One Function
+serves simulation, optimal control, MPC, linearisation, calibration and Monte Carlo
+(STYLE rule 1).
 """
 
 from __future__ import annotations
@@ -12,13 +15,23 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, input_layout, map_input_layout
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
+from lightcraft_opt.errors import OptionError
+from lightcraft_opt.layout import (
+    PARAMETERS,
+    PULSE_INPUT,
+    STATE,
+    VectorLayout,
+    input_layout,
+    map_input_layout,
+    rcs_levels,
+)
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.coast import rk4_coast, split_coast
+from lightcraft_opt.symbolic.coast import Rhs, Rhses, coning_rate_B, rk4_coast, split_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.rcs import phase_locked_thrust
 
 __all__ = ["ENGINE_OUTPUTS", "PulseMap", "build_pulse_map"]
 
@@ -45,20 +58,35 @@ class PulseMap:
         (STATE.size, dense) states at t + T k / dense, k = 1..dense, after the pulse
         (the last is x_next), and the engine outputs.
     period : pulse period T [s].
+    inputs : layout of u (:func:`~lightcraft_opt.layout.map_input_layout` with the
+        options' RCS profile): read it instead of rebuilding it from the model. None only
+        for a map assembled without it.
+    options : the options Φ was built with (None likewise).
     """
 
     step: ca.Function
     dense: ca.Function
     period: float
+    inputs: VectorLayout | None = None
+    options: PulseMapOptions | None = None
 
 
 def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> PulseMap:
-    """Build Φ for ``model`` (structure fixed here, numbers through p)."""
+    """Build Φ for ``model`` (structure fixed here, numbers through p).
+
+    The options' scheme and substeps set the coast; their RCS profile sets the layout of
+    u (:attr:`PulseMap.inputs`) and how the thrust varies over the interval. A profile
+    other than HOLD needs a craft with an RCS (OptionError otherwise).
+    """
     opts = options or PulseMapOptions()
     craft = model.craft
     n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
-    ulay = map_input_layout(n_thr, craft.has_carrier)
-    coast_layout = input_layout(n_thr, craft.has_carrier)
+    if opts.rcs_profile is not RcsProfile.HOLD and not n_thr:
+        raise OptionError(
+            f"PulseMapOptions.rcs_profile {opts.rcs_profile.value!r} needs a craft with an RCS; "
+            f"{model.name!r} has none: use 'hold'"
+        )
+    ulay = map_input_layout(n_thr, craft.has_carrier, opts.rcs_profile, opts.rcs_subintervals)
     period = 1.0 / model.flight.pulse_rate
 
     x = ca.SX.sym("x", STATE.size)
@@ -66,15 +94,9 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
     p = ca.SX.sym("p", PARAMETERS.size)
     t = ca.SX.sym("t")
     pulse = u[: PULSE_INPUT.size]
-    u_coast = u[PULSE_INPUT.size :]
-    assert u_coast.numel() == coast_layout.size
-
-    rhs = build_coast_rhs(model)
-
-    def f(tt: ca.SX, xx: ca.SX) -> ca.SX:
-        return rhs(tt, xx, u_coast, p)
 
     x_plus, eng = pulse_jump(x, pulse, p, model)
+    f = _coast_rhs(model, opts, ulay, n_thr, u, p, t, x_plus)
     if opts.scheme is CoastScheme.RK4:
         states = rk4_coast(f, t, x_plus, period, opts.substeps)
     else:
@@ -90,7 +112,53 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
     dense_f = ca.Function(
         "pulse_map_dense", [x, u, p, t], [dense, engine], names_in, ["X", "engine"]
     )
-    return PulseMap(step=step, dense=dense_f, period=period)
+    return PulseMap(step=step, dense=dense_f, period=period, inputs=ulay, options=opts)
+
+
+def _coast_rhs(
+    model: Model,
+    opts: PulseMapOptions,
+    ulay: VectorLayout,
+    n_thr: int,
+    u: ca.SX,
+    p: ca.SX,
+    t: ca.SX,
+    x_plus: ca.SX,
+) -> Rhses:
+    """The coast's right-hand side (t, x) -> xdot with the continuous inputs of u: one
+    for HOLD and PHASE_LOCKED (thrust a function of the stage time), one per substep for
+    SUBINTERVALS (levels constant on each substep)."""
+    craft = model.craft
+    rhs = build_coast_rhs(model)
+    coast_layout = input_layout(n_thr, craft.has_carrier)
+    motor = [ulay.get("motor_torque", u)] if craft.has_carrier else []
+
+    def with_inputs(u_coast: ca.SX) -> Rhs:
+        assert u_coast.numel() == coast_layout.size
+
+        def f(tt: ca.SX, xx: ca.SX) -> ca.SX:
+            return rhs(tt, xx, u_coast, p)
+
+        return f
+
+    if opts.rcs_profile is RcsProfile.HOLD:
+        return with_inputs(u[PULSE_INPUT.size :])
+    if opts.rcs_profile is RcsProfile.SUBINTERVALS:
+        per_level = opts.substeps // opts.rcs_subintervals
+        levels = [
+            with_inputs(ca.vertcat(u[rcs_levels(ulay, n_thr, j)], *motor))
+            for j in range(opts.rcs_subintervals)
+        ]
+        return [levels[k // per_level] for k in range(opts.substeps)]
+    # PHASE_LOCKED: ω from the state right after the jump, fixed over the interval
+    omega = coning_rate_B(x_plus, p)
+    mean, cos_, sin_ = (ulay.get(name, u) for name in ("rcs_thrust", "rcs_cos", "rcs_sin"))
+
+    def f_phase(tt: ca.SX, xx: ca.SX) -> ca.SX:
+        thrust = phase_locked_thrust(mean, cos_, sin_, omega, tt - t)
+        return rhs(tt, xx, ca.vertcat(thrust, *motor), p)
+
+    return f_phase
 
 
 def _normalised(x: ca.SX) -> ca.SX:

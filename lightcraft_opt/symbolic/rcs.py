@@ -3,6 +3,10 @@
 Thrusters are fixed in B (docs/frames.md); their positions are from P. Moments
 are taken about the current system mass centre S*. Propellant flows at
 sum(T_k) / (Isp g0); an empty tank gives no thrust.
+
+Over a pulse interval the thrust is held, piecewise constant on sub-intervals, or
+phase-locked to the coning mode (:func:`phase_locked_thrust`; options.RcsProfile). It is
+never clipped here: Φ stays smooth and the caller keeps 0 <= thrust <= max_thrust.
 """
 
 from __future__ import annotations
@@ -12,7 +16,7 @@ import casadi as ca
 from lightcraft_opt.params import Rcs
 from lightcraft_opt.symbolic.rotation import Expr, cross
 
-__all__ = ["STANDARD_GRAVITY", "rcs_loads"]
+__all__ = ["STANDARD_GRAVITY", "phase_locked_thrust", "rcs_loads"]
 
 STANDARD_GRAVITY = 9.80665  # g0 in the definition of Isp [m/s^2]
 
@@ -46,3 +50,23 @@ def rcs_loads(
         M = M + cross(ca.DM(thruster.position_B) - cm_B, f_k)
         total = total + on * thrust[k]
     return F, M, -total / (isp * STANDARD_GRAVITY)
+
+
+def phase_locked_thrust(mean: Expr, cos_: Expr, sin_: Expr, omega: Expr, tau: Expr) -> Expr:
+    """Thrust of the PHASE_LOCKED profile: mean + cos_ cos(ω τ) + sin_ sin(ω τ).
+
+    Parameters
+    ----------
+    mean, cos_, sin_ : (n,) mean level and the cosine and sine amplitudes per thruster [N]
+        (map-input slots ``rcs_thrust``, ``rcs_cos``, ``rcs_sin``).
+    omega : coning rate in B [rad/s] (symbolic/coast.py ``coning_rate_B``), fixed over
+        the interval.
+    tau : time since the pulse [s].
+
+    Returns
+    -------
+    (n,) thrust per thruster [N], along each thruster's direction in B. Not clipped: it
+    stays in [0, max] at every τ exactly when sqrt(cos_^2 + sin_^2) <= min(mean,
+    max - mean).
+    """
+    return mean + cos_ * ca.cos(omega * tau) + sin_ * ca.sin(omega * tau)
