@@ -3,10 +3,17 @@
 Frames and units: docs/frames.md. Everything inside is SI.
 """
 
-from lightcraft_opt.errors import LightcraftError, ModelFileError, OptionError, ParameterError
+from lightcraft_opt.errors import (
+    LightcraftError,
+    ModelFileError,
+    OptionError,
+    ParameterError,
+    ProblemFileError,
+)
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
+from lightcraft_opt.problem_files import ProblemFile, load_problem
 from lightcraft_opt.results import SimulationResult, SimulationStatus
 from lightcraft_opt.simulate import simulate
 
@@ -22,12 +29,15 @@ __all__ = [
     "ModelFileError",
     "OptionError",
     "ParameterError",
+    "ProblemFile",
+    "ProblemFileError",
     "SimulationResult",
     "SimulationStatus",
     "Site",
     "Wind",
     "initial_state",
     "load_model",
+    "load_problem",
     "parameter_values",
     "simulate",
 ]

@@ -12,7 +12,12 @@ from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
+from lightcraft_opt.ocp import CompiledOcp
+from lightcraft_opt.ocp_files import write_ocp_summary, write_solution_csv
+from lightcraft_opt.options import OcpSolver
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
+from lightcraft_opt.plots.ocp import ocp_figures
+from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.run_files import write_pulses_csv, write_summary, write_trajectory_csv
 from lightcraft_opt.simulate import simulate
 
@@ -55,6 +60,37 @@ def _simulate(args: argparse.Namespace) -> int:
         f"{summary['air_time_s']:.2f} s -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
+
+
+def _optimize(args: argparse.Namespace) -> int:
+    source = Path(args.problem)
+    pf = load_problem(source, horizon=args.horizon, solver=args.solver, max_iter=args.max_iter)
+    problem, options = pf.problem, pf.options
+    out = Path(args.out) if args.out else Path("runs") / source.stem
+    out.mkdir(parents=True, exist_ok=True)
+    print(
+        f"building {pf.title!r}: {problem.model.name}, {problem.horizon} pulses, "
+        f"{options.solver.value} ({options.hessian.value} Hessian) ...",
+        flush=True,
+    )
+    compiled = CompiledOcp(problem, options)
+    print(f"built in {compiled.build_time:.1f} s; solving ...", flush=True)
+    result = compiled.solve()
+    print(
+        f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
+        f"{result.solve_time:.2f} s ({result.message})"
+    )
+    write_solution_csv(result, problem, out / "solution.csv")
+    summary = write_ocp_summary(result, pf, out / "summary.json")
+    figures = ocp_figures(result, problem, title=pf.title)
+    for name, fig in figures.items():
+        fig.savefig(out / name, dpi=PLOT_DPI)
+    print(
+        f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
+        f"{summary['final_altitude_m']:.3f} m, largest capture fraction "
+        f"{summary['max_capture_fraction']:.3f} -> {out}/"
+    )
+    return 0 if result.success else 1
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -105,6 +141,29 @@ def build_parser() -> argparse.ArgumentParser:
         help="laser off: coast from the initial state (variable-step CVODES)",
     )
     sim.set_defaults(run=_simulate)
+
+    opt = sub.add_parser(
+        "optimize",
+        help="solve an optimal control problem from a problem file",
+        description="Solve the problem file's optimal control problem and write solution.csv, "
+        "summary.json and figures. Exit status 0: solved; 1: the solver did not converge "
+        "(files still written); 2: bad input.",
+    )
+    opt.add_argument("problem", help="problem TOML, e.g. problems/hold_in_crosswind.toml")
+    opt.add_argument("--out", default=None, help="output folder (default runs/<problem name>)")
+    opt.add_argument(
+        "--solver",
+        choices=[s.value for s in OcpSolver],
+        default=None,
+        help="NLP solver instead of the file's [solver] name",
+    )
+    opt.add_argument(
+        "--horizon", type=int, default=None, help="pulses instead of the file's horizon_pulses"
+    )
+    opt.add_argument(
+        "--max-iter", type=int, default=None, help="NLP iterations instead of the file's"
+    )
+    opt.set_defaults(run=_optimize)
     return parser
 
 

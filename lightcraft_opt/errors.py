@@ -11,6 +11,7 @@ __all__ = [
     "ModelFileError",
     "OptionError",
     "ParameterError",
+    "ProblemFileError",
 ]
 
 
@@ -39,6 +40,21 @@ class ModelFileError(LightcraftError, ValueError):
     """A model file (TOML in ``models/``) cannot be read into parameters.
 
     The message names the file and, where known, the field.
+    """
+
+    def __init__(self, path: str, field: str | None, message: str) -> None:
+        self.path = path
+        self.field = field
+        self.reason = message
+        where = f"{path}: {field}" if field else path
+        super().__init__(f"{where}: {message}")
+
+
+class ProblemFileError(LightcraftError, ValueError):
+    """A problem file (TOML in ``problems/``) cannot be read into an optimal control problem.
+
+    The message names the file and, where known, the key as written in it (a dotted path,
+    e.g. ``"objective[1].weight"`` or ``"model_overrides.environment.wind.speed_ref_kmh"``).
     """
 
     def __init__(self, path: str, field: str | None, message: str) -> None:

@@ -1,0 +1,151 @@
+"""Writing an optimal control solution to disk: solution.csv, summary.json (floor 3).
+
+Column names carry their units and match trajectory.csv's (:mod:`lightcraft_opt.run_files`):
+positions in L (x east, y north, z up, docs/frames.md), impulses in B. A failed solve is
+written too: its status is in the summary, its last iterate in the CSV.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lightcraft_opt.layout import PARAMETERS, VectorLayout
+from lightcraft_opt.ocp_problem import CaptureFraction, OcpProblem
+from lightcraft_opt.ocp_results import OcpResult
+from lightcraft_opt.problem_files import ProblemFile, objective_names
+from lightcraft_opt.results import PulseRecord
+from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, model_hash
+from lightcraft_opt.symbolic.invariants import build_invariants
+from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS
+
+__all__ = [
+    "capture_fractions",
+    "engine_columns",
+    "input_columns",
+    "solution_columns",
+    "write_ocp_summary",
+    "write_solution_csv",
+]
+
+#: Component names in column names, by the frame suffix of a slot (``offset_L`` -> x, y).
+_COMPONENTS = {"L": ("x", "y", "z"), "B": ("b1", "b2", "b3")}
+
+
+def _unit(unit: str) -> str:
+    """A layout unit as a column suffix: "N m" -> "_Nm", "-" -> ""."""
+    return "" if unit in ("", "-") else "_" + unit.replace(" ", "")
+
+
+def _columns(name: str, size: int, unit: str, components: tuple[str, ...] = ()) -> list[str]:
+    base, _, frame = name.rpartition("_")
+    if frame in _COMPONENTS and size <= 3:
+        name, components = base, _COMPONENTS[frame][:size]
+    if size == 1:
+        return [name + _unit(unit)]
+    comps = components or tuple(str(i + 1) for i in range(size))
+    return [f"{name}_{c}{_unit(unit)}" for c in comps]
+
+
+def input_columns(inputs: VectorLayout) -> list[str]:
+    """Column names of a map input: pointing_x_m, pointing_y_m, focus_m, energy_J, then
+    rcs_thrust_1_N ... and motor_torque_Nm when the model has them."""
+    return [c for s in inputs.slots for c in _columns(s.name, s.size, s.unit)]
+
+
+def engine_columns() -> list[str]:
+    """Column names of Φ's engine outputs (energy_captured_J, impulse_b1_Ns ...,
+    offset_x_m, offset_y_m, liner_loss_kg, health), then capture_fraction."""
+    return [c for n, size, unit in ENGINE_OUTPUTS for c in _columns(n, size, unit)] + [
+        "capture_fraction"
+    ]
+
+
+def solution_columns(inputs: VectorLayout) -> list[str]:
+    """Header of solution.csv: k, trajectory.csv's columns, inputs, engine outputs."""
+    return ["k", *TRAJECTORY_COLUMNS, *input_columns(inputs), *engine_columns()]
+
+
+def capture_fractions(result: OcpResult, problem: OcpProblem) -> np.ndarray:
+    """(N,) |offset_L| / R_c at each pulse: the beam axis's distance from the optic centre
+    over the capture radius (the CaptureFraction measure) [-]."""
+    pulses = PulseRecord(result.t[:-1], result.u, result.engine)
+    radius = float(problem.p[PARAMETERS.index("capture_radius")][0])
+    return np.hypot(*pulses.offset_L.T) / radius
+
+
+def write_solution_csv(result: OcpResult, problem: OcpProblem, path: Path) -> None:
+    """One row per node k = 0..N, columns :func:`solution_columns`: the state at node k
+    (with mass, tilt and coning as in trajectory.csv), then pulse k's inputs and engine
+    outputs, empty on the last node (no pulse fires there)."""
+    n = len(result.t)
+    _, _, tilt, coning, mass = build_invariants().map(n)(result.x.T, problem.p)
+    nodes = np.column_stack(
+        [
+            np.arange(n),
+            result.t,
+            result.x,
+            np.asarray(mass).ravel(),
+            np.degrees(np.asarray(tilt).ravel()),
+            np.degrees(np.asarray(coning).ravel()),
+        ]
+    )
+    pulses = np.column_stack([result.u, result.engine, capture_fractions(result, problem)])
+    lines = [",".join(solution_columns(result.inputs))]
+    for k in range(n):
+        cells = [_cell(v, integer=j == 0) for j, v in enumerate(nodes[k])]
+        cells += [_cell(v) for v in pulses[k]] if k < n - 1 else [""] * pulses.shape[1]
+        lines.append(",".join(cells))
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _cell(value: float, *, integer: bool = False) -> str:
+    return str(int(value)) if integer else f"{value:.12g}"
+
+
+def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:
+    """summary.json: how the solve went (status, cost and its terms by name, iterations,
+    times), what it asked (solver, horizon) and what it achieved (laser energy, final
+    altitude, largest capture fraction against its limit, constraint violation)."""
+    problem, options = problem_file.problem, problem_file.options
+    fractions = capture_fractions(result, problem)
+    limits = [c.fraction for c in problem.constraints if isinstance(c, CaptureFraction)]
+    r_L = result.state("r_L")
+    summary: dict[str, Any] = {
+        "title": problem_file.title,
+        "problem_file": str(problem_file.source),
+        "model": problem.model.name,
+        "model_hash": model_hash(problem.model),
+        "status": result.status.value,
+        "success": result.success,
+        "message": result.message,
+        "solver": result.solver,
+        "hessian": options.hessian.value,
+        "cost": result.cost,
+        "cost_terms": dict(
+            zip(objective_names(problem), map(float, result.cost_terms), strict=False)
+        ),
+        "iterations": result.iterations,
+        "solve_time_s": result.solve_time,
+        "build_time_s": result.build_time,
+        "horizon_pulses": result.horizon,
+        "pulse_period_s": problem.period,
+        "laser_energy_J": result.laser_energy,
+        "final_altitude_m": float(r_L[-1, 2]),
+        "final_position_m": r_L[-1].tolist(),
+        "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
+        "max_capture_fraction": float(np.max(fractions)) if fractions.size else 0.0,
+        "capture_fraction_limit": min(limits) if limits else None,
+        "constraint_violation": _finite_or_none(result.constraint_violation),
+    }
+    path.write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+def _finite_or_none(value: float) -> float | None:
+    """JSON has no NaN: an unknown value is null."""
+    return float(value) if math.isfinite(value) else None

@@ -1,0 +1,477 @@
+"""Problem files: TOML in ``problems/`` read into an optimal control problem and its options.
+
+The edge of :mod:`lightcraft_opt.ocp_problem` (what to solve) and
+:class:`~lightcraft_opt.options.OcpOptions` (how), as :mod:`lightcraft_opt.model_files` is
+the edge of the model: the same units and spellings (its :data:`QUANTITIES`), converted to
+SI here and nowhere else. A quantity carries its unit in the key (``tilt_deg``,
+``clearance_cm``, ``total_kj``); numbers, text and choices are bare. One exception: a
+table that names a slot (``input = "pointing_L"``, ``state = "r_L"``) takes its bounds,
+reference and path bare, in the slot's SI unit (pointing_L, focus [m], energy [J],
+rcs_thrust [N], motor_torque [N m]; the states of docs/frames.md), or, where the slot is a
+length, speed, angular rate, mass, energy or force, with a unit in the key
+(``lower_cm``, ``upper_kj``) and a rate with ``_per_s`` (``slew_rate_cm_per_s``).
+
+A problem file::
+
+    title = "hold Flight 5 over the pad in a crosswind"
+    model = "../models/flight5.toml"      # relative to this file
+    horizon_pulses = 260
+    t0_s = 0.0                             # optional: time of the first pulse
+
+    [model_overrides]                      # optional: tables and keys of a model file,
+    [model_overrides.environment.wind]     # merged over it before it is read
+    speed_ref_mps = 3.0
+    direction_from_deg = 90.0
+    [model_overrides.craft.engine]
+    quadrature_radial = 4                  # a cheaper optic quadrature
+    quadrature_azimuthal = 16
+
+    [initial]                              # optional; defaults: on the pad, upright,
+    position_L_m = [0.01, 0.0, 2.0]        # at rest, the model's spin
+    velocity_L_mps = [0.0, 0.0, 4.0]
+    tilt_deg = 0.0
+    tilt_azimuth_deg = 90.0                # clockwise from north
+    w_B_rad_s = [0.0, 0.0, 0.0]
+    spin_rpm = 10000
+
+    [[objective]]
+    term = "lateral_offset"
+    weight = 1e4
+    relative_to = "beam"                   # or "pad" (the default)
+    [[objective]]
+    term = "control_effort"
+    input = "pointing_L"
+    weight = 1e3
+
+    [[constraint]]
+    kind = "capture_fraction"
+    fraction = 0.5
+    [[constraint]]
+    kind = "tilt_limit"
+    max_tilt_deg = 10
+
+    [[control]]
+    input = "pointing_L"
+    lower_cm = -5.0                        # or lower = -0.05 (the slot's unit, m)
+    upper_cm = 5.0
+    slew_rate = 1.0                        # m/s; or slew_rate_cm_per_s = 100
+    [[control]]
+    input = "energy"
+    lower = 420.0                          # J: held at 420 J (lower = upper)
+    upper = 420.0
+
+    [solver]                               # optional: OcpOptions
+    name = "ipopt"                         # fatrop, sqp_qrqp, sqp_hpipm, sqp_osqp
+    hessian = "exact"                      # or "limited_memory"
+    max_iter = 200
+    tol = 1e-8
+    move_blocking = 1                      # or block lengths [4, 4, 2, ...]
+    threads = 1
+    print_level = 0
+
+    [pulse_map]                            # optional: PulseMapOptions; keys not given
+    scheme = "split4"                      # keep OCP_PULSE_MAP's (split4, 8 substeps,
+    substeps = 8                           # dense 8)
+    dense = 8
+
+Objective terms (``term``, the snake_case name of the dataclass, then its fields):
+``laser_energy`` (weight [1/J]), ``final_altitude`` (weight [1/m]), ``track_reference``
+(state = "r_L", weight: one or one per component, ``path``: N + 1 rows in the slot's unit,
+or ``path_csv``: a CSV file relative to this one with a header, first column ``t_s``,
+then one column per component of the slot in its SI unit, e.g. ``t_s,x_m,y_m,z_m``,
+linearly interpolated at the node times), ``lateral_offset`` (weight [1/m^2],
+relative_to), ``control_effort`` (input, weight, reference), ``control_rate`` (input,
+weight). Constraints (``kind``): ``capture_fraction`` (fraction), ``tilt_limit``
+(max_tilt), ``no_ground_contact`` (clearance), ``terminal_altitude`` (minimum,
+maximum), ``terminal_state`` (state, lower, upper), ``energy_budget`` (total).
+``[[control]]``: input, lower, upper, slew_rate (``inf`` for none). A quantity's keys
+take any unit of model_files' QUANTITIES (``clearance_m``, ``clearance_cm`` ...); an
+unknown key gets a did-you-mean hint. :mod:`lightcraft_opt.problem_tables` reads the
+tables.
+
+``[model_overrides]`` is merged key by key (a key given in another unit replaces the
+model's, arrays such as ``[[craft.rcs.thrusters]]`` are replaced whole; ``site`` and
+``laser`` paths stay relative to the model file). Any problem raises one
+:class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written in
+it; an error inside the model file names the ``model`` key and quotes the model file's.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass, fields, replace
+from enum import Enum
+from pathlib import Path
+from typing import Any, get_type_hints
+
+import numpy as np
+
+from lightcraft_opt import model_files as mf
+from lightcraft_opt import params
+from lightcraft_opt.errors import ModelFileError, OptionError, ParameterError, ProblemFileError
+from lightcraft_opt.layout import initial_state
+from lightcraft_opt.ocp_problem import (
+    ControlEffort,
+    ControlRate,
+    LateralOffset,
+    OcpProblem,
+    TrackReference,
+)
+from lightcraft_opt.options import (
+    OCP_PULSE_MAP,
+    HessianApproximation,
+    OcpOptions,
+    OcpSolver,
+    PulseMapOptions,
+)
+from lightcraft_opt.problem_tables import (
+    BLOCKS,
+    CONSTRAINTS,
+    CONTROL,
+    INTEGER,
+    NUMBER,
+    OBJECTIVES,
+    TEXT,
+    Spec,
+    Table,
+    choice,
+    quantity,
+    read_array,
+    read_item,
+    read_kind,
+    read_table,
+    si_note,
+)
+
+__all__ = ["ProblemFile", "load_problem", "objective_names"]
+
+_TABLES = (
+    "model_overrides",
+    "initial",
+    "objective",
+    "constraint",
+    "control",
+    "solver",
+    "pulse_map",
+)
+_TOP: Mapping[str, Spec] = {
+    "title": TEXT,
+    "model": TEXT,
+    "horizon_pulses": INTEGER,
+    "t0": quantity("time"),
+}
+_INITIAL: Mapping[str, Spec] = {
+    "position_L": quantity("length", "list", 3),
+    "velocity_L": quantity("speed", "list", 3),
+    "tilt": quantity("angle"),
+    "tilt_azimuth": quantity("angle"),
+    "w_B": quantity("angular rate", "list", 3),
+    "spin": quantity("angular rate"),
+}
+_SOLVER: Mapping[str, Spec] = {
+    "name": choice(OcpSolver),
+    "hessian": choice(HessianApproximation),
+    "max_iter": INTEGER,
+    "tol": NUMBER,
+    "move_blocking": BLOCKS,
+    "threads": INTEGER,
+    "print_level": INTEGER,
+}
+
+
+def _options_schema(cls: type, skip: str) -> dict[str, Spec]:
+    """Keys of an options dataclass whose fields are choices (Enums), integers or numbers,
+    but those starting with ``skip``: the file follows the dataclass as fields arrive."""
+    hints = get_type_hints(cls)
+    schema: dict[str, Spec] = {}
+    for f in fields(cls):
+        if f.name.startswith(skip):
+            continue
+        kind = hints[f.name]
+        if isinstance(kind, type) and issubclass(kind, Enum):
+            schema[f.name] = choice(kind)
+        elif kind is int:
+            schema[f.name] = INTEGER
+        elif kind is float:
+            schema[f.name] = NUMBER
+    return schema
+
+
+#: ``[pulse_map]``: the fields of PulseMapOptions (scheme, substeps, dense ...) but the RCS
+#: profile, which is the problem's (it sets the decision variables), not the map's.
+_PULSE_MAP: Mapping[str, Spec] = _options_schema(PulseMapOptions, skip="rcs_")
+#: Table of a model file -> its model_files.SCHEMA entry (to merge overrides by field).
+_MODEL_TABLES: Mapping[tuple[str, ...], str] = {
+    (): "model",
+    ("craft",): "craft",
+    ("craft", "liner"): "liner",
+    ("craft", "carrier"): "carrier",
+    ("craft", "rcs"): "rcs",
+    ("craft", "aero"): "aero",
+    ("craft", "spin_decay"): "spin_decay",
+    ("craft", "engine"): "engine",
+    ("flight",): "flight",
+    ("environment",): "environment",
+    ("environment", "wind"): "wind",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class ProblemFile:
+    """A problem file as read: what to solve, how, under which title, from where.
+
+    Attributes
+    ----------
+    problem : the optimal control problem, everything in SI.
+    options : transcription and solver options.
+    title : the file's ``title`` (default: the file name without ``.toml``).
+    source : the file read.
+    """
+
+    problem: OcpProblem
+    options: OcpOptions
+    title: str
+    source: Path
+
+
+# --------------------------------------------------------------------------- public API
+def load_problem(
+    path: str | Path,
+    *,
+    horizon: int | None = None,
+    solver: str | None = None,
+    max_iter: int | None = None,
+) -> ProblemFile:
+    """Read a problem file (module docstring) and the model file it names.
+
+    Parameters
+    ----------
+    path : the problem file.
+    horizon, solver, max_iter : replace the file's ``horizon_pulses`` [pulses],
+        ``solver.name`` and ``solver.max_iter`` (quick runs from the command line).
+
+    Returns
+    -------
+    ProblemFile
+        The validated problem and options, in SI.
+
+    Raises
+    ------
+    ProblemFileError
+        Naming the file and the key as written in it, for any problem with the file, the
+        model file or the values they give.
+    """
+    file = Path(path)
+    with _problem_errors():
+        src, data = mf._read_toml(file)
+    for key, value in (("horizon_pulses", horizon), ("name", solver), ("max_iter", max_iter)):
+        if value is not None:
+            table = data if key == "horizon_pulses" else data.setdefault("solver", {})
+            if isinstance(table, dict):
+                table[key] = value
+    with _problem_errors():
+        return _problem_file(src, file, data)
+
+
+def objective_names(problem: OcpProblem) -> tuple[str, ...]:
+    """A name per objective term, in order: the file's term name, its slot or reference
+    in brackets (``control_effort[pointing_L]``, ``lateral_offset[beam]``), then ``#2`` ...
+    for repeats. For the cost terms of a result (``OcpResult.cost_terms``)."""
+    by_class = {kind.cls: name for name, kind in OBJECTIVES.items()}
+    names: list[str] = []
+    for term in problem.objective:
+        name = by_class[type(term)]
+        if isinstance(term, ControlEffort | ControlRate | TrackReference):
+            name += f"[{term.slot}]"
+        elif isinstance(term, LateralOffset):
+            name += f"[{term.relative_to.value}]"
+        repeat = sum(n == name or n.startswith(name + "#") for n in names)
+        names.append(f"{name}#{repeat + 1}" if repeat else name)
+    return tuple(names)
+
+
+# --------------------------------------------------------------------------- the file
+def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
+    top = read_table(src, data, "", _TOP, required=("model", "horizon_pulses"), tables=_TABLES)
+    model = _model(src, file, top.values["model"], data.get("model_overrides"))
+    horizon = top.values["horizon_pulses"]
+    t0 = top.values.get("t0", 0.0)
+    x0 = _initial_state(src, model, data.get("initial"))
+    times = t0 + np.arange(horizon + 1) / model.flight.pulse_rate if horizon > 0 else None
+    items: dict[str, list[Table]] = {"objective": [], "constraints": [], "controls": []}
+    made: dict[str, list[Any]] = {"objective": [], "constraints": [], "controls": []}
+    for table, field, kinds, tag in (
+        ("objective", "objective", OBJECTIVES, "term"),
+        ("constraint", "constraints", CONSTRAINTS, "kind"),
+        ("control", "controls", None, ""),
+    ):
+        for i, raw in enumerate(read_array(src, data, table)):
+            where = f"{table}[{i}]"
+            kind = CONTROL if kinds is None else read_kind(src, raw, where, tag, kinds)
+            item, value = read_item(src, file, raw, where, kind, tag, times)
+            items[field].append(item)
+            made[field].append(value)
+    try:
+        problem = OcpProblem(
+            model,
+            horizon,
+            tuple(made["objective"]),
+            tuple(made["constraints"]),
+            tuple(made["controls"]),
+            x0=x0,
+            t0=t0,
+        )
+    except ParameterError as err:
+        key = _problem_key(err.field, top, items)
+        raise ProblemFileError(src, key, si_note(key, err.reason)) from err
+    options = _options(src, data, problem.horizon)
+    title = top.values.get("title", file.stem)
+    return ProblemFile(problem=problem, options=options, title=title, source=file)
+
+
+def _model(src: str, file: Path, name: str, overrides: Any) -> params.Model:
+    """The model file ``name`` (relative to the problem file) with ``overrides`` merged in."""
+    if overrides is not None and not isinstance(overrides, dict):
+        raise ProblemFileError(src, "model_overrides", f"must be a table, got {overrides!r}")
+    target = Path(os.path.normpath(file.parent / name))
+    try:
+        model_src, data = mf._read_toml(target)
+        return _model_from_tables(model_src, target, _merge(data, overrides or {}))
+    except ModelFileError as err:
+        written = _override_key(err.field, overrides or {}) if err.path == str(target) else None
+        if written is not None:
+            raise ProblemFileError(src, f"model_overrides.{written}", err.reason) from err
+        raise ProblemFileError(src, "model", str(err)) from err
+
+
+def _model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.Model:
+    """model_files.load_model on tables already read (and merged)."""
+    top, _ = mf._read(src, data, "", "model", params.Model, ("craft", "flight", "environment"))
+    site = mf.load_site(mf._component(src, file, top, "site"))
+    laser = mf.load_laser(mf._component(src, file, top, "laser"))
+    craft = mf._craft(src, mf._required_table(src, data, "craft"))
+    fvalues, fkeys = mf._read(
+        src, mf._required_table(src, data, "flight"), "flight", "flight", params.Flight
+    )
+    places = {"flight": ("flight", fkeys)}
+    flight = mf._build(src, places, params.Flight, fvalues)
+    environment = mf._environment(src, mf._table(src, data, "environment"))
+    parts = {
+        "name": top["name"],
+        "craft": craft,
+        "site": site,
+        "laser": laser,
+        "flight": flight,
+        "environment": environment,
+    }
+    return mf._build(src, places, params.Model, parts)
+
+
+def _merge(base: Mapping[str, Any], over: Mapping[str, Any], at: tuple[str, ...] = ()) -> Any:
+    """``base`` with ``over`` merged in, table by table; a key replaces the base's keys for
+    the same field in any unit (``speed_ref_kmh`` replaces ``speed_ref_mps``)."""
+    out = dict(base)
+    schema = mf.SCHEMA.get(_MODEL_TABLES.get(at, ""))
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value, (*at, key))
+            continue
+        field = _model_field(key, schema) if schema else None
+        for old in [k for k in out if field and k != key and _model_field(k, schema) == field]:
+            del out[old]
+        out[key] = value
+    return out
+
+
+def _model_field(key: str, schema: Any) -> str | None:
+    """The model-file field ``key`` stands for (``speed_ref_mps`` -> ``speed_ref``)."""
+    if key in schema:
+        return key
+    fields = [
+        f
+        for f in schema
+        if key.startswith(f + "_") and key[len(f) + 1 :] in mf.QUANTITIES.get(schema[f].kind, {})
+    ]
+    return max(fields, key=len, default=None)
+
+
+def _override_key(field: str | None, overrides: Mapping[str, Any]) -> str | None:
+    """``field`` (a model-file key path) if ``overrides`` wrote it, else None."""
+    if not field:
+        return None
+    first = field.split(", ")[0]
+    node: Any = overrides
+    for part in first.split("."):
+        match = re.fullmatch(r"(\w+)((?:\[\d+\])*)", part)
+        if not match or not isinstance(node, dict) or match[1] not in node:
+            return None
+        node = node[match[1]]
+        for index in re.findall(r"\[(\d+)\]", match[2]):
+            if not isinstance(node, list) or int(index) >= len(node):
+                break
+            node = node[int(index)]
+    return first
+
+
+def _initial_state(src: str, model: params.Model, raw: Any) -> np.ndarray:
+    v = read_table(src, raw or {}, "initial", _INITIAL).values
+    try:
+        return initial_state(
+            model,
+            r_L=v.get("position_L", (0.0, 0.0, 0.0)),
+            v_L=v.get("velocity_L", (0.0, 0.0, 0.0)),
+            tilt=v.get("tilt", 0.0),
+            tilt_azimuth=v.get("tilt_azimuth", 0.0),
+            w_B=v.get("w_B", (0.0, 0.0, 0.0)),
+            spin=v.get("spin"),
+        )
+    except ParameterError as err:
+        raise ProblemFileError(src, "initial", str(err)) from err
+
+
+def _options(src: str, data: Mapping[str, Any], horizon: int) -> OcpOptions:
+    solver = read_table(src, data.get("solver", {}), "solver", _SOLVER)
+    pulse = read_table(src, data.get("pulse_map", {}), "pulse_map", _PULSE_MAP)
+    values = {("solver" if k == "name" else k): v for k, v in solver.values.items()}
+    try:
+        pulse_map = replace(OCP_PULSE_MAP, **pulse.values)
+        options = OcpOptions(**values, pulse_map=pulse_map)
+        options.blocks(horizon)
+    except OptionError as err:
+        found = re.search(r"\b(OcpOptions|PulseMapOptions)\.(\w+)", str(err))
+        key = "solver"
+        if found:
+            table = pulse if found[1] == "PulseMapOptions" else solver
+            key = table.key("name" if found[2] == "solver" else found[2])
+        raise ProblemFileError(src, key, str(err)) from err
+    return options
+
+
+# --------------------------------------------------------------------------- errors
+def _problem_key(field: str, top: Table, items: Mapping[str, list[Table]]) -> str:
+    """An OcpProblem field ("controls[1].lower", "horizon") as the file wrote it."""
+    found = re.fullmatch(r"(objective|constraints|controls)\[(\d+)\]\.?(\w*)(.*)", field)
+    if found and int(found[2]) < len(items[found[1]]):
+        table = items[found[1]][int(found[2])]
+        attr = {"slot": "input" if "input" in table.keys else "state"}.get(found[3], found[3])
+        return (table.key(attr) if attr else table.where) + found[4]
+    simple = {
+        "horizon": top.key("horizon_pulses"),
+        "t0": top.key("t0"),
+        "x0": "initial",
+        "constraints": "constraint",
+        "controls": "control",
+    }
+    return simple.get(field, field)
+
+
+@contextmanager
+def _problem_errors() -> Iterator[None]:
+    """model_files' errors about the problem file become ProblemFileErrors."""
+    try:
+        yield
+    except ModelFileError as err:
+        raise ProblemFileError(err.path, err.field, err.reason) from err

@@ -1,0 +1,401 @@
+"""The tables of a problem file read into SI values (problem_files.py has the schema).
+
+:func:`read_table` reads any table with model_files' keys and units (its QUANTITIES, its
+unknown-key hints), plus keys whose unit is the slot's their table names (``lower``,
+``lower_cm``, ``slew_rate_cm_per_s``); :func:`read_item` turns one ``[[objective]]``,
+``[[constraint]]`` or ``[[control]]`` table into its ocp_problem dataclass
+(:data:`OBJECTIVES`, :data:`CONSTRAINTS`, :data:`CONTROL`). Errors are
+:class:`~lightcraft_opt.errors.ProblemFileError` naming the key as written, or
+model_files' ModelFileError, which problem_files turns into one.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lightcraft_opt import model_files as mf
+from lightcraft_opt.errors import ParameterError, ProblemFileError
+from lightcraft_opt.layout import STATE
+from lightcraft_opt.ocp_problem import (
+    CaptureFraction,
+    ControlBound,
+    ControlEffort,
+    ControlRate,
+    EnergyBudget,
+    FinalAltitude,
+    LaserEnergy,
+    LateralOffset,
+    NoGroundContact,
+    OffsetFrom,
+    TerminalAltitude,
+    TerminalState,
+    TiltLimit,
+    TrackReference,
+)
+
+__all__ = [
+    "BLOCKS",
+    "CONSTRAINTS",
+    "CONTROL",
+    "INTEGER",
+    "NUMBER",
+    "NUMBERS",
+    "OBJECTIVES",
+    "SLOT",
+    "SLOT_QUANTITY",
+    "SLOT_RATE",
+    "TEXT",
+    "Spec",
+    "Table",
+    "TableKind",
+    "choice",
+    "join",
+    "quantity",
+    "read_array",
+    "read_item",
+    "read_kind",
+    "read_table",
+    "si_note",
+]
+
+Spec = mf._Spec  # model_files' description of a key: quantity or kind, shape, length
+TEXT, NUMBER = Spec("text"), Spec("dimensionless")
+INTEGER = Spec("dimensionless", "integer")
+SLOT = Spec("in the unit of its slot")  # one number or one per component, inf allowed
+SLOT_RATE = Spec("in the unit of its slot per second")
+NUMBERS = Spec("one number or one per component")
+BLOCKS = Spec("pulses per block")  # an integer or a list of integers
+
+
+def quantity(kind: str, shape: str = "scalar", length: int = 0) -> Spec:
+    return Spec(kind, shape, length)
+
+
+def choice(enum: type[Enum]) -> Spec:
+    return Spec("choice", choices=enum)
+
+
+#: Quantity of each slot whose bounds may carry a unit in the key (model_files.QUANTITIES).
+SLOT_QUANTITY: Mapping[str, str] = {
+    "pointing_L": "length",
+    "focus": "length",
+    "energy": "energy",
+    "rcs_thrust": "force",
+    "rcs_cos": "force",
+    "rcs_sin": "force",
+    "r_L": "length",
+    "v_L": "speed",
+    "w_B": "angular rate",
+    "spin": "angular rate",
+    "liner_mass": "mass",
+    "rcs_mass": "mass",
+}
+
+
+@dataclass(frozen=True)
+class TableKind:
+    """One ``[[objective]]``, ``[[constraint]]`` or ``[[control]]`` table: the dataclass it
+    becomes, its keys, the required ones, the key naming its slot ("input" or "state",
+    renamed to the dataclass field ``slot``) and the slot when not named, other keys
+    renamed on the way."""
+
+    cls: type
+    schema: Mapping[str, Spec]
+    required: tuple[str, ...] = ()
+    slot: str = ""
+    renamed: tuple[tuple[str, str], ...] = ()
+    default_slot: str | None = None
+
+    def field(self, key_field: str) -> str:
+        """The dataclass field a file field fills."""
+        if key_field == self.slot:
+            return "slot"
+        return dict(self.renamed).get(key_field, key_field)
+
+
+#: ``term = "..."`` of ``[[objective]]`` tables.
+OBJECTIVES: Mapping[str, TableKind] = {
+    "laser_energy": TableKind(LaserEnergy, {"weight": NUMBER}),
+    "final_altitude": TableKind(FinalAltitude, {"weight": NUMBER}),
+    "track_reference": TableKind(
+        TrackReference,
+        {"state": TEXT, "weight": NUMBERS, "path": SLOT, "path_csv": TEXT},
+        slot="state",
+        renamed=(("weight", "weights"),),
+        default_slot="r_L",
+    ),
+    "lateral_offset": TableKind(
+        LateralOffset, {"weight": NUMBER, "relative_to": choice(OffsetFrom)}
+    ),
+    "control_effort": TableKind(
+        ControlEffort,
+        {"input": TEXT, "weight": NUMBER, "reference": SLOT},
+        ("input",),
+        slot="input",
+    ),
+    "control_rate": TableKind(ControlRate, {"input": TEXT, "weight": NUMBER}, ("input",), "input"),
+}
+
+#: ``kind = "..."`` of ``[[constraint]]`` tables.
+CONSTRAINTS: Mapping[str, TableKind] = {
+    "capture_fraction": TableKind(CaptureFraction, {"fraction": NUMBER}, ("fraction",)),
+    "tilt_limit": TableKind(TiltLimit, {"max_tilt": quantity("angle")}, ("max_tilt",)),
+    "no_ground_contact": TableKind(NoGroundContact, {"clearance": quantity("length")}),
+    "terminal_altitude": TableKind(
+        TerminalAltitude, {"minimum": quantity("length"), "maximum": quantity("length")}
+    ),
+    "terminal_state": TableKind(
+        TerminalState, {"state": TEXT, "lower": SLOT, "upper": SLOT}, ("state",), "state"
+    ),
+    "energy_budget": TableKind(EnergyBudget, {"total": quantity("energy")}, ("total",)),
+}
+
+CONTROL = TableKind(
+    ControlBound,
+    {"input": TEXT, "lower": SLOT, "upper": SLOT, "slew_rate": SLOT_RATE},
+    ("input",),
+    "input",
+)
+
+
+@dataclass(frozen=True)
+class Table:
+    """One table as read: SI values by field and the key each field was written as."""
+
+    where: str
+    values: dict[str, Any]
+    keys: dict[str, str]
+
+    def key(self, field: str) -> str:
+        """The field's key as written (its bare name if not written)."""
+        return join(self.where, self.keys.get(field, field))
+
+
+def read_array(src: str, data: Mapping[str, Any], key: str) -> list[Any]:
+    """The array of tables ``[[key]]`` (empty if absent)."""
+    raw = data.get(key, [])
+    if not isinstance(raw, list) or not all(isinstance(t, dict) for t in raw):
+        raise ProblemFileError(src, key, f"must be an array of tables [[{key}]], got {raw!r}")
+    return raw
+
+
+def read_kind(
+    src: str, raw: Mapping[str, Any], where: str, tag: str, kinds: Mapping[str, TableKind]
+) -> TableKind:
+    """The kind named by the table's ``term`` or ``kind`` key."""
+    allowed = ", ".join(kinds)
+    name = raw.get(tag)
+    if name is None:
+        raise ProblemFileError(src, f"{where}.{tag}", f"missing required key; one of {allowed}")
+    if not isinstance(name, str) or name not in kinds:
+        close = difflib.get_close_matches(str(name), list(kinds), n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ProblemFileError(
+            src, f"{where}.{tag}", f"unknown {tag} {name!r}; {hint}allowed: {allowed}"
+        )
+    return kinds[name]
+
+
+def read_item(
+    src: str,
+    file: Path,
+    raw: Mapping[str, Any],
+    where: str,
+    kind: TableKind,
+    tag: str,
+    times: np.ndarray | None,
+) -> tuple[Table, Any]:
+    """One objective term, constraint or control bound and where its keys were written."""
+    slot = raw.get(kind.slot, kind.default_slot) if kind.slot else None
+    if (
+        kind.slot == "state"
+        and slot is not None
+        and (not isinstance(slot, str) or slot not in STATE)
+    ):
+        close = difflib.get_close_matches(str(slot), list(STATE.names), n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ProblemFileError(
+            src, f"{where}.state", f"no such state {slot!r}; {hint}states: {', '.join(STATE.names)}"
+        )
+    # input names: checked by OcpProblem, which knows the model's map-input layout; a unit
+    # in a key needs a slot with a known unit
+    fields_with_units = [f for f, spec in kind.schema.items() if spec in (SLOT, SLOT_RATE)]
+    suffixed = [
+        k
+        for k in raw
+        if k not in kind.schema and any(k.startswith(f + "_") for f in fields_with_units)
+    ]
+    if suffixed and isinstance(slot, str) and slot not in SLOT_QUANTITY:
+        raise ProblemFileError(
+            src,
+            f"{where}.{kind.slot}",
+            f"{slot!r} takes no unit in keys ({suffixed[0]}): only "
+            f"{', '.join(sorted(SLOT_QUANTITY))} do; is the name right?",
+        )
+    schema = {**kind.schema, **({tag: TEXT} if tag else {})}
+    slot_name = slot if isinstance(slot, str) else None
+    table = read_table(src, raw, where, schema, required=kind.required, slot=slot_name)
+    values = {kind.field(f): v for f, v in table.values.items() if f not in (tag, "path_csv")}
+    if kind.cls is TrackReference:
+        values["path"] = _track_path(src, file, table, times)
+    try:
+        return table, kind.cls(**values)
+    except ParameterError as err:
+        attr = err.field.rpartition(".")[2]
+        file_field = next((f for f in kind.schema if kind.field(f) == attr), attr)
+        key = table.key(file_field)
+        raise ProblemFileError(src, key, si_note(key, err.reason)) from err
+
+
+def _track_path(src: str, file: Path, table: Table, times: np.ndarray | None) -> Any:
+    """A TrackReference path: the ``path`` rows, or ``path_csv`` at the node times."""
+    given = [k for k in ("path", "path_csv") if k in table.values]
+    if len(given) != 1:
+        raise ProblemFileError(
+            src, table.key("path"), "give the reference as one of path or path_csv"
+        )
+    if given[0] == "path":
+        return table.values["path"]
+    key = table.key("path_csv")
+    table.keys["path"] = table.keys["path_csv"]  # the path's errors name the CSV key
+    size = STATE.slot(table.values.get("state", "r_L")).size
+    target = file.parent / table.values["path_csv"]
+    try:
+        rows = list(csv.reader(target.read_text(encoding="utf-8").splitlines()))
+    except (OSError, UnicodeDecodeError) as err:
+        raise ProblemFileError(src, key, f"cannot read {str(target)!r}: {err}") from err
+    if not rows or len(rows[0]) != size + 1 or rows[0][0].strip() != "t_s":
+        raise ProblemFileError(
+            src, key, f"{target}: needs a header t_s and {size} columns, e.g. t_s,x_m,y_m,z_m"
+        )
+    try:
+        data = np.array([[float(v) for v in row] for row in rows[1:] if row], dtype=float)
+    except ValueError as err:
+        raise ProblemFileError(src, key, f"{target}: {err}") from err
+    if data.ndim != 2 or data.shape[0] < 2 or data.shape[1] != size + 1:
+        raise ProblemFileError(src, key, f"{target}: needs 2 or more rows of {size + 1} numbers")
+    t = data[:, 0]
+    if not np.all(np.isfinite(data)) or np.any(np.diff(t) <= 0):
+        raise ProblemFileError(src, key, f"{target}: needs finite values, t_s increasing")
+    if times is not None and (times[0] < t[0] - 1e-9 or times[-1] > t[-1] + 1e-9):
+        raise ProblemFileError(
+            src,
+            key,
+            f"{target}: covers t = {t[0]:g}..{t[-1]:g} s, the horizon needs "
+            f"{times[0]:g}..{times[-1]:g} s",
+        )
+    nodes = t[:1] if times is None else times
+    return np.column_stack([np.interp(nodes, t, data[:, j]) for j in range(1, size + 1)])
+
+
+def read_table(
+    src: str,
+    data: Any,
+    where: str,
+    schema: Mapping[str, Spec],
+    *,
+    required: tuple[str, ...] = (),
+    slot: str | None = None,
+    tables: tuple[str, ...] = (),
+) -> Table:
+    """Convert one table to SI values by field, with model_files' keys and units."""
+    if not isinstance(data, dict):
+        raise ProblemFileError(src, where or None, f"must be a table [{where}], got {data!r}")
+    values: dict[str, Any] = {}
+    keys: dict[str, str] = {}
+    for key, raw in data.items():
+        if key in tables:
+            continue
+        name = join(where, key)
+        field, factor = _slot_key(src, name, schema, slot)
+        unit = None
+        if field is None:
+            field, unit = mf._match(src, key, name, schema, tables)
+            factor = mf.QUANTITIES[schema[field].kind][unit] if unit else "1"
+        if field in keys:
+            raise ProblemFileError(
+                src, name, f"{field} is also given as {join(where, keys[field])}; give it once"
+            )
+        keys[field] = key
+        spec = schema[field]
+        if spec in (SLOT, SLOT_RATE, NUMBERS):
+            values[field] = _numbers(src, name, raw, factor)
+        elif spec is BLOCKS:
+            values[field] = (
+                tuple(mf._value(src, f"{name}[{i}]", v, INTEGER, None) for i, v in enumerate(raw))
+                if isinstance(raw, list)
+                else mf._value(src, name, raw, INTEGER, None)
+            )
+        else:
+            values[field] = mf._value(src, name, raw, spec, unit)
+    for field in required:
+        if field not in keys:
+            raise ProblemFileError(
+                src, join(where, field), f"missing required key; write {_spelling(field, schema)}"
+            )
+    return Table(where, values, keys)
+
+
+def _slot_key(
+    src: str, name: str, schema: Mapping[str, Spec], slot: str | None
+) -> tuple[str | None, float | str]:
+    """(field, factor to SI) of a key in the unit of its slot (``lower``, ``lower_cm``,
+    ``slew_rate_cm_per_s``), or (None, "1") for any other key."""
+    key = name.rpartition(".")[2]
+    if key in schema:
+        return (key if schema[key] in (SLOT, SLOT_RATE, NUMBERS) else None), "1"
+    units = mf.QUANTITIES.get(SLOT_QUANTITY.get(slot or "", ""), {})
+    for field, spec in schema.items():
+        if spec not in (SLOT, SLOT_RATE) or not key.startswith(field + "_"):
+            continue
+        unit = key[len(field) + 1 :]
+        if spec is SLOT_RATE:
+            unit = unit.removesuffix("_per_s") if unit.endswith("_per_s") else ""
+        if unit in units:
+            return field, units[unit]
+        if units:
+            rate = "_per_s" if spec is SLOT_RATE else ""
+            spellings = ", ".join(f"{field}_{u}{rate}" for u in units)
+            raise ProblemFileError(
+                src,
+                name,
+                f"unit {key[len(field) + 1 :]!r} is not known for {slot} "
+                f"({SLOT_QUANTITY[slot or '']}{' per second' * bool(rate)}); "
+                f"write {field} (SI) or {spellings}",
+            )
+    return None, "1"
+
+
+def _numbers(src: str, name: str, raw: Any, factor: float | str) -> Any:
+    """A number, or nested lists of numbers, times ``factor``; +-inf kept, NaN refused."""
+    if isinstance(raw, list):
+        return tuple(_numbers(src, f"{name}[{i}]", v, factor) for i, v in enumerate(raw))
+    if isinstance(raw, float) and math.isinf(raw):
+        return raw
+    return mf._number(src, name, raw, factor)
+
+
+def _spelling(field: str, schema: Mapping[str, Spec]) -> str:
+    units = mf.QUANTITIES.get(schema[field].kind)
+    return " or ".join(f"{field}_{u}" for u in units) if units else field
+
+
+def si_note(key: str, reason: str) -> str:
+    """``reason``, noting that its numbers are SI when the key wrote another unit."""
+    unit = key.removesuffix("_per_s").rpartition("_")[2]
+    converted = unit in mf._NOT_SI and re.search(r"\d", reason)
+    return reason + (" (converted to SI)" if converted else "")
+
+
+def join(where: str, key: str) -> str:
+    return f"{where}.{key}" if where else key
