@@ -17,6 +17,7 @@ with a readable status and the solver's last iterate; bad inputs raise
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Sequence
 from typing import Any
@@ -150,6 +151,19 @@ def _solver_options(opts: OcpOptions, equality: list[bool]) -> tuple[str, dict[s
         "print_iteration": not quiet,
         "print_status": not quiet,
     }
+
+
+#: Parameter slots that OcpOptions.wind_ramp scales (speeds; directions and profiles stay).
+_WIND_SPEEDS = ("wind_speed_ref", "gust_L")
+
+
+def _wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
+    """(PARAMETERS.size,) ``p`` with the wind's reference speed and gust scaled by
+    ``factor``."""
+    out = np.array(p, dtype=float)
+    for name in _WIND_SPEEDS:
+        out[PARAMETERS.index(name)] *= factor
+    return out
 
 
 def _stats(solver: ca.Function, opts: OcpOptions) -> tuple[OcpStatus, str, int]:
@@ -305,6 +319,10 @@ class CompiledOcp:
         ref = pr.reference() if reference is None else np.asarray(reference, dtype=float)
         if ref.shape != pr.reference().shape or not np.all(np.isfinite(ref)):
             raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
+        if warm_start is None and initial_guess is None and self.options.wind_ramp:
+            scaled = _wind_scaled(pv, 0.0)
+            if not np.array_equal(scaled, pv):
+                return self._solve_ramped(x0v, pv, t0v, u_prev, ref)
         u_fixed = np.where(pr.free, 0.0, pr.lower)
         P = tr.parameter_vector(x0v, pv, t0v, u_prev, u_fixed, ref)
         lam_x0, lam_g0 = np.zeros(tr.n_w), np.zeros(tr.lbg.size)
@@ -335,6 +353,34 @@ class CompiledOcp:
         return self._result(w, lam_x, lam_g, P, status, message, iterations, solve_time, t0v)
 
     # ----------------------------------------------------------------- helpers
+    def _solve_ramped(
+        self,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        u_previous: np.ndarray | None,
+        reference: np.ndarray,
+    ) -> OcpResult:
+        """Continuation on the wind (OcpOptions.wind_ramp): calm air first, then the wind
+        scaled by 1/n .. 1, each solve warm-started from the last. Iterations and solve
+        times add up; the status is the last solve's."""
+        n = self.options.wind_ramp
+        result: OcpResult | None = None
+        iterations, seconds, steps = 0, 0.0, []
+        for i in range(n + 1):
+            pi = _wind_scaled(p, i / n)
+            result = self.solve(
+                x0=x0, p=pi, t0=t0, u_previous=u_previous, reference=reference, warm_start=result
+            )
+            iterations += result.iterations
+            seconds += result.solve_time
+            steps.append(f"{i}/{n}: {result.status.value} in {result.iterations}")
+        assert result is not None
+        message = f"{result.message} (wind ramp {', '.join(steps)})"
+        return dataclasses.replace(
+            result, iterations=iterations, solve_time=seconds, message=message
+        )
+
     def _warm_started(self) -> ca.Function:
         """The solver for warm starts: IPOPT told to start from the given primal and dual
         point with a small barrier parameter (built once, on first use; it shares the

@@ -182,6 +182,10 @@ class OcpOptions:
         block lengths in pulses (a tuple, summing to the horizon); 1 means free every pulse.
     threads : evaluate Φ over the horizon on this many threads (casadi map), >= 1.
     print_level : 0 is silent; 1..12 the solver's own verbosity (IPOPT's scale).
+    wind_ramp : continuation steps on the wind, >= 0. With n > 0 a cold solve first
+        solves the problem in calm air, then with the wind (reference speed and gust)
+        scaled by 1/n, 2/n, ... 1, each solve warm-started from the last: a crosswind can
+        blow the nominal rollout out of the beam, where Φ gives the solver no gradient.
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -192,6 +196,7 @@ class OcpOptions:
     move_blocking: int | tuple[int, ...] = 1
     threads: int = 1
     print_level: int = 0
+    wind_ramp: int = 0
 
     def __post_init__(self) -> None:
         if not isinstance(self.solver, OcpSolver):
@@ -216,6 +221,7 @@ class OcpOptions:
             ("max_iter", 1, None),
             ("threads", 1, None),
             ("print_level", 0, 12),
+            ("wind_ramp", 0, None),
         ):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low or (high and v > high):

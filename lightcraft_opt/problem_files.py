@@ -17,6 +17,8 @@ A problem file::
     model = "../models/flight5.toml"      # relative to this file
     horizon_pulses = 260
     t0_s = 0.0                             # optional: time of the first pulse
+    rcs_profile = "hold"                   # optional: RCS thrust over an interval: "hold",
+    rcs_subintervals = 1                   # "subintervals" (this many levels), "phase_locked"
 
     [model_overrides]                      # optional: tables and keys of a model file,
     [model_overrides.environment.wind]     # merged over it before it is read
@@ -68,6 +70,7 @@ A problem file::
     move_blocking = 1                      # or block lengths [4, 4, 2, ...]
     threads = 1
     print_level = 0
+    wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
 
     [pulse_map]                            # optional: PulseMapOptions; keys not given
     scheme = "split4"                      # keep OCP_PULSE_MAP's (split4, 8 substeps,
@@ -83,7 +86,8 @@ linearly interpolated at the node times), ``lateral_offset`` (weight [1/m^2],
 relative_to), ``control_effort`` (input, weight, reference), ``control_rate`` (input,
 weight). Constraints (``kind``): ``capture_fraction`` (fraction), ``tilt_limit``
 (max_tilt), ``no_ground_contact`` (clearance), ``terminal_altitude`` (minimum,
-maximum), ``terminal_state`` (state, lower, upper), ``energy_budget`` (total).
+maximum), ``terminal_state`` (state, lower, upper), ``energy_budget`` (total),
+``rcs_envelope`` (no keys: phase-locked thrust within [0, max] at every phase).
 ``[[control]]``: input, lower, upper, slew_rate (``inf`` for none). A quantity's keys
 take any unit of model_files' QUANTITIES (``clearance_m``, ``clearance_cm`` ...); an
 unknown key gets a did-you-mean hint. :mod:`lightcraft_opt.problem_tables` reads the
@@ -126,6 +130,7 @@ from lightcraft_opt.options import (
     OcpOptions,
     OcpSolver,
     PulseMapOptions,
+    RcsProfile,
 )
 from lightcraft_opt.problem_tables import (
     BLOCKS,
@@ -162,6 +167,8 @@ _TOP: Mapping[str, Spec] = {
     "model": TEXT,
     "horizon_pulses": INTEGER,
     "t0": quantity("time"),
+    "rcs_profile": choice(RcsProfile),
+    "rcs_subintervals": INTEGER,
 }
 _INITIAL: Mapping[str, Spec] = {
     "position_L": quantity("length", "list", 3),
@@ -179,6 +186,7 @@ _SOLVER: Mapping[str, Spec] = {
     "move_blocking": BLOCKS,
     "threads": INTEGER,
     "print_level": INTEGER,
+    "wind_ramp": INTEGER,
 }
 
 
@@ -323,6 +331,8 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
             tuple(made["controls"]),
             x0=x0,
             t0=t0,
+            rcs_profile=top.values.get("rcs_profile", RcsProfile.HOLD),
+            rcs_subintervals=top.values.get("rcs_subintervals", 1),
         )
     except ParameterError as err:
         key = _problem_key(err.field, top, items)

@@ -37,6 +37,7 @@ from lightcraft_opt.ocp_problem import (
     LateralOffset,
     NoGroundContact,
     OffsetFrom,
+    RcsEnvelope,
     TerminalAltitude,
     TerminalState,
     TiltLimit,
@@ -158,6 +159,7 @@ CONSTRAINTS: Mapping[str, TableKind] = {
         TerminalState, {"state": TEXT, "lower": SLOT, "upper": SLOT}, ("state",), "state"
     ),
     "energy_budget": TableKind(EnergyBudget, {"total": quantity("energy")}, ("total",)),
+    "rcs_envelope": TableKind(RcsEnvelope, {}),
 }
 
 CONTROL = TableKind(

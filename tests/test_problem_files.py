@@ -24,6 +24,7 @@ from lightcraft_opt.ocp_problem import (
     EnergyBudget,
     LateralOffset,
     OffsetFrom,
+    RcsEnvelope,
     TerminalState,
     TiltLimit,
     TrackReference,
@@ -34,6 +35,7 @@ from lightcraft_opt.options import (
     HessianApproximation,
     OcpOptions,
     OcpSolver,
+    RcsProfile,
 )
 from lightcraft_opt.problem_files import objective_names
 
@@ -381,3 +383,48 @@ def test_track_reference_needs_exactly_one_path(folder: Path) -> None:
     assert isinstance(track, TrackReference)
     assert track.path[:, 2] == pytest.approx([0.0, 1.0, 2.0], abs=0)
     assert STATE.slot(track.slot).size == 3
+
+
+def test_the_ready_problems_load_as_their_comments_say() -> None:
+    """problems/*.toml: (a) crosswind climb, (b) least energy to 30 m, (c) RCS tilt in a gust,
+    each with the numbers its header states."""
+    root = Path(__file__).resolve().parents[1] / "problems"
+    a = load_problem(root / "crosswind_climb.toml")
+    assert a.problem.horizon == 130 and a.options.wind_ramp == 3
+    assert PARAMETERS.get("wind_speed_ref", a.problem.p) == pytest.approx(3.0)
+    assert PARAMETERS.get("wind_direction_from", a.problem.p) == pytest.approx(math.pi / 2)
+    b = load_problem(root / "least_energy_flight16.toml")
+    assert b.problem.model.name == "flight16" and b.problem.free[b.problem.inputs.index("energy")]
+    c = load_problem(root / "rcs_gust_tilt.toml")
+    gust = PARAMETERS.get("gust_L", c.problem.p)
+    assert gust == pytest.approx([1.5, 0.0, 0.0])
+    tilt = [k for k in c.problem.constraints if isinstance(k, TiltLimit)]
+    assert tilt[0].max_tilt == pytest.approx(math.radians(1.0))
+    assert c.problem.inputs.slot("rcs_thrust").size == 4
+
+
+def test_rcs_profile_envelope_and_wind_ramp_reach_problem_and_options(folder: Path) -> None:
+    path = write(
+        folder,
+        """
+model = "../models/flight5-rcs.toml"
+horizon_pulses = 3
+rcs_profile = "phase_locked"
+[[objective]]
+term = "control_effort"
+input = "rcs_cos"
+[[constraint]]
+kind = "rcs_envelope"
+[solver]
+wind_ramp = 2
+""",
+    )
+    loaded = load_problem(path)
+    assert loaded.problem.rcs_profile is RcsProfile.PHASE_LOCKED
+    assert "rcs_sin" in loaded.problem.inputs
+    assert any(isinstance(k, RcsEnvelope) for k in loaded.problem.constraints)
+    assert loaded.options.wind_ramp == 2
+    bad = write(folder, path.read_text().replace("wind_ramp = 2", "wind_ramp = -1"), "bad.toml")
+    with pytest.raises(ProblemFileError) as err:
+        load_problem(bad)
+    assert err.value.field == "solver.wind_ramp"
