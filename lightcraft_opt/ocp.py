@@ -88,11 +88,20 @@ def rollout(
     return np.array(X), np.array(U).reshape(N, lay.size)
 
 
-def _solver_options(opts: OcpOptions, equality: list[bool]) -> tuple[str, dict[str, Any]]:
+def _solver_options(opts: OcpOptions, tr: MultipleShooting) -> tuple[str, dict[str, Any]]:
     """nlpsol plugin name and options for ``opts``."""
     quiet = opts.print_level == 0
-    common: dict[str, Any] = {"print_time": not quiet, "error_on_fail": False}
-    exact = opts.hessian is HessianApproximation.EXACT
+    # Trial points where Φ is not finite (IPOPT then shortens its step) are not warned about
+    # unless the solver is verbose.
+    common: dict[str, Any] = {
+        "print_time": not quiet,
+        "error_on_fail": False,
+        "show_eval_warnings": not quiet,
+    }
+    if opts.hessian is HessianApproximation.GAUSS_NEWTON:
+        common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
+    exact = opts.hessian is not HessianApproximation.LIMITED_MEMORY
+    equality = tr.equality
     if opts.solver is OcpSolver.IPOPT:
         ipopt: dict[str, Any] = {
             "print_level": opts.print_level,
@@ -250,7 +259,7 @@ class CompiledOcp:
         self.transcription = tr = MultipleShooting(
             problem, self.pulse_map, blocks=blocks, threads=opts.threads
         )
-        name, solver_opts = _solver_options(opts, tr.equality)
+        name, solver_opts = _solver_options(opts, tr)
         try:
             self.solver = ca.nlpsol("ocp_nlp", name, tr.nlp, solver_opts)
         except RuntimeError as err:

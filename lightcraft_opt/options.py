@@ -150,11 +150,16 @@ class HessianApproximation(Enum):
     ``EXACT``: the Hessian of the Lagrangian by automatic differentiation through Φ
     (quadratic convergence; its construction dominates the first build). ``LIMITED_MEMORY``:
     quasi-Newton (L-BFGS in IPOPT, BFGS in sqpmethod): cheaper iterations, more of them.
-    FATROP takes only ``EXACT``, SQP_OSQP only ``LIMITED_MEMORY``.
+    ``GAUSS_NEWTON``: 2 J^T J of the objective's least-squares residuals, the constraints'
+    curvature dropped (transcription.MultipleShooting.gauss_newton_hessian): iterations
+    need Φ's first derivatives only and the QPs are convex; linear convergence. Linear
+    terms (laser energy, final altitude) contribute no curvature.
+    FATROP takes only ``EXACT``, SQP_OSQP (convex QPs only) not ``EXACT``.
     """
 
     EXACT = "exact"
     LIMITED_MEMORY = "limited_memory"
+    GAUSS_NEWTON = "gauss_newton"
 
 
 #: Pulse map of an OCP prediction unless told otherwise: Φ's 4th-order splitting with 8
@@ -210,12 +215,15 @@ class OcpOptions:
             allowed = [h.value for h in HessianApproximation]
             raise OptionError(f"OcpOptions.hessian must be one of {allowed}, got {self.hessian!r}")
         if self.solver is OcpSolver.FATROP and self.hessian is not HessianApproximation.EXACT:
-            raise OptionError("OcpOptions.hessian: fatrop takes only 'exact'")
+            raise OptionError(
+                "OcpOptions.hessian: fatrop takes only 'exact' (its casadi interface builds "
+                "its own Hessian)"
+            )
         if self.solver is OcpSolver.SQP_OSQP and self.hessian is HessianApproximation.EXACT:
             raise OptionError(
                 "OcpOptions.hessian: sqp_osqp needs convex QPs, which the exact Hessian of Φ "
                 "does not give (casadi's convexification fails on these NLPs); use "
-                "'limited_memory'"
+                "'gauss_newton' or 'limited_memory'"
             )
         for name, low, high in (
             ("max_iter", 1, None),

@@ -114,6 +114,8 @@ class MultipleShooting:
     Attributes
     ----------
     nlp : {"x", "f", "g", "p"} casadi MX expressions for ``nlpsol``.
+    residuals : the least-squares residuals r of the objective (its squared-norm terms sum
+        to |r|^2), for :meth:`gauss_newton_hessian`.
     lbg, ubg : bounds of g; ``equality`` marks lbg == ubg (fatrop's structure detection).
     parameters : layout of the parameter vector.
     trajectory : casadi.Function ``ocp_trajectory(w, P) -> (X, U, engine)``: physical
@@ -175,7 +177,7 @@ class MultipleShooting:
 
         st = self._stages(phi, xs, as_, vs, threads)
         g, lbg, ubg = self._constraints(st)
-        terms = self._objective(st)
+        terms, self.residuals = self._objective(st)
         self.nlp = {"x": w, "f": ca.sum1(terms), "g": g, "p": self.P}
         self.lbg, self.ubg = lbg, ubg
         self.equality = [bool(v) for v in lbg == ubg]
@@ -297,14 +299,23 @@ class MultipleShooting:
         g = ca.vertcat((amp2 - mean**2) / top**2, (amp2 - (top - mean) ** 2) / top**2)
         return ca.Function("rcs_envelope", [u], [g], ["u"], ["g"])
 
-    def _objective(self, st: _Stages) -> ca.MX:
-        """(n_terms,) the objective terms, in the problem's order."""
+    def _objective(self, st: _Stages) -> tuple[ca.MX, ca.MX]:
+        """(n_terms,) the objective terms, in the problem's order, and the residuals r of
+        the least-squares terms (sum of the squared-norm terms = |r|^2; the other terms are
+        linear in w), the Gauss-Newton model's."""
         pr, lay, N = self.problem, self.problem.inputs, self.problem.horizon
         width = pr.reference().shape[1]
         ref = ca.reshape(self.parameters.get("reference", self.P), width, N + 1)
         altitude, drift, _, _ = st.nodes
         offset, _ = st.pulses
         terms: list[ca.MX] = []
+        residuals: list[ca.MX] = []
+
+        def squares(weights: ca.DM | float, r: ca.MX) -> None:
+            scaled = ca.sqrt(weights) * r
+            residuals.append(ca.vec(scaled))
+            terms.append(ca.sumsqr(scaled))
+
         col = 0
         for term in pr.objective:
             if isinstance(term, LaserEnergy):
@@ -315,19 +326,40 @@ class MultipleShooting:
                 size = STATE.slot(term.slot).size
                 err = st.X[STATE.index(term.slot), 1:] - ref[col : col + size, 1:]
                 col += size
-                terms.append(ca.sum2(ca.mtimes(ca.DM(term.weights).T, err**2)))
+                squares(ca.repmat(ca.DM(term.weights), 1, N), err)
             elif isinstance(term, LateralOffset):
                 d = drift[:, 1:] if term.relative_to is OffsetFrom.PAD else offset
-                terms.append(term.weight * ca.sumsqr(d))
+                squares(term.weight, d)
             elif isinstance(term, ControlEffort):
-                du = st.U[lay.index(term.slot), :] - ca.DM(term.reference)
-                terms.append(term.weight * ca.sumsqr(du))
+                squares(term.weight, st.U[lay.index(term.slot), :] - ca.DM(term.reference))
             else:  # ControlRate: on the free entries of the slot (held ones do not change)
                 slot = lay.slot(term.slot)
                 rows = [i for i, e in enumerate(self.free) if slot.start <= e < slot.stop]
                 rate = (st.V[rows, :] - st.A[rows, :N]) / self.period if rows else ca.MX(0, 1)
-                terms.append(term.weight * ca.sumsqr(rate))
-        return ca.vertcat(*terms)
+                squares(term.weight, rate)
+        return ca.vertcat(*terms), ca.vertcat(*residuals) if residuals else ca.MX(0, 1)
+
+    def gauss_newton_hessian(self, *, upper: bool = True) -> ca.Function:
+        """casadi.Function ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``:
+        lam_f 2 J^T J, J the Jacobian of the least-squares residuals with respect to w
+        (nlpsol's ``hess_lag`` option), its upper triangle for IPOPT, the whole matrix
+        with ``upper=False`` for sqpmethod. It drops the curvature of the
+        constraints (Φ's second derivatives weighted by the multipliers) and of the
+        residuals: the Gauss-Newton model of acados and of constrained Gauss-Newton SQP;
+        convergence becomes linear, each iteration needs Φ's first derivatives only."""
+        w, r = self.nlp["x"], self.residuals
+        lam_f = ca.MX.sym("lam_f")
+        lam_g = ca.MX.sym("lam_g", self.lbg.size)
+        J = ca.jacobian(r, w) if r.numel() else ca.MX(0, w.numel())
+        H = lam_f * 2 * ca.mtimes(J.T, J)
+        H = ca.triu(H) if upper else H
+        return ca.Function(
+            "nlp_hess_l",
+            [w, self.P, lam_f, lam_g],
+            [H],
+            ["x", "p", "lam_f", "lam_g"],
+            ["hess_gamma_x_x"],
+        )
 
     # ----------------------------------------------------------------- numbers
     def parameter_vector(
