@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 from collections.abc import Sequence
@@ -66,6 +67,8 @@ def _optimize(args: argparse.Namespace) -> int:
     source = Path(args.problem)
     pf = load_problem(source, horizon=args.horizon, solver=args.solver, max_iter=args.max_iter)
     problem, options = pf.problem, pf.options
+    if args.verbose:
+        options = dataclasses.replace(options, print_level=5)
     out = Path(args.out) if args.out else Path("runs") / source.stem
     out.mkdir(parents=True, exist_ok=True)
     print(
@@ -75,7 +78,7 @@ def _optimize(args: argparse.Namespace) -> int:
     )
     compiled = CompiledOcp(problem, options)
     print(f"built in {compiled.build_time:.1f} s; solving ...", flush=True)
-    result = compiled.solve()
+    result = compiled.solve(initial_guess=pf.initial_guess())
     print(
         f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
         f"{result.solve_time:.2f} s ({result.message})"
@@ -162,6 +165,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     opt.add_argument(
         "--max-iter", type=int, default=None, help="NLP iterations instead of the file's"
+    )
+    opt.add_argument(
+        "--verbose", action="store_true", help="print the solver's iterations (progress)"
     )
     opt.set_defaults(run=_optimize)
     return parser

@@ -36,6 +36,9 @@ A problem file::
     w_B_rad_s = [0.0, 0.0, 0.0]
     spin_rpm = 10000
 
+    [initial_guess]                        # optional: inputs held over the horizon in the
+    energy = 75.0                          # rollout that starts the solver (SI of the slot)
+
     [[objective]]
     term = "lateral_offset"
     weight = 1e4
@@ -107,6 +110,7 @@ import re
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
+from dataclasses import field as dataclass_field
 from enum import Enum
 from pathlib import Path
 from typing import Any, get_type_hints
@@ -138,6 +142,7 @@ from lightcraft_opt.problem_tables import (
     CONTROL,
     INTEGER,
     NUMBER,
+    NUMBERS,
     OBJECTIVES,
     TEXT,
     Spec,
@@ -156,6 +161,7 @@ __all__ = ["ProblemFile", "load_problem", "objective_names"]
 _TABLES = (
     "model_overrides",
     "initial",
+    "initial_guess",
     "objective",
     "constraint",
     "control",
@@ -235,6 +241,8 @@ class ProblemFile:
     ----------
     problem : the optimal control problem, everything in SI.
     options : transcription and solver options.
+    guess_inputs : ``[initial_guess]``: map-input slot -> values held over the horizon
+        in the initial guess (:meth:`initial_guess`).
     title : the file's ``title`` (default: the file name without ``.toml``).
     source : the file read.
     """
@@ -243,6 +251,19 @@ class ProblemFile:
     options: OcpOptions
     title: str
     source: Path
+    guess_inputs: Mapping[str, tuple[float, ...]] = dataclass_field(default_factory=dict)
+
+    def initial_guess(self) -> np.ndarray | None:
+        """(N, map-input size) inputs to roll out as the initial guess: the problem's
+        nominal input with the file's ``[initial_guess]`` values, clipped to the bounds;
+        None without that table (the solver then rolls out its nominal policy)."""
+        if not self.guess_inputs:
+            return None
+        pr = self.problem
+        u = pr.nominal_input()
+        for name, value in self.guess_inputs.items():
+            u[pr.inputs.index(name)] = value
+        return np.tile(np.clip(u, pr.lower, pr.upper), (pr.horizon, 1))
 
 
 # --------------------------------------------------------------------------- public API
@@ -339,7 +360,26 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
         raise ProblemFileError(src, key, si_note(key, err.reason)) from err
     options = _options(src, data, problem.horizon)
     title = top.values.get("title", file.stem)
-    return ProblemFile(problem=problem, options=options, title=title, source=file)
+    guess = _guess_inputs(src, problem, data.get("initial_guess"))
+    return ProblemFile(
+        problem=problem, options=options, title=title, source=file, guess_inputs=guess
+    )
+
+
+def _guess_inputs(src: str, problem: OcpProblem, raw: Any) -> dict[str, tuple[float, ...]]:
+    """``[initial_guess]``: one number or one per component for map-input slots (SI)."""
+    schema = {name: NUMBERS for name in problem.inputs.names}
+    table = read_table(src, raw or {}, "initial_guess", schema)
+    out: dict[str, tuple[float, ...]] = {}
+    for name, value in table.values.items():
+        size = problem.inputs.slot(name).size
+        v = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
+        if v.size not in (1, size) or not np.all(np.isfinite(v)):
+            raise ProblemFileError(
+                src, table.key(name), f"needs 1 or {size} finite numbers, got {value!r}"
+            )
+        out[name] = tuple(np.broadcast_to(v, (size,)).tolist())
+    return out
 
 
 def _model(src: str, file: Path, name: str, overrides: Any) -> params.Model:

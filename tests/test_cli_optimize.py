@@ -235,3 +235,11 @@ def test_ocp_figures_draw_the_results_numbers(problem_file):
     assert offset.get_ydata() == pytest.approx([0.5, 1.0, 1.0], rel=1e-12)  # |offset| cm
     assert radius.get_ydata()[0] == pytest.approx(100 * CAPTURE_RADIUS)
     assert limit.get_ydata()[0] == pytest.approx(0.2 * 100 * CAPTURE_RADIUS)
+
+
+def test_verbose_prints_the_solvers_iterations(problem_file, tmp_path, capfd):
+    """--verbose: IPOPT's iteration table (written by the C library to the process's stdout)."""
+    argv = ["optimize", str(problem_file), "--out", str(tmp_path / "v"), "--horizon", "3"]
+    main([*argv, "--solver", "ipopt", "--max-iter", "2", "--verbose"])
+    out = capfd.readouterr().out
+    assert "inf_pr" in out and "inf_du" in out

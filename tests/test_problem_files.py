@@ -428,3 +428,31 @@ wind_ramp = 2
     with pytest.raises(ProblemFileError) as err:
         load_problem(bad)
     assert err.value.field == "solver.wind_ramp"
+
+
+def test_initial_guess_inputs_are_held_over_the_horizon(folder: Path) -> None:
+    path = write(
+        folder,
+        """
+model = "../models/flight16.toml"
+horizon_pulses = 4
+[[objective]]
+term = "laser_energy"
+[initial_guess]
+energy = 75.0
+pointing_L = [0.01, -0.02]
+""",
+    )
+    loaded = load_problem(path)
+    guess = loaded.initial_guess()
+    lay = loaded.problem.inputs
+    assert guess is not None and guess.shape == (4, lay.size)
+    assert np.all(guess[:, lay.index("energy")] == 75.0)
+    assert np.all(guess[:, lay.index("pointing_L")] == [0.01, -0.02])
+    assert np.all(
+        guess[:, lay.index("focus")] == loaded.problem.nominal_input()[lay.index("focus")]
+    )
+    bad = write(folder, path.read_text().replace("[0.01, -0.02]", "[0.01, 0.0, 0.0]"), "b.toml")
+    with pytest.raises(ProblemFileError) as err:
+        load_problem(bad)
+    assert err.value.field == "initial_guess.pointing_L"
