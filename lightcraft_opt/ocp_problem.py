@@ -251,7 +251,8 @@ class ControlBound:
     """Bounds of one map-input slot, one value or one per component, in the slot's unit.
 
     lower, upper : lower <= u_k[slot] <= upper at every pulse (equal: held at that value,
-        not a decision variable); +-inf for none.
+        not a decision variable); +-inf for none; None (the default) keeps the model's
+        limit below, so a ControlBound that sets only a slew rate stays within the laser.
     slew_rate : |u_k - u_{k-1}| / T <= slew_rate [unit/s], > 0; inf for none (from
         ``u_previous`` at k = 0 when the problem gives it).
 
@@ -265,8 +266,8 @@ class ControlBound:
     """
 
     slot: str
-    lower: Values = -math.inf
-    upper: Values = math.inf
+    lower: Values | None = None
+    upper: Values | None = None
     slew_rate: Values = math.inf
 
 
@@ -633,8 +634,17 @@ class OcpProblem:
             if bound.slot in seen:
                 raise ParameterError(f"{where}.slot", f"{bound.slot!r} is bounded twice")
             seen.add(bound.slot)
-            lo = _values(f"{where}.lower", bound.lower, size, allow_inf=True)
-            hi = _values(f"{where}.upper", bound.upper, size, allow_inf=True)
+            idx = lay.index(bound.slot)
+            lo = (
+                lower[idx]
+                if bound.lower is None
+                else _values(f"{where}.lower", bound.lower, size, allow_inf=True)
+            )
+            hi = (
+                upper[idx]
+                if bound.upper is None
+                else _values(f"{where}.upper", bound.upper, size, allow_inf=True)
+            )
             rate = _values(f"{where}.slew_rate", bound.slew_rate, size, allow_inf=True)
             if np.any(lo > hi):
                 raise ParameterError(f"{where}.lower", f"{lo} exceeds upper {hi}")
@@ -647,7 +657,6 @@ class OcpProblem:
                 )
             if np.any(np.isinf(lo) & (lo == hi)):
                 raise ParameterError(f"{where}.lower", "an input cannot be held at infinity")
-            idx = lay.index(bound.slot)
             lower[idx], upper[idx], slew[idx] = lo, hi, rate * self.period
         _set(self, "lower", lower)
         _set(self, "upper", upper)

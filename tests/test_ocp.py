@@ -437,3 +437,16 @@ def test_ocp_measures_values_and_jacobians():
     assert_jacobians_match_finite_differences(
         build_pulse_measures(), [engine, p], scale=[0.01, np.ones(PARAMETERS.size)]
     )
+
+
+def test_a_slew_rate_alone_keeps_the_lasers_pointing_limit():
+    """ControlBound with only a slew rate: the laser's own pointing limit still bounds it."""
+    model = drag_free_vertical()
+    problem = OcpProblem(
+        model, 3, (LaserEnergy(),), controls=(ControlBound("pointing_L", slew_rate=1.0),)
+    )
+    idx = problem.inputs.index("pointing_L")
+    limit = model.laser.pointing_limit
+    assert problem.upper[idx] == pytest.approx([limit, limit])
+    assert problem.lower[idx] == pytest.approx([-limit, -limit])
+    assert problem.slew[idx] == pytest.approx([problem.period] * 2)
