@@ -11,13 +11,15 @@ For each solver in ``--solvers`` (``name:hessian``, e.g. ``ipopt:exact``), in on
 * **warm**: an MPC-like re-solve for the craft moved 2 mm east at the start, warm-started
   from the cold optimum (primal and dual).
 
-Problem (a) is ``problems/crosswind_climb.toml``; at ``--horizon`` pulses longer than the
-file's 130 (5 s) the terminal altitude of 50 m is dropped (the Flight 5 engine overheats near
-the 100th pulse and the craft sinks back below 50 m before 10 s), and the problem becomes:
-stay in the beam and near the pad's vertical for the whole flight. Each solver's optimum is
-compared with the first solver's (largest pointing difference, cost difference), and the
-fastest converged solver's times are checked against the issue's targets (<= 1 s cold,
-<= 100 ms warm).
+Problem (a) is ``problems/crosswind_climb.toml``; at a ``--horizon`` other than the file's
+130 pulses (5 s) the terminal altitude of 50 m is dropped (too high for a short horizon; at
+260 pulses the Flight 5 engine has overheated near the 100th pulse and the craft sinks back
+below 50 m before 10 s), and the problem becomes: stay in the beam and near the pad's
+vertical for the whole flight. NOTE: at 130 pulses or more the problem does not converge yet
+(problems/crosswind_climb.toml's header); ``--horizon 30`` is its launch second, which
+does. Each solver's optimum is compared with the first solver's (largest pointing
+difference, cost difference), and the fastest converged solver's times are checked
+against the issue's targets (<= 1 s cold, <= 100 ms warm).
 
 Run: ``pip install -e ".[bench]" && python bench/ocp.py`` (``--help`` for options;
 ``--horizon 30`` for a quick look).
@@ -55,11 +57,7 @@ def main() -> None:
     loaded = load_problem(args.problem)
     problem = loaded.problem
     if args.horizon != problem.horizon:
-        keep = tuple(
-            c
-            for c in problem.constraints
-            if not (isinstance(c, TerminalAltitude) and args.horizon > problem.horizon)
-        )
+        keep = tuple(c for c in problem.constraints if not isinstance(c, TerminalAltitude))
         problem = replace(problem, horizon=args.horizon, constraints=keep)
     base = replace(loaded.options, max_iter=args.max_iter)
     start = time.perf_counter()
@@ -73,7 +71,7 @@ def main() -> None:
     )
 
     moved = problem.x_start.copy()
-    moved[STATE.index("r_L")[0]] += 0.002
+    moved[STATE.slot("r_L").start] += 0.002  # 2 mm east
     first: OcpResult | None = None
     rows = []
     for spec in args.solvers.split(","):

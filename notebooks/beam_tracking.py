@@ -14,8 +14,10 @@
 # %% [markdown]
 # # Beam tracking in a crosswind: optimal laser pointing
 #
-# Problem (a) of `problems/crosswind_climb.toml`: the Flight 5 craft climbs under the PLVTS
-# beam through a 3 m/s crosswind from the east. With the beam held on the pad's vertical the
+# Problem (a), `problems/crosswind_climb.toml`: the Flight 5 craft climbs under the PLVTS
+# beam through a 3 m/s crosswind from the east. Here its launch second,
+# `problems/crosswind_launch.toml` (30 pulses; the whole 130-pulse climb does not converge yet,
+# see that file's header). With the beam held on the pad's vertical the
 # wind tips the craft and blows it off the optic within about a second. Here the beam axis is
 # steered pulse by pulse (within the laser's 10 cm limit and a 2 m/s slew rate) so that the
 # beam axis always meets the optic within half its capture radius, while the craft stays as
@@ -23,36 +25,28 @@
 #
 # The optimal control problem is multiple shooting over pulses with the pulse map Φ as the
 # dynamics (one node per pulse), solved by IPOPT; the wind is ramped from calm in three
-# continuation steps. Set `LIGHTCRAFT_QUICK=1` for a 30-pulse version (the test suite does).
+# continuation steps. `LIGHTCRAFT_QUICK=1` (the test suite sets it) keeps the problem as it is:
+# it is already small.
 
 # %%
 import os
-from dataclasses import replace
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 import lightcraft_opt as lc
 from lightcraft_opt.ocp import CompiledOcp
-from lightcraft_opt.ocp_problem import TerminalAltitude
 from lightcraft_opt.plots.ocp import plot_beam_offset, plot_drift, plot_pointing
 from lightcraft_opt.plots.track import plot_track_xy
 from lightcraft_opt.simulate import nominal_inputs
 
-QUICK = os.environ.get("LIGHTCRAFT_QUICK") == "1"
 
 # %% [markdown]
 # ## The problem, as the file states it
 
 # %%
-loaded = lc.load_problem("problems/crosswind_climb.toml")
+loaded = lc.load_problem("problems/crosswind_launch.toml")
 problem, options = loaded.problem, loaded.options
-if QUICK:  # 30 pulses: too short to reach 50 m, so the terminal altitude goes
-    problem = replace(
-        problem,
-        horizon=30,
-        constraints=tuple(c for c in problem.constraints if not isinstance(c, TerminalAltitude)),
-    )
 print(loaded.title)
 print(f"horizon {problem.horizon} pulses, {problem.horizon * problem.period:.2f} s")
 print("objective:", [type(t).__name__ for t in problem.objective])
