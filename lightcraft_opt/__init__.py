@@ -3,6 +3,9 @@
 Frames and units: docs/frames.md. Everything inside is SI.
 """
 
+from lightcraft_opt.closed_loop import closed_loop
+from lightcraft_opt.closed_loop_files import ClosedLoopProblem, load_closed_loop
+from lightcraft_opt.closed_loop_results import ClosedLoopResult
 from lightcraft_opt.errors import (
     LightcraftError,
     ModelFileError,
@@ -20,6 +23,8 @@ from lightcraft_opt.simulate import simulate
 __all__ = [
     "PARAMETERS",
     "STATE",
+    "ClosedLoopProblem",
+    "ClosedLoopResult",
     "Craft",
     "Environment",
     "Flight",
@@ -35,7 +40,9 @@ __all__ = [
     "SimulationStatus",
     "Site",
     "Wind",
+    "closed_loop",
     "initial_state",
+    "load_closed_loop",
     "load_model",
     "load_problem",
     "parameter_values",

@@ -57,3 +57,22 @@ def assert_jacobians_match_finite_differences(
                 f"{f.name()}: d{f.name_out(j)}/d{f.name_in(i)} differs from finite "
                 f"differences by {worst:.3g} (relative)"
             )
+
+
+def state_step_scale(craft_mass: float) -> np.ndarray:
+    """(STATE.size,) finite-difference step scale per state entry, a small size of each slot:
+    1 cm, 0.1 m/s, 0.01 of the quaternion, 1 rad/s, 1 rad/s of spin, the craft mass for the
+    propellant masses, one pulse for the counter."""
+    from lightcraft_opt.layout import STATE
+
+    natural = {
+        "r_L": 1e-2,
+        "v_L": 0.1,
+        "q_LB": 1e-2,
+        "w_B": 1.0,
+        "spin": 1.0,
+        "liner_mass": craft_mass,
+        "rcs_mass": craft_mass,
+        "pulses": 1.0,
+    }
+    return STATE.pack({k: np.full(STATE.slot(k).size, v) for k, v in natural.items()})

@@ -34,7 +34,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import torque_free
-from jacobian_check import assert_jacobians_match_finite_differences
+from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
 from lightcraft_opt.coast_reference import coast_integrator, simulate_coast
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -420,17 +420,7 @@ def test_pulse_map_jacobians_match_finite_differences_for_each_profile(rcs_model
     if profile is RcsProfile.PHASE_LOCKED:
         u[lay.index("rcs_cos")] = rng.uniform(-0.05, 0.05, N_THR)
         u[lay.index("rcs_sin")] = rng.uniform(-0.05, 0.05, N_THR)
-    natural = {
-        "r_L": 1e-2,
-        "v_L": 0.1,
-        "q_LB": 1e-2,
-        "w_B": 1.0,
-        "spin": 1.0,
-        "liner_mass": model.craft.mass,
-        "rcs_mass": model.craft.mass,
-        "pulses": 1.0,
-    }
-    x_scale = STATE.pack({k: np.full(STATE.slot(k).size, v) for k, v in natural.items()})
+    x_scale = state_step_scale(model.craft.mass)
     p_scale = np.where(p != 0.0, 1e-3 * np.abs(p), 1e-4)
     p_scale[PARAMETERS.index("carrier_inertia")] = model.craft.inertia_transverse
     assert_jacobians_match_finite_differences(

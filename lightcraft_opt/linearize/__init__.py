@@ -22,11 +22,20 @@ The modules, in the order they build on each other:
   (:func:`lqr_policy`);
 - :mod:`.stability_grid`: multipliers over spin rate × beam offset
   (:func:`stability_map`);
+- :mod:`.coning_model`: linear models in coning coordinates scheduled on spin and
+  altitude (:func:`coning_model`), the prediction model of the nutation MPC;
 - :mod:`.signal_names`: the names of layout entries, shared by the above.
 
 Everything public is re-exported here: ``from lightcraft_opt.linearize import ...``.
 """
 
+from lightcraft_opt.linearize.coning_model import (
+    CONING_INPUTS,
+    CONING_STATES,
+    ConingModel,
+    coning_model,
+    turn,
+)
 from lightcraft_opt.linearize.modes import (
     Controllability,
     ModeKind,
@@ -45,11 +54,14 @@ from lightcraft_opt.linearize.operating_points import (
     trim_hover,
 )
 from lightcraft_opt.linearize.stability_grid import StabilityMap, stability_map
-from lightcraft_opt.linearize.state_feedback import LqrResult, lqr, lqr_policy
+from lightcraft_opt.linearize.state_feedback import LqrResult, dlqr_gain, lqr, lqr_policy
 from lightcraft_opt.linearize.state_space import REDUCED_STATES, Coordinates, linearize
 
 __all__ = [
+    "CONING_INPUTS",
+    "CONING_STATES",
     "REDUCED_STATES",
+    "ConingModel",
     "Controllability",
     "Coordinates",
     "LqrResult",
@@ -61,7 +73,9 @@ __all__ = [
     "StabilityMap",
     "beam_riding_modes",
     "climb_point",
+    "coning_model",
     "controllability",
+    "dlqr_gain",
     "error_state",
     "linearize",
     "lqr",
@@ -70,4 +84,5 @@ __all__ = [
     "pulse_map_jacobian",
     "stability_map",
     "trim_hover",
+    "turn",
 ]

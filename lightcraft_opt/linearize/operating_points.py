@@ -26,8 +26,10 @@ import numpy as np
 from lightcraft_opt.layout import (
     PULSE_INPUT,
     STATE,
+    VectorLayout,
     checked_vector,
     initial_state,
+    map_input_layout,
     parameter_values,
 )
 from lightcraft_opt.linearize.signal_names import _select
@@ -135,6 +137,9 @@ class OperatingPoint:
     status : trimmed, a trajectory point, or why no trim was found.
     message : more about the status.
     iterations : Newton iterations of a trim.
+    inputs : layout of ``u``: the ``inputs`` of the pulse map the point was found with
+        (its RCS profile: held, sub-intervals or phase-locked); None means the model's
+        layout with held RCS levels.
     """
 
     x: np.ndarray
@@ -145,6 +150,14 @@ class OperatingPoint:
     status: PointStatus
     message: str = ""
     iterations: int = 0
+    inputs: VectorLayout | None = None
+
+    def input_layout(self, model: Model) -> VectorLayout:
+        """The layout of ``u``: :attr:`inputs`, or ``model``'s with held RCS levels."""
+        if self.inputs is not None:
+            return self.inputs
+        craft = model.craft
+        return map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
 
     @property
     def success(self) -> bool:
@@ -193,15 +206,16 @@ def climb_point(
         v_L=(0.0, 0.0, speed),
         spin=spin,
     )
-    u = nominal_inputs(model)
-    if energy is not None:
-        u[_ENERGY] = energy
-    p = parameter_values(model)
     if isinstance(pulse_map, PulseMapJacobian):
         pulse_map = pulse_map.pulse_map
     phi = pulse_map or build_pulse_map(model, options)
+    u = nominal_inputs(model, phi.inputs)
+    if energy is not None:
+        u[_ENERGY] = energy
+    p = parameter_values(model)
     x_next = np.asarray(phi.step(x, u, p, t)[0]).ravel()
-    return OperatingPoint(x, u, p, t, x_next, PointStatus.TRAJECTORY, "a climb, not a fixed point")
+    msg = "a climb, not a fixed point"
+    return OperatingPoint(x, u, p, t, x_next, PointStatus.TRAJECTORY, msg, inputs=phi.inputs)
 
 
 def trim_hover(
@@ -241,7 +255,8 @@ def trim_hover(
     e_max = model.laser.pulse_energy_max if max_energy is None else max_energy
     period = jac.pulse_map.period
     x = initial_state(model, r_L=(0.0, 0.0, altitude), spin=spin)
-    u = nominal_inputs(model)
+    lay = jac.pulse_map.inputs
+    u = nominal_inputs(model, lay)
     p = parameter_values(model)
     iz, iv = STATE.slot("r_L").start + 2, STATE.slot("v_L").start + 2
     g_guess = 9.81
@@ -255,7 +270,7 @@ def trim_hover(
             if u[_ENERGY] > e_max:
                 status = PointStatus.NO_TRIM
                 msg = f"hover needs {u[_ENERGY]:.4g} J a pulse, more than {e_max:.4g} J"
-            return OperatingPoint(x, u, p, t, x_next, status, msg, k)
+            return OperatingPoint(x, u, p, t, x_next, status, msg, k, lay)
         if k == max_iter:
             break
         J = np.array(
@@ -263,12 +278,12 @@ def trim_hover(
         )
         if abs(B[iv, _ENERGY]) * e_max < 1e-9 * g_guess * period:
             msg = f"the optic catches no energy at {altitude:g} m: no pulse can hold the craft"
-            return OperatingPoint(x, u, p, t, x_next, PointStatus.NO_TRIM, msg, k)
+            return OperatingPoint(x, u, p, t, x_next, PointStatus.NO_TRIM, msg, k, lay)
         step = np.linalg.solve(J, -r)
         x[iv] += step[0]
         u[_ENERGY] += step[1]
         if u[_ENERGY] > 4 * e_max:
             msg = f"hover needs more than {4 * e_max:.4g} J a pulse (the laser gives {e_max:.4g})"
-            return OperatingPoint(x, u, p, t, x_next, PointStatus.NO_TRIM, msg, k + 1)
+            return OperatingPoint(x, u, p, t, x_next, PointStatus.NO_TRIM, msg, k + 1, lay)
     msg = f"Newton stopped after {max_iter} iterations, residual {r}"
-    return OperatingPoint(x, u, p, t, x_next, PointStatus.NOT_CONVERGED, msg, max_iter)
+    return OperatingPoint(x, u, p, t, x_next, PointStatus.NOT_CONVERGED, msg, max_iter, lay)

@@ -2,7 +2,8 @@
 
 :func:`lqr` designs the gain K (``control.dlqr``) on a model of :mod:`.state_space`;
 :func:`lqr_policy` turns it into the per-pulse input policy ``u = u_op - K (x ⊖ x_op)``
-for :func:`lightcraft_opt.simulate`.
+for :func:`lightcraft_opt.simulate`. :func:`dlqr_gain` is the same design on bare matrices
+with a cross weight, for controllers that schedule their own model (controllers.py).
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ import control
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import map_input_layout
 from lightcraft_opt.linearize.modes import (
     Multipliers,
     _matrices,
@@ -112,9 +112,9 @@ def lqr_policy(
 ) -> Callable[[int, float, np.ndarray], np.ndarray]:
     """The state feedback ``u = u_op - K (x ⊖ x_op)`` as a per-pulse input policy
     ``(k, t, x) -> u`` for :func:`lightcraft_opt.simulate` (the inputs left out of the
-    linear model stay at the point's values)."""
-    craft = model.craft
-    ulay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    linear model stay at the point's values). The input layout is the point's
+    (:meth:`OperatingPoint.input_layout`: that of the pulse map it was found with)."""
+    ulay = point.input_layout(model)
     iu = _select(ulay, gains.inputs, "gains.inputs")
     states = gains.states
 
@@ -124,3 +124,36 @@ def lqr_policy(
         return u
 
     return policy
+
+
+def dlqr_gain(
+    A: np.ndarray,
+    B: np.ndarray,
+    Q: np.ndarray,
+    R: np.ndarray,
+    N: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Discrete LQR on matrices (``control.dlqr``): minimise Σ x'Qx + u'Ru + 2 x'N u.
+
+    Parameters
+    ----------
+    A : (n, n), B : (n, m) the model x[k+1] = A x[k] + B u[k].
+    Q : (n, n), R : (m, m), N : (n, m) weights; [[Q, N], [N', R]] positive semidefinite,
+        R positive definite.
+
+    Returns
+    -------
+    K : (m, n) the gain of u = -K x; S : (n, n) the Riccati solution (cost-to-go x'Sx).
+
+    Raises
+    ------
+    ParameterError when control.dlqr fails (e.g. (A, B) not stabilisable).
+    """
+    n, m = np.shape(B)
+    Nm = np.zeros((n, m)) if N is None else np.asarray(N, dtype=float)
+    _weight("R", R, m, definite=True)
+    try:
+        K, S, _ = control.dlqr(A, B, Q, R, Nm)
+    except (ValueError, np.linalg.LinAlgError, control.ControlArgument) as err:
+        raise ParameterError("Q, R", f"control.dlqr failed: {err}") from err
+    return np.asarray(K, dtype=float), np.asarray(S, dtype=float)

@@ -29,7 +29,7 @@ import control
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, map_input_layout
+from lightcraft_opt.layout import STATE
 from lightcraft_opt.linearize.operating_points import (
     OperatingPoint,
     PulseMapJacobian,
@@ -75,7 +75,9 @@ def linearize(
         :data:`REDUCED_STATES` for the error state, every state for ``FULL``). A
         truncation: the others are held at zero, and their effect is dropped.
     inputs : map-input entries kept (default all: pointing_L [m], focus [m], energy [J],
-        rcs_thrust [N] per thruster, motor_torque [N m] with a carrier).
+        the RCS slots of the map's profile (``rcs_thrust`` [N] per thruster, and
+        ``rcs_cos``, ``rcs_sin`` [N] for PHASE_LOCKED), motor_torque [N m] with a carrier).
+        The layout is the pulse map's own (``pulse_map.inputs``), so any RCS profile works.
     pulse_map : Φ, or better its :func:`pulse_map_jacobian` to reuse across points.
 
     Returns
@@ -85,8 +87,13 @@ def linearize(
     the layouts, SI), input names ``pointing_L[east]``, ``energy``, ...
     """
     jac = _jacobian(model, pulse_map, options)
-    craft = model.craft
-    ulay = map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    ulay = jac.pulse_map.inputs or point.input_layout(model)
+    if point.inputs is not None and point.inputs != ulay:
+        raise ParameterError(
+            "point.inputs",
+            f"the point's inputs {list(point.inputs.names)} are not the pulse map's "
+            f"{list(ulay.names)}: find the point with the same pulse map",
+        )
     if ulay.size != point.u.size:
         raise ParameterError("point.u", f"needs {ulay.size} map inputs, got {point.u.size}")
     x_next, A, B = jac(point.x, point.u, point.p, point.t)

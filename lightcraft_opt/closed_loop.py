@@ -1,0 +1,209 @@
+"""Closed-loop flight: a controller against the plant, pulse by pulse, with what goes wrong.
+
+The loop is written out (STYLE rule 1)::
+
+    for k in pulses:
+        y = x + noise                       # what the controller is told
+        u = controller.step(y, t_k)         # its input (a fault injected at chosen k)
+        u' = u, energy 0 if the laser drops the pulse
+        x = Φ(x, u', p_plant, t_k)          # the plant
+
+The plant is the pulse map Φ (default options, PHASE_LOCKED RCS: SPLIT4 with 32
+substeps resolves the 216 Hz forcing) with its own parameters: the model's, with the
+problem's overrides (wind, gusts) and the dispersion of
+:class:`~lightcraft_opt.options.Dispersion` on top; the controller keeps the undispersed
+model and calm air. Flights end as :func:`lightcraft_opt.simulate`'s do (duration,
+landing, leaving the beam, a non-finite state), by the same bookkeeping.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.closed_loop_results import ClosedLoopResult, ControllerLog, StepStats
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.flight_measures import flight_result
+from lightcraft_opt.layout import (
+    ERROR_STATE,
+    PARAMETERS,
+    STATE,
+    checked_vector,
+    initial_state,
+    parameter_values,
+)
+from lightcraft_opt.options import (
+    ClosedLoopOptions,
+    Dispersion,
+    MeasurementNoise,
+    PulseMapOptions,
+    RcsProfile,
+)
+from lightcraft_opt.params import Model
+from lightcraft_opt.results import PulseRecord
+from lightcraft_opt.simulate import _Flight  # simulate's own end-of-flight rules
+from lightcraft_opt.symbolic.error_state import build_error_state
+from lightcraft_opt.symbolic.invariants import build_invariants
+from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, PulseMap, build_pulse_map
+
+if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
+    from lightcraft_opt.controllers import Controller
+
+__all__ = ["closed_loop", "disperse", "measured", "plant_parameters"]
+
+#: Map of the plant unless given: Φ's defaults with the phase-locked RCS profile.
+PLANT_MAP = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED)
+_NAMES = [name for name, _, _ in ENGINE_OUTPUTS]
+_OFFSET = sum(size for _, size, _ in ENGINE_OUTPUTS[: _NAMES.index("offset_L")])
+
+
+def plant_parameters(
+    model: Model, overrides: Mapping[str, float | Sequence[float]] | None = None
+) -> np.ndarray:
+    """The model's parameter vector with ``overrides`` {PARAMETERS slot: value} (SI)."""
+    p = parameter_values(model)
+    for name, value in (overrides or {}).items():
+        if name not in PARAMETERS:
+            raise ParameterError(
+                f"parameters.{name}", f"no such parameter; see {list(PARAMETERS.names)}"
+            )
+        size = PARAMETERS.slot(name).size
+        p[PARAMETERS.index(name)] = checked_vector(f"parameters.{name}", np.ravel(value), size)
+    return p
+
+
+def disperse(p: np.ndarray, dispersion: Dispersion, rng: np.random.Generator) -> np.ndarray:
+    """``p`` with each named entry times 1 + σ n, n ~ N(0, 1) clipped to ±3, drawn in the
+    order of ``dispersion.relative`` (one draw per component)."""
+    out = np.array(p, dtype=float)
+    for name, sigma in dispersion.relative:
+        if name not in PARAMETERS:
+            raise ParameterError(
+                f"dispersion.{name}", f"no such parameter; see {list(PARAMETERS.names)}"
+            )
+        idx = PARAMETERS.index(name)
+        n = np.clip(rng.standard_normal(idx.stop - idx.start), -3.0, 3.0)
+        out[idx] = out[idx] * (1.0 + sigma * n)
+    return out
+
+
+def measured(x: np.ndarray, noise: MeasurementNoise, rng: np.random.Generator) -> np.ndarray:
+    """What the controller is told: ``x`` with Gaussian noise on position, velocity, the
+    attitude (a small rotation of B, error-state chart), w_B and the spin. No draw is
+    made for a zero standard deviation (a noiseless loop uses no random numbers)."""
+    sigma = {
+        "r_L": noise.position,
+        "v_L": noise.velocity,
+        "theta_B": noise.attitude,
+        "w_B": noise.rate,
+        "spin": noise.spin,
+    }
+    if not any(sigma.values()):
+        return x
+    dx = np.zeros(ERROR_STATE.size)
+    for name, s in sigma.items():
+        if s:
+            idx = ERROR_STATE.index(name)
+            dx[idx] = s * rng.standard_normal(idx.stop - idx.start)
+    return np.asarray(_retract()(x, dx), dtype=float).ravel()
+
+
+@functools.cache
+def _retract() -> ca.Function:
+    """x_op ⊕ δ of the error-state chart, built on first use."""
+    return build_error_state()[0]
+
+
+def closed_loop(
+    model: Model,
+    controller: Controller,
+    duration: float,
+    *,
+    x0: np.ndarray | Sequence[float] | None = None,
+    parameters: Mapping[str, float | Sequence[float]] | None = None,
+    pulse_map: PulseMap | None = None,
+    options: ClosedLoopOptions | None = None,
+) -> ClosedLoopResult:
+    """Fly ``model`` under ``controller`` for ``duration`` seconds (module docstring).
+
+    Parameters
+    ----------
+    model : the plant's model (the controller holds its own).
+    controller : ``step(x, t, fault=...) -> u`` and ``last`` (controllers.py, mpc.py);
+        reset before the flight.
+    duration : s, > 0.
+    x0 : state at the first pulse (default: on the pad, upright, spinning).
+    parameters : {PARAMETERS slot: value} overriding the plant's parameters before the
+        dispersion (wind, gusts: the disturbance the controller does not know).
+    pulse_map : the plant Φ (default :data:`PLANT_MAP`); its inputs are the controller's.
+    options : noise, dispersion, drop-outs, injected faults, seed.
+
+    Returns
+    -------
+    ClosedLoopResult: the plant's flight, the controller's per-pulse statistics and the
+    per-pulse coning, tilt, offset and propellant used. A failed or late solve is a
+    status in the log, never an exception.
+    """
+    opts = options or ClosedLoopOptions()
+    if not (np.isfinite(duration) and duration > 0):
+        raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
+    phi = pulse_map or build_pulse_map(model, PLANT_MAP)
+    lay = phi.inputs
+    if lay is None:
+        raise ParameterError("pulse_map", "needs its input layout (build_pulse_map gives it)")
+    rng = np.random.default_rng(opts.seed)
+    p = disperse(plant_parameters(model, parameters), opts.dispersion, rng)
+    x = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
+    n = int(np.ceil(duration / phi.period - 1e-9))
+    dropped = rng.random(n) < opts.dropout_rate if opts.dropout_rate else np.zeros(n, bool)
+    i_energy = lay.slot("energy").start
+    flight = _Flight(x, phi.period, duration, i_energy)
+    faults = set(opts.faults)
+    controller.reset()
+    steps: list[StepStats] = []
+    commanded: list[np.ndarray] = []
+    nodes = [x]
+    for k in range(n):
+        t = k * phi.period
+        fault = opts.fault if k in faults else None
+        y = measured(x, opts.noise, rng)
+        u = checked_vector(f"controller input {k}", controller.step(y, t, fault=fault), lay.size)
+        steps.append(controller.last)
+        commanded.append(u)
+        applied = u.copy()
+        if dropped[k]:
+            applied[i_energy] = 0.0
+        X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
+        if flight.ended_by(t, applied, X, eng.ravel()):
+            break
+        x = X[:, -1]
+        nodes.append(x)
+    k_done = len(flight.pulse_t)
+    record = PulseRecord(
+        t=np.asarray(flight.pulse_t),
+        u=np.asarray(flight.pulse_u).reshape(-1, lay.size),
+        engine=np.asarray(flight.pulse_e).reshape(k_done, -1),
+    )
+    states = np.vstack(flight.states)
+    result = flight_result(
+        model, np.asarray(flight.times), states, p, flight.status, flight.message, record
+    )
+    X_nodes = np.array([*nodes[:k_done], states[-1]])
+    _, _, tilt, coning, _ = build_invariants().map(len(X_nodes))(X_nodes.T, p)
+    rcs = X_nodes[:, STATE.slot("rcs_mass").start]
+    return ClosedLoopResult(
+        flight=result,
+        log=ControllerLog.of(controller.name, steps[:k_done]),
+        pulse_t=record.t,
+        coning=np.asarray(coning, dtype=float).ravel(),
+        tilt=np.asarray(tilt, dtype=float).ravel(),
+        offset=np.hypot(*record.engine[:, _OFFSET : _OFFSET + 2].T) if k_done else np.empty(0),
+        rcs_used=rcs[0] - rcs,
+        commanded=np.array(commanded).reshape(-1, lay.size)[:k_done],
+        dropped=dropped[:k_done],
+        p_plant=p,
+    )

@@ -1,0 +1,334 @@
+"""Closed-loop problem files: TOML in ``problems/`` read into a closed-loop flight to run.
+
+The sibling of :mod:`lightcraft_opt.problem_files` (the optimal control problems): the same
+conventions, and its machinery (the model file with ``[model_overrides]``, the
+``[initial]`` table, model_files' units in the keys, errors naming the key as written), for
+what a closed loop needs instead of an objective: the controller's options, and what
+happens to the plant.
+
+A closed-loop file::
+
+    title = "nutation suppression after a launch kick"
+    model = "../models/flight5-rcs.toml"   # relative to this file; the controller's model
+    duration_s = 1.0
+
+    [model_overrides]                      # as in problem files: merged over the model file
+
+    [initial]                              # problem files' keys, and the coning:
+    coning_deg = 5.0                       # angle b1 to H, made by the transverse rate
+    coning_azimuth_deg = 17.0              # direction of H_⊥ in B, from b2 toward b3
+
+    [controller]                           # MpcOptions; the LQR reads the tolerances
+    horizon_pulses = 10
+    solver = "hpipm"                       # qrqp, osqp, ipopt
+    max_iter = 30
+    tol = 1e-6
+    time_budget_ms = 5.0
+    envelope_directions = 4
+    capture_fraction = 0.4
+    warm_start = true
+    propellant_weight = 1.0                # [1/N] on the summed mean thrust, linear
+
+    [controller.tolerances]                # the objective, weight = 1 / tolerance^2
+    coning_deg = 0.5
+    tilt_deg = 2.0
+    offset_cm = 1.0
+    drift_cm = 20.0
+    velocity_mps = 0.2
+    pointing_cm = 20.0
+    rcs_n = 0.5
+
+    [plant]                                # what the controller does not know
+    dropout_rate = 0.05
+    seed = 0
+    fault_pulses = [4, 12]                 # solver failures injected at these pulses
+    fault = "raise"                        # or "non_finite", "late"
+
+    [plant.noise]                          # 1-sigma of what the controller is told
+    position_mm = 1.0
+    velocity_mps = 0.005
+    attitude_deg = 0.1
+    rate_rad_s = 0.5
+    spin_rpm = 10.0
+
+    [plant.dispersion]                     # relative 1-sigma of parameter-vector entries
+    rotor_axial_inertia_dry = 0.01         # (layout.PARAMETERS names)
+
+    [plant.wind]                           # the wind the plant alone feels:
+    gust_L_mps = [2.0, 0.0, 0.0]           # model files' [environment.wind] keys
+    gust_start_s = 0.4
+    gust_duration_s = 0.8
+
+Every table but the top is optional. ``[plant.wind]`` replaces the model's wind for the
+plant (keys not given take params.Wind's defaults: calm); the controller keeps the
+model's. Wind tables (``table_height`` ...) are structure of Φ and belong in
+``[model_overrides]``. Any problem raises one
+:class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lightcraft_opt import model_files as mf
+from lightcraft_opt import params
+from lightcraft_opt.errors import ModelFileError, OptionError, ProblemFileError
+from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.options import (
+    ClosedLoopOptions,
+    ControllerFault,
+    ControlWeights,
+    Dispersion,
+    MeasurementNoise,
+    MpcOptions,
+    MpcSolver,
+)
+
+# problem_files' own readers of the model and [initial] tables: one convention for both
+from lightcraft_opt.problem_files import _initial_state, _model, _problem_errors
+from lightcraft_opt.problem_tables import (
+    INTEGER,
+    NUMBER,
+    NUMBERS,
+    TEXT,
+    Spec,
+    Table,
+    choice,
+    quantity,
+    read_table,
+)
+
+__all__ = ["ClosedLoopProblem", "load_closed_loop"]
+
+_TABLES = ("model_overrides", "initial", "controller", "plant")
+_TOP: dict[str, Spec] = {"title": TEXT, "model": TEXT, "duration": quantity("time")}
+_CONING: dict[str, Spec] = {"coning": quantity("angle"), "coning_azimuth": quantity("angle")}
+_SWITCH = Spec("switch")
+_CONTROLLER: dict[str, Spec] = {
+    "horizon_pulses": INTEGER,
+    "solver": choice(MpcSolver),
+    "max_iter": INTEGER,
+    "tol": NUMBER,
+    "time_budget": quantity("time"),
+    "envelope_directions": INTEGER,
+    "capture_fraction": NUMBER,
+    "warm_start": _SWITCH,
+    "propellant_weight": NUMBER,
+}
+#: ``[controller.tolerances]``: ControlWeights field -> quantity of its tolerance.
+_TOLERANCES: dict[str, Spec] = {
+    "coning": quantity("angle"),
+    "tilt": quantity("angle"),
+    "offset": quantity("length"),
+    "drift": quantity("length"),
+    "velocity": quantity("speed"),
+    "pointing": quantity("length"),
+    "rcs": quantity("force"),
+}
+_PLANT: dict[str, Spec] = {
+    "dropout_rate": NUMBER,
+    "seed": INTEGER,
+    "fault_pulses": NUMBERS,
+    "fault": choice(ControllerFault),
+}
+_NOISE: dict[str, Spec] = {
+    "position": quantity("length"),
+    "velocity": quantity("speed"),
+    "attitude": quantity("angle"),
+    "rate": quantity("angular rate"),
+    "spin": quantity("angular rate"),
+}
+#: Wind fields the parameter vector carries (the tables are structure: not here).
+_WIND_PARAMETERS = {
+    "speed_ref": "wind_speed_ref",
+    "height_ref": "wind_height_ref",
+    "roughness_height": "wind_roughness_height",
+    "shear_exponent": "wind_shear_exponent",
+    "direction_from": "wind_direction_from",
+    "veer": "wind_veer",
+    "gust_L": "gust_L",
+    "gust_start": "gust_start",
+    "gust_duration": "gust_duration",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class ClosedLoopProblem:
+    """A closed-loop file as read, everything in SI.
+
+    Attributes
+    ----------
+    model : the controller's model (and the plant's, before its wind and dispersion).
+    x0 : (STATE.size,) state at the first pulse.
+    duration : [s].
+    mpc : the MPC's options (the LQR takes their weights).
+    loop : noise, dispersion, drop-outs, injected faults, seed.
+    plant_parameters : {PARAMETERS slot: value} the plant has and the controller does
+        not (its wind).
+    title : the file's ``title`` (default: the file name).
+    source : the file read.
+    """
+
+    model: params.Model
+    x0: np.ndarray
+    duration: float
+    mpc: MpcOptions
+    loop: ClosedLoopOptions
+    plant_parameters: dict[str, Any]
+    title: str
+    source: Path
+
+
+def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
+    """Read a closed-loop file (module docstring) and the model file it names.
+
+    Parameters
+    ----------
+    path : the file.
+    duration : replaces the file's ``duration`` [s] (quick runs from the command line).
+
+    Raises
+    ------
+    ProblemFileError naming the file and the key as written, for any problem with the
+    file, the model file or the values they give.
+    """
+    file = Path(path)
+    with _problem_errors():
+        src, data = mf._read_toml(file)
+        return _closed_loop(src, file, data, duration)
+
+
+def _closed_loop(
+    src: str, file: Path, data: dict[str, Any], duration: float | None
+) -> ClosedLoopProblem:
+    top = read_table(src, data, "", _TOP, required=("model", "duration"), tables=_TABLES)
+    model = _model(src, file, top.values["model"], data.get("model_overrides"))
+    t_end = top.values["duration"] if duration is None else duration
+    if not (math.isfinite(t_end) and t_end > 0):
+        raise ProblemFileError(src, top.key("duration"), f"must be positive, got {t_end!r} s")
+    x0 = _initial(src, model, data.get("initial"))
+    controller = data.get("controller", {})
+    plant = data.get("plant", {})
+    return ClosedLoopProblem(
+        model=model,
+        x0=x0,
+        duration=float(t_end),
+        mpc=_mpc_options(src, controller),
+        loop=_loop_options(src, plant),
+        plant_parameters=_plant_wind(src, plant),
+        title=top.values.get("title", file.stem),
+        source=file,
+    )
+
+
+def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
+    """problem_files' [initial] with the coning keys: w_B's transverse part set so that
+    tan(coning) = A |w_⊥| / H1 at w_B[b1] = 0 (H1 = J (w1 + spin), A the transverse
+    moment: the craft's own inertia, for a centred rotor)."""
+    raw = dict(raw or {})
+    coning = read_table(src, {k: raw.pop(k) for k in list(raw) if k.startswith("coning")},
+                        "initial", _CONING).values  # fmt: skip
+    x0 = _initial_state(src, model, raw)
+    if coning:
+        w = STATE.index("w_B")
+        if abs(x0[w][0]) > 0 and coning.get("coning", 0.0):
+            raise ProblemFileError(src, "initial.coning", "needs w_B[b1] = 0 (w_B_rad_s[0])")
+        craft = model.craft
+        spin = float(x0[STATE.index("spin")][0])
+        w_t = craft.inertia_axial * spin * math.tan(coning.get("coning", 0.0))
+        w_t /= craft.inertia_transverse
+        phase = coning.get("coning_azimuth", 0.0)
+        x0[w.start + 1] += w_t * math.cos(phase)
+        x0[w.start + 2] += w_t * math.sin(phase)
+    return x0
+
+
+def _mpc_options(src: str, raw: Any) -> MpcOptions:
+    table = read_table(src, raw, "controller", _CONTROLLER, tables=("tolerances",))
+    tol = read_table(src, raw.get("tolerances", {}), "controller.tolerances", _TOLERANCES)
+    values = dict(table.values)
+    weights: dict[str, float] = {}
+    for name, v in tol.values.items():
+        if v <= 0:
+            raise ProblemFileError(src, tol.key(name), f"a tolerance must be positive, got {v}")
+        weights[name] = 1.0 / v**2
+    if "propellant_weight" in values:
+        weights["propellant"] = values.pop("propellant_weight")
+    renamed = {"horizon_pulses": "horizon"}
+    kwargs = {renamed.get(k, k): v for k, v in values.items()}
+    try:
+        return MpcOptions(**kwargs, weights=ControlWeights(**weights))
+    except OptionError as err:
+        raise ProblemFileError(src, _option_key(str(err), table, tol), str(err)) from err
+
+
+def _option_key(message: str, table: Table, tol: Table) -> str:
+    """The key an OptionError's ``Class.field`` was written as."""
+    for name in (*_CONTROLLER, "horizon"):
+        if f"MpcOptions.{name} " in message:
+            return table.key("horizon_pulses" if name == "horizon" else name)
+    for name in _TOLERANCES:
+        if f"ControlWeights.{name} " in message:
+            return tol.key(name)
+    if "ControlWeights.propellant" in message:
+        return table.key("propellant_weight")
+    return "controller"
+
+
+def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
+    if not isinstance(raw, dict):
+        raise ProblemFileError(src, "plant", f"must be a table [plant], got {raw!r}")
+    table = read_table(src, raw, "plant", _PLANT, tables=("noise", "dispersion", "wind"))
+    noise = read_table(src, raw.get("noise", {}), "plant.noise", _NOISE)
+    schema = {name: NUMBER for name in PARAMETERS.names}
+    dispersion = read_table(src, raw.get("dispersion", {}), "plant.dispersion", schema)
+    values = dict(table.values)
+    faults = values.pop("fault_pulses", ())
+    faults = (faults,) if not isinstance(faults, tuple) else faults
+    if any(not float(k).is_integer() for k in faults):
+        raise ProblemFileError(src, table.key("fault_pulses"), f"needs pulse numbers, got {faults}")
+    try:
+        return ClosedLoopOptions(
+            noise=MeasurementNoise(**noise.values),
+            dispersion=Dispersion(tuple(dispersion.values.items())),
+            faults=tuple(int(k) for k in faults),
+            **values,
+        )
+    except OptionError as err:
+        message = str(err)
+        key = "plant"
+        for t, prefix in ((noise, "MeasurementNoise."), (table, "ClosedLoopOptions.")):
+            for name in t.keys:
+                if f"{prefix}{name}" in message:
+                    key = t.key(name)
+        if "Dispersion.relative[" in message:
+            key = "plant.dispersion"
+        if "ClosedLoopOptions.faults" in message:
+            key = table.key("fault_pulses")
+        raise ProblemFileError(src, key, message) from err
+
+
+def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
+    """[plant.wind] read as a model file's [environment.wind], as parameter overrides."""
+    wind = raw.get("wind") if isinstance(raw, dict) else None
+    if wind is None:
+        return {}
+    try:
+        values, keys = mf._read(src, wind, "plant.wind", "wind", params.Wind)
+        structural = [k for k in values if k not in _WIND_PARAMETERS]
+        if structural:
+            raise ProblemFileError(
+                src,
+                f"plant.wind.{keys[structural[0]]}",
+                "wind tables are structure of the pulse map, not parameters: give them in "
+                "[model_overrides.environment.wind] (the controller then knows them too)",
+            )
+        built = mf._build(src, {"wind": ("plant.wind", keys)}, params.Wind, values)
+    except ModelFileError as err:
+        raise ProblemFileError(src, err.field, err.reason) from err
+    return {_WIND_PARAMETERS[f]: getattr(built, f) for f in _WIND_PARAMETERS}

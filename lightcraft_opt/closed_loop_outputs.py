@@ -1,0 +1,110 @@
+"""Writing a closed-loop flight to disk: steps.csv and summary.json (floor 3, the edge).
+
+The flight itself goes to trajectory.csv and pulses.csv by :mod:`lightcraft_opt.run_files`
+(the same columns as ``lightcraft simulate``'s); here the controller's side: one row per
+pulse with what it did and how long it took, and a summary of the acceptance measures.
+Column names carry their units.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lightcraft_opt.closed_loop_files import ClosedLoopProblem
+from lightcraft_opt.closed_loop_results import ClosedLoopResult, ControllerStatus
+from lightcraft_opt.run_files import model_hash
+
+__all__ = ["STEP_COLUMNS", "write_closed_loop_summary", "write_steps_csv"]
+
+STEP_COLUMNS = (
+    "k",
+    "t_s",
+    "status",
+    "solve_time_ms",
+    "step_time_ms",
+    "iterations",
+    "coning_deg",
+    "tilt_deg",
+    "offset_cm",
+    "rcs_used_g",
+    "dropped",
+    "message",
+)
+
+
+def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
+    """One row per pulse k, columns :data:`STEP_COLUMNS`: the controller's status,
+    solve and step time, iterations, then the coning and tilt before pulse k, the beam
+    offset at it, the propellant used before it, whether the laser dropped it, and the
+    solver's message (commas replaced)."""
+    log = result.log
+    lines = [",".join(STEP_COLUMNS)]
+    for k in range(result.pulses):
+        cells = [
+            str(k),
+            f"{result.pulse_t[k]:.9g}",
+            log.status[k].value,
+            f"{log.solve_time[k] * 1e3:.6g}",
+            f"{log.step_time[k] * 1e3:.6g}",
+            str(int(log.iterations[k])),
+            f"{math.degrees(result.coning[k]):.9g}",
+            f"{math.degrees(result.tilt[k]):.9g}",
+            f"{result.offset[k] * 100:.9g}",
+            f"{result.rcs_used[k] * 1e3:.9g}",
+            str(int(result.dropped[k])),
+            log.messages[k].replace(",", ";"),
+        ]
+        lines.append(",".join(cells))
+    path.write_text("\n".join(lines) + "\n")
+
+
+def write_closed_loop_summary(
+    result: ClosedLoopResult, problem: ClosedLoopProblem, path: Path
+) -> dict[str, Any]:
+    """summary.json: which problem and controller, how the flight ended, the coning
+    measures (first pulse from which it stays below 0.5 degrees, largest after pulse 25),
+    tilt and offset, propellant, and the controller's statistics (counts by status,
+    fallbacks, solve time median / 99th percentile / max)."""
+    log = result.log
+    settled = result.first_pulse_below(math.radians(0.5))
+    times = {
+        k: v * 1e3 if math.isfinite(v) else None for k, v in log.solve_time_percentiles().items()
+    }
+    summary: dict[str, Any] = {
+        "title": problem.title,
+        "problem_file": str(problem.source),
+        "model": problem.model.name,
+        "model_hash": model_hash(problem.model),
+        "controller": result.controller,
+        "status": result.flight.status.value,
+        "message": result.flight.message,
+        "pulses": result.pulses,
+        "duration_s": problem.duration,
+        "coning_initial_deg": math.degrees(result.coning[0]),
+        "coning_final_deg": math.degrees(result.coning[-1]),
+        "coning_below_0.5deg_from_pulse": settled,
+        "max_coning_after_pulse_25_deg": (
+            math.degrees(result.max_coning_after(25)) if result.coning.size > 25 else None
+        ),
+        "max_tilt_deg": math.degrees(float(np.max(result.tilt))),
+        "final_tilt_deg": math.degrees(result.tilt[-1]),
+        "max_offset_cm": float(np.max(result.offset)) * 100 if result.offset.size else None,
+        "rcs_used_g": float(result.rcs_used[-1]) * 1e3,
+        "pulses_dropped": int(np.sum(result.dropped)),
+        "final_position_m": result.flight.state("r_L")[-1].tolist(),
+        "steps_by_status": {s.value: log.count(s) for s in ControllerStatus if log.count(s)},
+        "fallbacks": int(np.sum(log.fallbacks)),
+        "faults_injected": len(problem.loop.faults),
+        "solve_time_ms": times,
+        "step_time_median_ms": (
+            float(np.median(log.step_time)) * 1e3 if log.step_time.size else None
+        ),
+        "iterations_max": int(np.max(log.iterations)) if log.iterations.size else 0,
+    }
+    path.write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
+    return summary

@@ -1,0 +1,169 @@
+"""Typed, numpy-only records of a closed-loop flight and of its controller (STYLE rule 9).
+
+A controller reports each pulse as a :class:`StepStats` with a :class:`ControllerStatus`;
+a failed or late solve is a status (the controller fell back to its shifted plan), never
+an exception. :class:`ClosedLoopResult` holds the flight (a
+:class:`~lightcraft_opt.results.SimulationResult` of the plant), the controller log and
+the per-pulse measures the acceptance criteria read.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from lightcraft_opt.results import SimulationResult
+
+__all__ = [
+    "ClosedLoopResult",
+    "ControllerLog",
+    "ControllerStatus",
+    "StepStats",
+]
+
+
+class ControllerStatus(Enum):
+    """What a controller did at one pulse."""
+
+    SOLVED = "solved"  # the MPC's QP solved within its budget: its first input applied
+    FALLBACK_FAILED = "fallback_failed"  # the solve failed: the shifted previous plan
+    FALLBACK_LATE = "fallback_late"  # the solve overran its budget: the shifted plan
+    FEEDBACK = "feedback"  # a feedback law (LQR) computed the input
+    OPEN_LOOP = "open_loop"  # the nominal input, no feedback
+
+    @property
+    def fallback(self) -> bool:
+        """True when the input came from the shifted previous plan."""
+        return self in (ControllerStatus.FALLBACK_FAILED, ControllerStatus.FALLBACK_LATE)
+
+
+@dataclass(frozen=True)
+class StepStats:
+    """One pulse of a controller.
+
+    Attributes
+    ----------
+    status : what it did.
+    solve_time : wall time of the solve (QP, Riccati equation) [s]; 0 without one.
+    step_time : wall time of the whole ``step`` call, measurement to input [s].
+    iterations : of the solver (0 without one, -1 when it does not say).
+    message : the solver's own word, or why it fell back.
+    """
+
+    status: ControllerStatus
+    solve_time: float = 0.0
+    step_time: float = 0.0
+    iterations: int = 0
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class ControllerLog:
+    """Every pulse's :class:`StepStats`, as arrays.
+
+    Attributes
+    ----------
+    controller : its name ("mpc", "lqr", "none").
+    status : (n,) ControllerStatus per pulse.
+    solve_time, step_time : (n,) [s].
+    iterations : (n,).
+    messages : (n,) strings.
+    """
+
+    controller: str
+    status: tuple[ControllerStatus, ...]
+    solve_time: np.ndarray
+    step_time: np.ndarray
+    iterations: np.ndarray
+    messages: tuple[str, ...]
+
+    @classmethod
+    def of(cls, controller: str, steps: Sequence[StepStats]) -> ControllerLog:
+        return cls(
+            controller,
+            tuple(s.status for s in steps),
+            np.array([s.solve_time for s in steps], dtype=float),
+            np.array([s.step_time for s in steps], dtype=float),
+            np.array([s.iterations for s in steps], dtype=int),
+            tuple(s.message for s in steps),
+        )
+
+    def count(self, status: ControllerStatus) -> int:
+        """Pulses with this status."""
+        return sum(s is status for s in self.status)
+
+    @property
+    def fallbacks(self) -> np.ndarray:
+        """(n,) bool: the shifted plan was applied (a failed or late solve)."""
+        return np.array([s.fallback for s in self.status], dtype=bool)
+
+    def solve_time_percentiles(self) -> dict[str, float]:
+        """Median, 99th percentile and max of the solve time [s] (NaN without steps)."""
+        t = self.solve_time
+        if not t.size:
+            return {"median": math.nan, "p99": math.nan, "max": math.nan}
+        return {
+            "median": float(np.median(t)),
+            "p99": float(np.percentile(t, 99)),
+            "max": float(np.max(t)),
+        }
+
+
+@dataclass(frozen=True)
+class ClosedLoopResult:
+    """A closed-loop flight: ``u = controller.step(measured x); x = Φ(x, u, p_plant)``.
+
+    Attributes
+    ----------
+    flight : the plant's flight, dense in time, with its pulse record (the inputs
+        applied, drop-outs included).
+    log : the controller's per-pulse statistics.
+    pulse_t : (k,) pulse times [s].
+    coning : (k + 1,) coning angle b1 to H before each pulse and after the last [rad]
+        (the plant's true state).
+    tilt : (k + 1,) angle of b1 from L up, likewise [rad].
+    offset : (k,) distance of the optic centre from the beam axis at each pulse [m].
+    rcs_used : (k + 1,) RCS propellant used since the start [kg].
+    commanded : (k, map-input size) the controller's inputs (before drop-outs).
+    dropped : (k,) bool: the laser dropped that pulse.
+    p_plant : the plant's parameter vector (dispersed).
+    """
+
+    flight: SimulationResult
+    log: ControllerLog
+    pulse_t: np.ndarray
+    coning: np.ndarray
+    tilt: np.ndarray
+    offset: np.ndarray
+    rcs_used: np.ndarray
+    commanded: np.ndarray
+    dropped: np.ndarray
+    p_plant: np.ndarray
+
+    @property
+    def controller(self) -> str:
+        return self.log.controller
+
+    @property
+    def pulses(self) -> int:
+        return int(self.pulse_t.size)
+
+    def first_pulse_below(self, angle: float) -> int | None:
+        """The first pulse index k at which the coning angle before pulse k is below
+        ``angle`` [rad] and stays below to the end; None if it never settles there."""
+        above = np.nonzero(self.coning >= angle)[0]
+        k = 0 if not above.size else int(above[-1]) + 1
+        return k if k < self.coning.size else None
+
+    def max_coning_after(self, pulse: int) -> float:
+        """Largest coning angle from pulse ``pulse`` on [rad]."""
+        return float(np.max(self.coning[pulse:]))
+
+    def rms(self, name: str, start: int = 0) -> float:
+        """Root mean square of ``coning``, ``tilt`` or ``offset`` from pulse ``start``."""
+        v = getattr(self, name)[start:]
+        return float(np.sqrt(np.mean(v**2))) if v.size else math.nan

@@ -1,0 +1,325 @@
+"""Per-pulse controllers of the nutation problem, one interface: ``u = controller.step(x)``.
+
+:class:`OpenLoopController` ("none") flies the nominal input; :class:`LqrController`
+("lqr") is a discrete LQR on the same scheduled prediction model, objective and inputs
+as the MPC (:mod:`lightcraft_opt.mpc`), its input projected onto the thrust envelope. Both
+share :class:`ConingFrame`: the measurement of the coning coordinates from a state and
+the conversion of the model's inputs (beam pointing in the yaw-aligned frame, RCS in B)
+back to Φ's map input (pointing in L).
+
+Every ``step`` takes the state the controller is given (noisy in a closed loop), the pulse
+time and an optional injected fault (only the MPC has a solver to fail; the others
+ignore it), returns the map input and leaves its :class:`StepStats` in ``last``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from lightcraft_opt.closed_loop_results import ControllerStatus, StepStats
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import STATE, VectorLayout, parameter_values
+from lightcraft_opt.linearize import ConingModel, dlqr_gain, turn
+from lightcraft_opt.options import ControllerFault, ControlWeights
+from lightcraft_opt.params import Model
+from lightcraft_opt.simulate import nominal_inputs
+from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
+
+__all__ = [
+    "ConingFrame",
+    "Controller",
+    "LqrController",
+    "Measurement",
+    "OpenLoopController",
+    "PhaseTracker",
+    "StageWeights",
+    "stage_weights",
+]
+
+
+class Controller(Protocol):
+    """What the closed loop needs of a controller."""
+
+    name: str
+    last: StepStats
+
+    def step(
+        self, x: np.ndarray, t: float = 0.0, *, fault: ControllerFault | None = None
+    ) -> np.ndarray: ...
+
+    def reset(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What a controller reads of a state.
+
+    Attributes
+    ----------
+    z : (8,) coning coordinates (symbolic/coning_coordinates.py).
+    yaw : ψ [rad], the turn of B about the vertical from the upright attitude.
+    omega : coning rate in B [rad/s].
+    spin : rotor spin [rad/s].
+    altitude : r_L[up] [m].
+    climb_rate : v_L[up] [m/s].
+    """
+
+    z: np.ndarray
+    yaw: float
+    omega: float
+    spin: float
+    altitude: float
+    climb_rate: float
+
+
+class ConingFrame:
+    """Coning coordinates of a state and the map input of the model's inputs.
+
+    Parameters
+    ----------
+    model : the controller's model.
+    prediction : the scheduled linear model (its input layout and operating input).
+    p : the controller's parameter vector (default the model's).
+    """
+
+    def __init__(self, model: Model, prediction: ConingModel, p: np.ndarray | None = None) -> None:
+        self.model = model
+        self.prediction = prediction
+        self.p = parameter_values(model) if p is None else np.asarray(p, dtype=float)
+        self._coords = build_coning_coordinates()
+        lay = prediction.map_inputs
+        self.layout = lay
+        rcs = model.craft.rcs
+        if rcs is None:
+            raise ParameterError("model", f"{model.name!r} has no RCS: the controllers need one")
+        self.max_thrust = np.array([t.max_thrust for t in rcs.thrusters], dtype=float)
+        self._pointing = lay.index("pointing_L")
+        self._slots = {name: lay.index(name) for name in ("rcs_thrust", "rcs_cos", "rcs_sin")}
+        self.pointing_limit = model.laser.pointing_limit
+        first = prediction.input_index[:2]
+        if prediction.inputs[:2] != ("pointing_L[east]", "pointing_L[north]") or np.any(
+            first != np.arange(self._pointing.start, self._pointing.stop)
+        ):
+            raise ParameterError("prediction", "its first two inputs must be pointing_L")
+
+    def measure(self, x: np.ndarray) -> Measurement:
+        """The coning coordinates and schedule of state ``x`` (STATE.size,)."""
+        z, yaw, omega = self._coords(x, self.p)
+        return Measurement(
+            np.asarray(z, dtype=float).ravel(),
+            float(yaw),
+            float(omega),
+            float(x[STATE.slot("spin").start]),
+            float(x[STATE.slot("r_L").start + 2]),
+            float(x[STATE.slot("v_L").start + 2]),
+        )
+
+    def map_input(self, du: np.ndarray, yaw: float) -> np.ndarray:
+        """Φ's map input for model inputs ``du`` (departures from the operating input,
+        pointing in the yaw-aligned frame Y) at yaw ``yaw`` [rad]: the pointing turned
+        into L, then :meth:`project` onto the thrust envelope and the pointing range."""
+        u = self.prediction.u_op.copy()
+        d = np.array(du, dtype=float)
+        d[:2] = turn(yaw) @ d[:2]
+        u[self.prediction.input_index] += d
+        return self.project(u)
+
+    def project(self, u: np.ndarray) -> np.ndarray:
+        """``u`` with every thruster inside its envelope at every phase and the pointing
+        inside ±pointing_limit per axis.
+
+        The amplitude is capped at max/2; then every mean is raised by the same amount,
+        the least that lifts each to its |amplitude| (a common level adds lift, and no
+        torque for a ring of thrusters along b1 at equal radius, so the commanded torques
+        survive), and finally clipped to [|amplitude|, max - |amplitude|]. An input
+        already inside is returned unchanged.
+        """
+        out = u.copy()
+        mean, c, s = (out[self._slots[k]] for k in ("rcs_thrust", "rcs_cos", "rcs_sin"))
+        amp = np.hypot(c, s)
+        half = self.max_thrust / 2
+        scale = np.where(amp > half, half / np.maximum(amp, 1e-300), 1.0)
+        c, s, amp = c * scale, s * scale, amp * scale
+        out[self._slots["rcs_cos"]], out[self._slots["rcs_sin"]] = c, s
+        lift = max(0.0, float(np.max(amp - mean)))
+        out[self._slots["rcs_thrust"]] = np.clip(mean + lift, amp, self.max_thrust - amp)
+        lim = self.pointing_limit
+        out[self._pointing] = np.clip(out[self._pointing], -lim, lim)
+        return out
+
+
+class PhaseTracker:
+    """An estimate of how far the model's coning phase advance per pulse is off.
+
+    The coning vector turns in B by ω T a pulse (52 rad for Flight 5); ω comes from the
+    controller's J / A, so a 1 % error in it turns the predicted coning by 0.5 rad a
+    pulse. Pulse samples see ω T only modulo 2π, which is all the model needs: each
+    pulse the tracker compares the measured coning vector with the one predicted for it
+    and moves its correction by ``gain`` times the angle between them (wrapped to
+    (-π, π]); a first-order phase-locked loop on the aliased phase. Pulses where either
+    vector is shorter than ``min_coning`` (its direction is noise) leave it alone.
+
+    Parameters
+    ----------
+    gain : in (0, 1].
+    min_coning : |c| below which no update is made [rad].
+    """
+
+    def __init__(self, gain: float = 0.5, min_coning: float = 0.005) -> None:
+        self.gain, self.min_coning = gain, min_coning
+        self.reset()
+
+    def reset(self) -> None:
+        self.correction = 0.0
+        self._expected: np.ndarray | None = None
+
+    def update(self, c: np.ndarray) -> float:
+        """Take the measured coning vector c (2,) [rad, B]; return the correction [rad]."""
+        e = self._expected
+        self._expected = None
+        if e is not None and min(np.hypot(*c), np.hypot(*e)) > self.min_coning:
+            angle = math.atan2(e[0] * c[1] - e[1] * c[0], e[0] * c[0] + e[1] * c[1])
+            wrapped = self.correction + self.gain * angle
+            self.correction = math.atan2(math.sin(wrapped), math.cos(wrapped))
+        return self.correction
+
+    def expect(self, c: np.ndarray | None) -> None:
+        """The coning vector (2,) predicted for the next pulse (None: no prediction)."""
+        self._expected = None if c is None else np.array(c, dtype=float)
+
+
+@dataclass(frozen=True)
+class StageWeights:
+    """The objective per pulse in z (8,) and the model inputs du (m,):
+    z'Qz + du'R du + 2 z'S du + g'du."""
+
+    Q: np.ndarray
+    R: np.ndarray
+    S: np.ndarray
+    g: np.ndarray
+
+
+def stage_weights(weights: ControlWeights, inputs: tuple[str, ...]) -> StageWeights:
+    """The objective of :class:`~lightcraft_opt.options.ControlWeights` as matrices.
+
+    z = (r_Y, v_Y, h_Y, c_B) (2 each); ``inputs`` the model inputs' names (pointing_L[...],
+    rcs_thrust[i], rcs_cos[i], rcs_sin[i]). Coning |c|^2, tilt |h - c|^2 (the axis b1),
+    beam offset |r - pointing|^2 (the optic at the mass centre), drift |r|^2, velocity
+    |v|^2, pointing |pointing|^2, every RCS input squared, and the mean thrusts linearly.
+    """
+    m = len(inputs)
+    w = weights
+    I2 = np.eye(2)
+    r, v, h, c = slice(0, 2), slice(2, 4), slice(4, 6), slice(6, 8)
+    Q = np.zeros((8, 8))
+    Q[c, c] += w.coning * I2
+    Q[h, h] += w.tilt * I2
+    Q[c, c] += w.tilt * I2
+    Q[h, c] -= w.tilt * I2
+    Q[c, h] -= w.tilt * I2
+    Q[r, r] += (w.offset + w.drift) * I2
+    Q[v, v] += w.velocity * I2
+    pointing = [i for i, n in enumerate(inputs) if n.startswith("pointing_L")]
+    rcs = [i for i, n in enumerate(inputs) if n.startswith("rcs_")]
+    means = [i for i, n in enumerate(inputs) if n.startswith("rcs_thrust")]
+    if len(pointing) != 2 or not means:
+        raise ParameterError("inputs", f"needs pointing_L and the RCS inputs, got {inputs}")
+    R = np.zeros((m, m))
+    S = np.zeros((8, m))
+    g = np.zeros(m)
+    R[np.ix_(pointing, pointing)] += (w.offset + w.pointing) * I2
+    S[r, pointing] -= w.offset * I2
+    R[rcs, rcs] += w.rcs
+    g[means] = w.propellant
+    return StageWeights(Q, R, S, g)
+
+
+class OpenLoopController:
+    """"none": the nominal input every pulse (beam on the pad axis, focus at the far end,
+    the flight's pulse energy, RCS off: ``simulate.nominal_inputs``).
+
+    Parameters
+    ----------
+    model : gives the nominal input.
+    inputs : the map-input layout (the plant Φ's ``inputs``).
+    """
+
+    name = "none"
+
+    def __init__(self, model: Model, inputs: VectorLayout) -> None:
+        self._u = nominal_inputs(model, inputs)
+        self.last = StepStats(ControllerStatus.OPEN_LOOP)
+
+    def reset(self) -> None:
+        self.last = StepStats(ControllerStatus.OPEN_LOOP)
+
+    def step(
+        self, x: np.ndarray, t: float = 0.0, *, fault: ControllerFault | None = None
+    ) -> np.ndarray:
+        start = time.perf_counter()
+        u = self._u.copy()
+        self.last = StepStats(ControllerStatus.OPEN_LOOP, step_time=time.perf_counter() - start)
+        return u
+
+
+class LqrController:
+    """ "lqr": frozen-time discrete LQR on the scheduled model, every pulse.
+
+    At each pulse the model at the measured spin, coning rate and altitude
+    (:meth:`ConingModel.at`) and the weights of :func:`stage_weights` (the propellant's
+    linear term has no LQR counterpart and is left out) give the gain K by the discrete
+    Riccati equation (``linearize.dlqr_gain``); du = -K z, mapped to Φ's input and
+    projected onto the thrust envelope (:meth:`ConingFrame.project`): the LQR knows no
+    constraint, the projection is its saturation.
+    """
+
+    name = "lqr"
+
+    def __init__(
+        self,
+        model: Model,
+        prediction: ConingModel,
+        weights: ControlWeights | None = None,
+        p: np.ndarray | None = None,
+    ) -> None:
+        self.prediction = prediction
+        self.frame = ConingFrame(model, prediction, p)
+        self.weights = weights or ControlWeights()
+        self.cost = stage_weights(self.weights, prediction.inputs)
+        self.phase = PhaseTracker()
+        self.last = StepStats(ControllerStatus.FEEDBACK)
+
+    def reset(self) -> None:
+        self.phase.reset()
+        self.last = StepStats(ControllerStatus.FEEDBACK)
+
+    def gain(
+        self, spin: float, omega: float, altitude: float, phase: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K (m, 8), A, B): the LQR gain and the model it is designed on, at this spin
+        [rad/s], coning rate [rad/s], altitude [m] and phase correction [rad]."""
+        A, B = self.prediction.at(spin, omega, altitude, phase)
+        c = self.cost
+        K, _ = dlqr_gain(A, B, c.Q, c.R, c.S)
+        return K, A, B
+
+    def step(
+        self, x: np.ndarray, t: float = 0.0, *, fault: ControllerFault | None = None
+    ) -> np.ndarray:
+        start = time.perf_counter()
+        meas = self.frame.measure(x)
+        phase = self.phase.update(meas.z[6:8])
+        t0 = time.perf_counter()
+        K, A, B = self.gain(meas.spin, meas.omega, meas.altitude, phase)
+        solve = time.perf_counter() - t0
+        du = -K @ meas.z
+        u = self.frame.map_input(du, meas.yaw)
+        self.phase.expect((A @ meas.z + B @ du)[6:8])
+        step = time.perf_counter() - start
+        self.last = StepStats(ControllerStatus.FEEDBACK, solve, step, 0, "dlqr")
+        return u

@@ -1,0 +1,160 @@
+"""Closed-loop flights: coning, tilt, beam offset and RCS use pulse by pulse, and the
+controller's solve times.
+
+Each axes-level function takes a :class:`~lightcraft_opt.closed_loop_results.ClosedLoopResult`
+and an optional axes, draws, labels the line with the controller's name (so that several
+controllers drawn on one axes compare), and returns the artists (STYLE rule 10); none
+calls ``show()``. :func:`closed_loop_figures` builds the files the CLI writes. Angles are
+shown in degrees, lengths in cm, propellant in g; the data stay SI.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from lightcraft_opt.closed_loop_results import ClosedLoopResult
+
+__all__ = [
+    "closed_loop_figures",
+    "plot_closed_loop_coning",
+    "plot_closed_loop_offset",
+    "plot_closed_loop_rcs",
+    "plot_closed_loop_tilt",
+    "plot_solve_times",
+]
+
+TIME_LABEL = "time [s]"
+#: Colour of each controller, so that the figures of one problem agree.
+CONTROLLER_COLORS = {"mpc": "tab:blue", "lqr": "tab:orange", "none": "0.45"}
+
+
+def _axes(ax: Axes | None) -> Axes:
+    return ax if ax is not None else Figure(figsize=(6, 4)).add_subplot()
+
+
+def _node_times(result: ClosedLoopResult) -> np.ndarray:
+    """(k + 1,) times of the states before each pulse and after the last [s]."""
+    t = result.pulse_t
+    period = float(t[1] - t[0]) if t.size > 1 else float(result.flight.t[-1])
+    return np.r_[t, t[-1] + period] if t.size else np.zeros(1)
+
+
+def _style(result: ClosedLoopResult) -> dict[str, Any]:
+    return {
+        "label": result.controller,
+        "color": CONTROLLER_COLORS.get(result.controller),
+        "marker": ".",
+        "markersize": 4,
+    }
+
+
+def _finish(ax: Axes, ylabel: str) -> None:
+    ax.set_xlabel(TIME_LABEL)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+
+
+def plot_closed_loop_coning(
+    result: ClosedLoopResult, *, ax: Axes | None = None, threshold_deg: float | None = 0.5
+) -> list[Any]:
+    """Coning angle b1 to H [deg] before each pulse; a dotted line at ``threshold_deg``."""
+    ax = _axes(ax)
+    lines = ax.plot(_node_times(result), np.degrees(result.coning), **_style(result))
+    if threshold_deg is not None:
+        lines.append(ax.axhline(threshold_deg, color="k", ls=":", lw=0.8))
+    _finish(ax, "coning angle b1 to H [deg]")
+    return lines
+
+
+def plot_closed_loop_tilt(result: ClosedLoopResult, *, ax: Axes | None = None) -> list[Any]:
+    """Angle of b1 from L up [deg] before each pulse."""
+    ax = _axes(ax)
+    lines = ax.plot(_node_times(result), np.degrees(result.tilt), **_style(result))
+    _finish(ax, "tilt of b1 from up [deg]")
+    return lines
+
+
+def plot_closed_loop_offset(
+    result: ClosedLoopResult, *, ax: Axes | None = None, capture_radius: float | None = None
+) -> list[Any]:
+    """Distance of the optic centre from the beam axis at each pulse [cm]; the capture
+    radius [m] dashed when given."""
+    ax = _axes(ax)
+    lines = ax.plot(result.pulse_t, 100 * result.offset, **_style(result))
+    if capture_radius is not None:
+        lines.append(ax.axhline(100 * capture_radius, color="k", ls="--", lw=0.8))
+    _finish(ax, "beam offset at the optic [cm]")
+    return lines
+
+
+def plot_closed_loop_rcs(result: ClosedLoopResult, *, ax: Axes | None = None) -> list[Any]:
+    """RCS propellant used since the start [g], before each pulse."""
+    ax = _axes(ax)
+    lines = ax.plot(_node_times(result), 1e3 * result.rcs_used, **_style(result))
+    _finish(ax, "RCS propellant used [g]")
+    return lines
+
+
+def plot_solve_times(
+    result: ClosedLoopResult,
+    *,
+    ax: Axes | None = None,
+    budget: float | None = None,
+    bins: int = 30,
+) -> list[Any]:
+    """Histogram of the per-pulse solve times [ms], with the median, the 99th percentile
+    and, when given, the wall-time budget [s] marked."""
+    ax = _axes(ax)
+    t = 1e3 * result.log.solve_time
+    artists: list[Any] = []
+    if t.size and np.any(t > 0):
+        _, _, patches = ax.hist(t, bins=bins, color=CONTROLLER_COLORS.get(result.controller))
+        artists.append(patches)
+        stats = result.log.solve_time_percentiles()
+        for name, ls in (("median", "-"), ("p99", "--")):
+            value = 1e3 * stats[name]
+            label = f"{name} {value:.3g} ms"
+            artists.append(ax.axvline(value, color="k", ls=ls, lw=1, label=label))
+    if budget is not None and math.isfinite(budget):
+        artists.append(ax.axvline(1e3 * budget, color="tab:red", lw=1, label="budget"))
+    ax.set_xlabel("solve time [ms]")
+    ax.set_ylabel("pulses")
+    ax.grid(True, alpha=0.3)
+    if artists:
+        ax.legend(loc="best", fontsize=8)
+    return artists
+
+
+def closed_loop_figures(
+    result: ClosedLoopResult,
+    *,
+    title: str = "",
+    capture_radius: float | None = None,
+    budget: float | None = None,
+) -> dict[str, Figure]:
+    """Every figure of a closed-loop flight by file name: closed_loop.png (coning, tilt,
+    offset, RCS use in a 2 x 2) and solve_times.png (the histogram)."""
+    fig = Figure(figsize=(11, 7.5), layout="constrained")
+    axs = fig.subplots(2, 2, sharex=True)
+    plot_closed_loop_coning(result, ax=axs[0, 0])
+    plot_closed_loop_tilt(result, ax=axs[0, 1])
+    plot_closed_loop_offset(result, ax=axs[1, 0], capture_radius=capture_radius)
+    plot_closed_loop_rcs(result, ax=axs[1, 1])
+    for ax in axs[0]:
+        ax.set_xlabel("")
+        ax.tick_params(labelbottom=False)
+    axs[0, 0].legend(loc="upper right", fontsize=9)
+    fallbacks = int(np.sum(result.log.fallbacks))
+    fig.suptitle(
+        f"{title or result.flight.model_name}: {result.controller}, "
+        f"{result.flight.status.value}, {fallbacks} fallbacks"
+    )
+    hist = Figure(figsize=(6.5, 4.5), layout="constrained")
+    plot_solve_times(result, ax=hist.add_subplot(), budget=budget)
+    hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses} pulses)")
+    return {"closed_loop.png": fig, "solve_times.png": hist}
