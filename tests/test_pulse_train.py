@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from conftest import table1_flight5
-from jacobian_check import assert_jacobians_match_finite_differences
+from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, initial_state, parameter_values
 from lightcraft_opt.options import PulseMapOptions
@@ -406,18 +406,7 @@ def test_pulse_map_jacobians_match_finite_differences():
     #   step them by 2-3e-5 relative, moving the ~50 rad coning phase of one interval by
     #   1.6e-3 rad, whose central-difference error (Δφ)^2 / 6 ~ 4e-7 nears rtol. Nonzero
     #   parameters step 1e-5 of themselves, the carrier's inertia 1e-5 of the craft's.
-    m = model.craft.mass
-    natural = {
-        "r_L": 1e-2,
-        "v_L": 0.1,
-        "q_LB": 1e-2,
-        "w_B": 1.0,
-        "spin": 1.0,
-        "liner_mass": m,
-        "rcs_mass": m,
-        "pulses": 1.0,
-    }
-    x_scale = STATE.pack({name: np.full(STATE.slot(name).size, v) for name, v in natural.items()})
+    x_scale = state_step_scale(model.craft.mass)
     u_scale = PULSE_INPUT.pack({"pointing_L": (1e-2, 1e-2), "focus": 1.0, "energy": 1.0})
     p_scale = np.where(p != 0.0, 1e-3 * np.abs(p), 1e-4)
     p_scale[PARAMETERS.index("carrier_inertia")] = model.craft.inertia_transverse
