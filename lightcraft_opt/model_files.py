@@ -49,7 +49,7 @@ from typing import Any, TypeVar
 from lightcraft_opt import params
 from lightcraft_opt.errors import ModelFileError, ParameterError
 
-__all__ = ["QUANTITIES", "SCHEMA", "load_laser", "load_model", "load_site"]
+__all__ = ["QUANTITIES", "SCHEMA", "load_laser", "load_model", "load_site", "model_from_tables"]
 
 T = TypeVar("T")
 
@@ -273,6 +273,13 @@ def load_model(path: str | Path) -> params.Model:
     """
     file = Path(path)
     src, data = _read_toml(file)
+    return model_from_tables(src, file, data)
+
+
+def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.Model:
+    """:func:`load_model` on the tables of a flight file already read (``src`` names it in
+    errors; ``file`` locates the site and laser files), e.g. with a problem file's
+    overrides merged in (problem_files)."""
     top, _ = _read(src, data, "", "model", params.Model, ("craft", "flight", "environment"))
     site = load_site(_component(src, file, top, "site"))
     laser = load_laser(_component(src, file, top, "laser"))

@@ -389,35 +389,12 @@ def _model(src: str, file: Path, name: str, overrides: Any) -> params.Model:
     target = Path(os.path.normpath(file.parent / name))
     try:
         model_src, data = mf._read_toml(target)
-        return _model_from_tables(model_src, target, _merge(data, overrides or {}))
+        return mf.model_from_tables(model_src, target, _merge(data, overrides or {}))
     except ModelFileError as err:
         written = _override_key(err.field, overrides or {}) if err.path == str(target) else None
         if written is not None:
             raise ProblemFileError(src, f"model_overrides.{written}", err.reason) from err
         raise ProblemFileError(src, "model", str(err)) from err
-
-
-def _model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.Model:
-    """model_files.load_model on tables already read (and merged)."""
-    top, _ = mf._read(src, data, "", "model", params.Model, ("craft", "flight", "environment"))
-    site = mf.load_site(mf._component(src, file, top, "site"))
-    laser = mf.load_laser(mf._component(src, file, top, "laser"))
-    craft = mf._craft(src, mf._required_table(src, data, "craft"))
-    fvalues, fkeys = mf._read(
-        src, mf._required_table(src, data, "flight"), "flight", "flight", params.Flight
-    )
-    places = {"flight": ("flight", fkeys)}
-    flight = mf._build(src, places, params.Flight, fvalues)
-    environment = mf._environment(src, mf._table(src, data, "environment"))
-    parts = {
-        "name": top["name"],
-        "craft": craft,
-        "site": site,
-        "laser": laser,
-        "flight": flight,
-        "environment": environment,
-    }
-    return mf._build(src, places, params.Model, parts)
 
 
 def _merge(base: Mapping[str, Any], over: Mapping[str, Any], at: tuple[str, ...] = ()) -> Any:
