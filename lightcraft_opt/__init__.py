@@ -3,6 +3,9 @@
 Frames and units: docs/frames.md. Everything inside is SI.
 """
 
+from lightcraft_opt.calibrate import CalibrationOptions, calibrate
+from lightcraft_opt.calibration_problem import Track
+from lightcraft_opt.calibration_results import CalibrationResult, CalibrationStatus
 from lightcraft_opt.closed_loop import closed_loop
 from lightcraft_opt.closed_loop_files import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.closed_loop_results import ClosedLoopResult
@@ -15,14 +18,24 @@ from lightcraft_opt.errors import (
 )
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.model_files import load_model
+from lightcraft_opt.monte_carlo import CampaignResult, run_campaign
+from lightcraft_opt.monte_carlo_files import load_campaign
+from lightcraft_opt.monte_carlo_run import Campaign
+from lightcraft_opt.monte_carlo_summary import campaign_summary
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.problem_files import ProblemFile, load_problem
 from lightcraft_opt.results import SimulationResult, SimulationStatus
 from lightcraft_opt.simulate import simulate
+from lightcraft_opt.track_files import read_track
 
 __all__ = [
     "PARAMETERS",
     "STATE",
+    "CalibrationOptions",
+    "CalibrationResult",
+    "CalibrationStatus",
+    "Campaign",
+    "CampaignResult",
     "ClosedLoopProblem",
     "ClosedLoopResult",
     "Craft",
@@ -39,13 +52,19 @@ __all__ = [
     "SimulationResult",
     "SimulationStatus",
     "Site",
+    "Track",
     "Wind",
+    "calibrate",
+    "campaign_summary",
     "closed_loop",
     "initial_state",
+    "load_campaign",
     "load_closed_loop",
     "load_model",
     "load_problem",
     "parameter_values",
+    "read_track",
+    "run_campaign",
     "simulate",
 ]
 

@@ -1,0 +1,373 @@
+"""Calibration: fit engine, beam, aerodynamic and launch parameters to a tracked flight.
+
+Least squares over the pulse map Φ (STYLE rule 1): minimise ½ |r(θ)|² with r the
+predicted minus the tracked positions (:mod:`lightcraft_opt.calibration_problem`), by
+Gauss-Newton with Levenberg-Marquardt damping (Nielsen's update of the damping; Madsen,
+Nielsen & Tingleff, *Methods for non-linear least squares problems*, 2004, Sec. 3.2)
+and box bounds (an active set: a component on a bound whose gradient pushes outward is
+held there; a step is clipped into the box). The fit works in scaled variables θ / scale
+(each component's typical size), where the damping is λ I.
+
+Statistics at the optimum (Seber & Wild, *Nonlinear Regression*, 1989, Sec. 2.1):
+σ² = RSS / (3 m - n), covariance σ² (JᵀJ)⁺ from the SVD of the scaled Jacobian
+(pseudo-inverse: never a singular-matrix exception), standard deviations, correlations.
+Identifiability flags (:class:`~lightcraft_opt.calibration_results.FlagKind`), each with
+its reason: a null direction of J that loads on the parameter (the data do not depend on
+it, or only on a combination), a standard deviation above ``rel_std_max`` times
+max(|value|, scale), a correlation above ``correlation_max``, a value on its bound.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lightcraft_opt.calibration_parameters import FitComponent, fit_components
+from lightcraft_opt.calibration_problem import (
+    CalibrationProblem,
+    Track,
+    build_calibration_problem,
+    initial_values,
+)
+from lightcraft_opt.calibration_results import CalibrationResult, CalibrationStatus
+from lightcraft_opt.calibration_statistics import fit_statistics, identifiability_flags
+from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.params import Model
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+
+__all__ = ["CalibrationOptions", "calibrate"]
+
+
+@dataclass(frozen=True)
+class CalibrationOptions:
+    """How :func:`calibrate` solves and judges a fit.
+
+    Attributes
+    ----------
+    max_iter : Gauss-Newton iterations at most (>= 1).
+    ftol : converged when an accepted step lowers the cost by less than ftol times it.
+    xtol : converged when the scaled step is below xtol (|z| + xtol), z = θ / scale.
+    gtol : converged when the projected scaled gradient is below gtol [m²].
+    damping : initial λ relative to the largest diagonal entry of JᵀJ (scaled).
+    null_tolerance : singular values below it times the largest span null directions.
+    rel_std_max : POORLY_DETERMINED when std > rel_std_max max(|value|, scale).
+    correlation_max : CORRELATED when |correlation| exceeds it (in (0, 1)).
+    pulse_map : options of Φ (dense must be >= 2: the Hermite nodes).
+    verbose : print one line per iteration.
+    """
+
+    max_iter: int = 50
+    ftol: float = 1e-8
+    xtol: float = 1e-8
+    gtol: float = 1e-14
+    damping: float = 1e-3
+    null_tolerance: float = 1e-8
+    rel_std_max: float = 0.5
+    correlation_max: float = 0.95
+    pulse_map: PulseMapOptions = field(default_factory=PulseMapOptions)
+    verbose: bool = False
+
+    def __post_init__(self) -> None:
+        if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, int):
+            raise OptionError(
+                f"CalibrationOptions.max_iter must be an integer, got {self.max_iter!r}"
+            )
+        if self.max_iter < 1:
+            raise OptionError(f"CalibrationOptions.max_iter must be >= 1, got {self.max_iter}")
+        for name in ("ftol", "xtol", "gtol", "damping", "null_tolerance", "rel_std_max"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+                raise OptionError(f"CalibrationOptions.{name} must be a positive number, got {v!r}")
+        if not 0 < self.correlation_max < 1:
+            raise OptionError(
+                "CalibrationOptions.correlation_max must lie in (0, 1), got "
+                f"{self.correlation_max!r}"
+            )
+        if not isinstance(self.pulse_map, PulseMapOptions):
+            raise OptionError("CalibrationOptions.pulse_map must be a PulseMapOptions")
+        if self.pulse_map.dense < 2:
+            raise OptionError(
+                f"CalibrationOptions.pulse_map.dense must be >= 2 (Hermite nodes), got "
+                f"{self.pulse_map.dense}"
+            )
+
+
+def calibrate(
+    model: Model,
+    track: Track,
+    fit: Sequence[str] | str,
+    *,
+    x0: Sequence[float] | np.ndarray | None = None,
+    initial: Mapping[str, float] | None = None,
+    bounds: Mapping[str, tuple[float, float]] | None = None,
+    options: CalibrationOptions | None = None,
+    pulse_map: PulseMap | None = None,
+) -> CalibrationResult:
+    """Fit the components named by ``fit`` to ``track`` (module docstring).
+
+    Parameters
+    ----------
+    model : the model to calibrate; its values are the starting point.
+    track : tracked positions, L frame [m], times from the first pulse [s].
+    fit : ``--fit`` names (``cm``, ``overheating``, ``divergence``, ``blast_angle``,
+        ``lateral_gain``, ``tipping_gain``, ``offset``, ``tilt``, ``wind``, ``cd``), a
+        list or one comma-separated string.
+    x0 : (STATE.size,) initial state at the first pulse (default: on the pad, upright).
+    initial : starting values by component name [SI], instead of the model's.
+    bounds : (lower, upper) by component name [SI], instead of the catalogue's.
+    options : solver and flag thresholds.
+    pulse_map : a prebuilt Φ of ``model`` (its dense output must have >= 2 states).
+
+    Returns
+    -------
+    CalibrationResult with a status; a fit that fails is a result, not an exception.
+
+    Raises
+    ------
+    ParameterError
+        An unknown fit name (the allowed ones listed), a start outside its bounds, or a
+        track with no more residuals (3 per point) than fitted components.
+    """
+    opts = options or CalibrationOptions()
+    comps = fit_components(fit)
+    n = len(comps)
+    if 3 * track.t.size <= n:
+        raise ParameterError(
+            "track",
+            f"{track.t.size} points give {3 * track.t.size} residuals: too few "
+            f"for {n} fitted components",
+        )
+    phi = pulse_map or build_pulse_map(model, opts.pulse_map)
+    if phi.dense.size_out(0)[1] < 2:
+        raise OptionError("pulse_map: its dense output needs >= 2 states per pulse")
+    problem = build_calibration_problem(model, track, comps, phi, x0)
+    lower, upper = _bounds(comps, bounds)
+    start = _start(comps, initial_values(comps, model, problem.x0), initial, lower, upper)
+    t0 = time.perf_counter()
+    status, message, theta, iterations, costs = _solve(problem, start, lower, upper, opts)
+    solve_time = time.perf_counter() - t0
+    return _result(
+        problem, status, message, theta, start, lower, upper, iterations, costs, solve_time, opts
+    )
+
+
+def _bounds(
+    comps: Sequence[FitComponent], given: Mapping[str, tuple[float, float]] | None
+) -> tuple[np.ndarray, np.ndarray]:
+    names = [c.name for c in comps]
+    lower = np.array([c.lower for c in comps])
+    upper = np.array([c.upper for c in comps])
+    for name, pair in (given or {}).items():
+        if name not in names:
+            raise ParameterError(f"bounds.{name}", f"is not fitted; fitted: {names}")
+        try:
+            lo, hi = (float(v) for v in pair)
+        except (TypeError, ValueError):
+            raise ParameterError(f"bounds.{name}", f"needs (lower, upper), got {pair!r}") from None
+        if not lo < hi:
+            raise ParameterError(f"bounds.{name}", f"needs lower < upper, got ({lo}, {hi})")
+        i = names.index(name)
+        lower[i], upper[i] = lo, hi
+    return lower, upper
+
+
+def _start(
+    comps: Sequence[FitComponent],
+    model_values: np.ndarray,
+    given: Mapping[str, float] | None,
+    lower: np.ndarray,
+    upper: np.ndarray,
+) -> np.ndarray:
+    names = [c.name for c in comps]
+    start = model_values.copy()
+    for name, value in (given or {}).items():
+        if name not in names:
+            raise ParameterError(f"initial.{name}", f"is not fitted; fitted: {names}")
+        v = float(value)
+        if not np.isfinite(v):
+            raise ParameterError(f"initial.{name}", f"must be finite, got {value!r}")
+        start[names.index(name)] = v
+    for i, c in enumerate(comps):
+        if not lower[i] <= start[i] <= upper[i]:
+            raise ParameterError(
+                f"initial.{c.name}",
+                f"start {start[i]:.6g} {c.unit} lies outside its bounds "
+                f"[{lower[i]:.6g}, {upper[i]:.6g}]",
+            )
+    return start
+
+
+def _evaluate(problem: CalibrationProblem, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r, J = problem.jacobian(theta)
+    return np.asarray(r).ravel(), np.asarray(J)
+
+
+def _solve(
+    problem: CalibrationProblem,
+    start: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    opts: CalibrationOptions,
+) -> tuple[CalibrationStatus, str, np.ndarray, int, tuple[float, float]]:
+    """Projected Levenberg-Marquardt in z = θ / scale. Returns (status, message, θ,
+    iterations, (initial cost, final cost))."""
+    scale = np.array([c.scale for c in problem.components])
+    lo, hi = lower / scale, upper / scale
+    z = start / scale
+    r, J = _evaluate(problem, z * scale)
+    if not (np.all(np.isfinite(r)) and np.all(np.isfinite(J))):
+        return CalibrationStatus.FAILED, "non-finite residual at the start", start, 0, (np.nan,) * 2
+    cost0 = cost = 0.5 * float(r @ r)
+    Js = J * scale
+    H = Js.T @ Js
+    lam = opts.damping * max(float(np.max(np.diag(H))), 1e-30)
+    nu = 2.0
+    tiny = 1e-12 * (hi - lo)
+    for it in range(1, opts.max_iter + 1):
+        g = Js.T @ r
+        held = ((z <= lo + tiny) & (g > 0)) | ((z >= hi - tiny) & (g < 0))
+        free = ~held
+        if not np.any(free) or np.max(np.abs(g[free])) <= opts.gtol:
+            return (
+                CalibrationStatus.CONVERGED,
+                "projected gradient vanished",
+                z * scale,
+                it - 1,
+                (cost0, cost),
+            )
+        while True:
+            step = np.zeros_like(z)
+            Hf = H[np.ix_(free, free)]
+            step[free] = np.linalg.solve(Hf + lam * np.eye(int(free.sum())), -g[free])
+            z_new = np.clip(z + step, lo, hi)
+            d = z_new - z
+            predicted = -(g @ d + 0.5 * d @ H @ d)
+            r_new, J_new = _evaluate(problem, z_new * scale)
+            finite = bool(np.all(np.isfinite(r_new)) and np.all(np.isfinite(J_new)))
+            cost_new = 0.5 * float(r_new @ r_new) if finite else np.inf
+            rho = (cost - cost_new) / predicted if predicted > 0 else -1.0
+            small = np.linalg.norm(d) <= opts.xtol * (np.linalg.norm(z) + opts.xtol)
+            if rho > 0:
+                break
+            if small:
+                return CalibrationStatus.CONVERGED, "step below xtol", z * scale, it, (cost0, cost)
+            lam *= nu
+            nu *= 2.0
+            if lam > 1e20 * max(float(np.max(np.diag(H))), 1e-30):
+                return (
+                    CalibrationStatus.FAILED,
+                    "no descent step found",
+                    z * scale,
+                    it,
+                    (cost0, cost),
+                )
+        decrease = cost - cost_new
+        z, r, J, cost = z_new, r_new, J_new, cost_new
+        Js = J * scale
+        H = Js.T @ Js
+        lam *= max(1 / 3, 1 - (2 * rho - 1) ** 3)
+        nu = 2.0
+        if opts.verbose:
+            print(
+                f"  iteration {it:3d}: cost {cost:.6e} m^2, step {np.linalg.norm(d):.3e}, "
+                f"damping {lam:.2e}",
+                flush=True,
+            )
+        if decrease <= opts.ftol * cost:
+            return (
+                CalibrationStatus.CONVERGED,
+                "cost decrease below ftol",
+                z * scale,
+                it,
+                (cost0, cost),
+            )
+        if small:
+            return CalibrationStatus.CONVERGED, "step below xtol", z * scale, it, (cost0, cost)
+    return (
+        CalibrationStatus.MAX_ITER,
+        f"stopped after max_iter = {opts.max_iter} iterations",
+        z * scale,
+        opts.max_iter,
+        (cost0, cost),
+    )
+
+
+def _result(
+    problem: CalibrationProblem,
+    status: CalibrationStatus,
+    message: str,
+    theta: np.ndarray,
+    start: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    iterations: int,
+    costs: tuple[float, float],
+    solve_time: float,
+    opts: CalibrationOptions,
+) -> CalibrationResult:
+    comps = problem.components
+    n = len(comps)
+    track = problem.track
+    r, J = _evaluate(problem, theta)
+    scale = np.array([c.scale for c in comps])
+    m_obs = r.size
+    rss = float(r @ r)
+    sigma2 = rss / (m_obs - n)
+    if np.all(np.isfinite(r)) and np.all(np.isfinite(J)):
+        cov, std, corr, sv, null_load = fit_statistics(
+            J * scale, scale, sigma2, opts.null_tolerance
+        )
+        flags = identifiability_flags(
+            comps,
+            theta,
+            std,
+            corr,
+            sv,
+            null_load,
+            lower,
+            upper,
+            null_tolerance=opts.null_tolerance,
+            rel_std_max=opts.rel_std_max,
+            correlation_max=opts.correlation_max,
+        )
+    else:  # a failed fit: no statistics (NaN), never a LinAlgError
+        cov, corr = np.full((n, n), np.nan), np.full((n, n), np.nan)
+        std, sv = np.full(n, np.nan), np.full(n, np.nan)
+        flags = ()
+    p, x0 = (np.asarray(v).ravel() for v in problem.setup(theta))
+    X = np.asarray(problem.flight(theta)).T
+    residuals = r.reshape(-1, 3)
+    return CalibrationResult(
+        status=status,
+        message=message,
+        names=tuple(c.name for c in comps),
+        units=tuple(c.unit for c in comps),
+        values=theta,
+        initial=start,
+        lower=lower,
+        upper=upper,
+        std=std,
+        covariance=cov,
+        correlation=corr,
+        singular_values=sv,
+        condition=float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf"),
+        flags=flags,
+        iterations=iterations,
+        cost=0.5 * rss,
+        initial_cost=costs[0],
+        sigma=float(np.sqrt(sigma2)),
+        rms=np.sqrt(np.mean(residuals**2, axis=0)),
+        residuals=residuals,
+        t=track.t,
+        r_measured=track.r_L,
+        flight_t=np.concatenate([[0.0], problem.flight_t]),
+        flight_x=np.vstack([x0, X]),
+        p=p,
+        x0=x0,
+        solve_time=solve_time,
+        gaps=track.gaps,
+    )

@@ -1,0 +1,125 @@
+"""Typed, numpy-only result of a calibration (STYLE rule 9): status, fitted values with
+their covariance, and the identifiability flags that say what the data cannot tell."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+__all__ = ["CalibrationResult", "CalibrationStatus", "FitFlag", "FlagKind"]
+
+
+class CalibrationStatus(Enum):
+    """How the least-squares fit ended."""
+
+    CONVERGED = "converged"  # cost or step stopped changing
+    MAX_ITER = "max_iter"  # the iteration limit came first
+    FAILED = "failed"  # a non-finite residual or Jacobian, or no descent possible
+
+
+class FlagKind(Enum):
+    """Why a fitted parameter is not trustworthy."""
+
+    NOT_IDENTIFIABLE = "not_identifiable"  # loads on a null direction of the Jacobian
+    POORLY_DETERMINED = "poorly_determined"  # standard deviation too large for its size
+    CORRELATED = "correlated"  # |correlation| with another parameter above the limit
+    AT_BOUND = "at_bound"  # ended on a bound: its statistics do not hold
+
+    @property
+    def unidentified(self) -> bool:
+        """True when the data cannot determine the parameter (not merely a warning)."""
+        return self in (FlagKind.NOT_IDENTIFIABLE, FlagKind.POORLY_DETERMINED)
+
+
+@dataclass(frozen=True)
+class FitFlag:
+    """One identifiability flag: the parameter, the kind and the reason in words."""
+
+    parameter: str
+    kind: FlagKind
+    reason: str
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """A fitted model: values, statistics and the fitted flight.
+
+    Attributes
+    ----------
+    status, message : how the fit ended, in words.
+    names, units : (n,) fitted components (:data:`~lightcraft_opt.calibration_problem.FIT_GROUPS`)
+        and their SI units.
+    values, initial : (n,) fitted and starting values [SI, per ``units``].
+    lower, upper : (n,) bounds used [SI].
+    std : (n,) standard deviations [SI]; inf for a parameter on a null direction.
+    covariance : (n, n) σ² (JᵀJ)⁺ at the optimum [SI products].
+    correlation : (n, n) [-] (0 off the diagonal where a std is inf).
+    singular_values : of the scaled Jacobian J diag(scale), largest first [m].
+    condition : their largest over smallest (inf when one is zero) [-].
+    flags : the identifiability flags, each with its reason.
+    iterations : Gauss-Newton iterations taken.
+    cost : ½ Σ r² at the optimum [m²]; ``initial_cost`` at the start.
+    sigma : residual standard deviation sqrt(RSS / (3 m - n)) [m].
+    rms : (3,) root-mean-square residual per axis (east, north, up) [m].
+    residuals : (m, 3) predicted minus measured positions, L frame [m].
+    t : (m,) track times [s]; ``r_measured`` (m, 3) the tracked positions, L [m].
+    flight_t : (k,) times of the fitted flight's dense states [s].
+    flight_x : (k, STATE.size) fitted flight's states (docs/frames.md).
+    p : (PARAMETERS.size,) fitted parameter vector; ``x0`` (STATE.size,) fitted initial
+        state.
+    solve_time : wall time of the fit [s]; ``gaps`` track rows dropped as gaps.
+    """
+
+    status: CalibrationStatus
+    message: str
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    values: np.ndarray
+    initial: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    std: np.ndarray
+    covariance: np.ndarray
+    correlation: np.ndarray
+    singular_values: np.ndarray
+    condition: float
+    flags: tuple[FitFlag, ...]
+    iterations: int
+    cost: float
+    initial_cost: float
+    sigma: float
+    rms: np.ndarray
+    residuals: np.ndarray
+    t: np.ndarray
+    r_measured: np.ndarray
+    flight_t: np.ndarray
+    flight_x: np.ndarray
+    p: np.ndarray
+    x0: np.ndarray
+    solve_time: float
+    gaps: int = 0
+
+    @property
+    def success(self) -> bool:
+        return self.status is CalibrationStatus.CONVERGED
+
+    def value(self, name: str) -> float:
+        """Fitted value of component ``name`` [SI]."""
+        return float(self.values[self.names.index(name)])
+
+    def std_of(self, name: str) -> float:
+        """Standard deviation of component ``name`` [SI]."""
+        return float(self.std[self.names.index(name)])
+
+    def flags_of(self, name: str) -> tuple[FitFlag, ...]:
+        """The flags raised on component ``name``."""
+        return tuple(f for f in self.flags if f.parameter == name)
+
+    @property
+    def unidentified(self) -> tuple[str, ...]:
+        """Components the data cannot determine (a NOT_IDENTIFIABLE or
+        POORLY_DETERMINED flag), in fit order."""
+        bad = {f.parameter for f in self.flags if f.kind.unidentified}
+        return tuple(n for n in self.names if n in bad)

@@ -1,0 +1,179 @@
+"""What a Monte Carlo campaign draws for each run, and the drawing itself (floor 0).
+
+A campaign declares distributions of a fixed set of quantities (:data:`DISPERSED`), in SI.
+Each run ``index`` of a campaign with seed ``seed`` draws each declared quantity from its
+own stream, ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(index, 1 + j)))``
+with ``j`` the quantity's place in :data:`DISPERSED`, and the closed loop's own seed (noise,
+drop-outs, :class:`~lightcraft_opt.options.Dispersion`) from ``spawn_key=(index, 0)``
+(:func:`loop_seed`). A run therefore depends only on (campaign, seed, index): not on the
+order runs are made in, the worker count or the engine; and adding a dispersion leaves
+the draws of the others unchanged (common random numbers between campaigns).
+
+Distributions describe the value itself, absolute and SI: the file reader turns a
+relative sigma and a missing mean into absolute numbers (monte_carlo_files.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from lightcraft_opt.errors import OptionError
+
+__all__ = [
+    "DISPERSED",
+    "Dispersions",
+    "Normal",
+    "Uniform",
+    "draw",
+    "draw_many",
+    "loop_seed",
+]
+
+#: Quantity -> (column of the run table, what it sets). The order is the drawing order
+#: and fixes each quantity's stream; new quantities go at the end.
+DISPERSED: dict[str, tuple[str, str]] = {
+    "mass": ("mass_kg", "rotor_mass_dry: the dry mass of the craft [kg]"),
+    "inertia_axial": ("inertia_axial_kg_m2", "rotor_axial_inertia_dry [kg m^2]"),
+    "inertia_transverse": ("inertia_transverse_kg_m2", "rotor_transverse_inertia_dry [kg m^2]"),
+    "coupling": ("impulse_per_pulse_Ns", "impulse_per_pulse: the engine's coupling [N s]"),
+    "dropout_rate": (
+        "dropout_rate",
+        "probability that the laser drops a pulse, clipped to [0, 0.99]",
+    ),
+    "offset_east": ("offset_east_m", "added to the initial position, east [m, L]"),
+    "offset_north": ("offset_north_m", "added to the initial position, north [m, L]"),
+    "tilt": ("tilt_rad", "an initial tilt composed on top of the file's attitude [rad]"),
+    "tilt_azimuth": ("tilt_azimuth_rad", "direction of that tilt, clockwise from north [rad]"),
+    "wind_speed": ("wind_speed_mps", "wind_speed_ref: the plant's reference wind [m/s]"),
+    "wind_direction_from": ("wind_direction_from_rad", "wind_direction_from [rad]"),
+}
+
+
+@dataclass(frozen=True)
+class Normal:
+    """A normal distribution, optionally truncated (redrawn beyond ``truncate`` sigmas).
+
+    Attributes
+    ----------
+    mean, sigma : SI, sigma >= 0.
+    truncate : redraw values more than this many sigmas from the mean (> 0); None: never.
+    """
+
+    mean: float
+    sigma: float
+    truncate: float | None = None
+
+    def __post_init__(self) -> None:
+        if not _finite(self.mean):
+            raise OptionError(f"Normal.mean must be a finite number, got {self.mean!r}")
+        if not (_finite(self.sigma) and self.sigma >= 0):
+            raise OptionError(f"Normal.sigma must be a finite number >= 0, got {self.sigma!r}")
+        t = self.truncate
+        if t is not None and not (_finite(t) and t > 0):
+            raise OptionError(f"Normal.truncate must be a number of sigmas > 0, got {t!r}")
+
+    def sample(self, rng: np.random.Generator) -> float:
+        n = rng.standard_normal()
+        while self.truncate is not None and abs(n) > self.truncate:
+            n = rng.standard_normal()
+        return float(self.mean + self.sigma * n)
+
+
+@dataclass(frozen=True)
+class Uniform:
+    """A uniform distribution on [low, high) (SI, low <= high)."""
+
+    low: float
+    high: float
+
+    def __post_init__(self) -> None:
+        if not (_finite(self.low) and _finite(self.high)):
+            raise OptionError(f"Uniform bounds must be finite, got {self.low!r}, {self.high!r}")
+        if self.low > self.high:
+            raise OptionError(f"Uniform.low must be <= high, got {self.low!r} > {self.high!r}")
+
+    def sample(self, rng: np.random.Generator) -> float:
+        return float(rng.uniform(self.low, self.high))
+
+
+Distribution = Normal | Uniform
+
+
+@dataclass(frozen=True)
+class Dispersions:
+    """The distributions of a campaign: ((quantity of :data:`DISPERSED`, distribution), ...),
+    each quantity once, kept in :data:`DISPERSED` order whatever the order given."""
+
+    items: tuple[tuple[str, Distribution], ...] = ()
+
+    def __post_init__(self) -> None:
+        seen: set[str] = set()
+        for i, item in enumerate(self.items):
+            if not (isinstance(item, tuple) and len(item) == 2):
+                raise OptionError(f"Dispersions.items[{i}] must be a (name, distribution) pair")
+            name, dist = item
+            if name not in DISPERSED:
+                raise OptionError(
+                    f"Dispersions.items[{i}]: unknown quantity {name!r}; one of {list(DISPERSED)}"
+                )
+            if not isinstance(dist, Normal | Uniform):
+                raise OptionError(f"Dispersions.{name} must be a Normal or a Uniform, got {dist!r}")
+            if name in seen:
+                raise OptionError(f"Dispersions.{name} is given twice")
+            seen.add(name)
+        order = list(DISPERSED)
+        object.__setattr__(
+            self, "items", tuple(sorted(self.items, key=lambda item: order.index(item[0])))
+        )
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(name for name, _ in self.items)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """Run-table columns of the drawn values, in drawing order."""
+        return tuple(DISPERSED[name][0] for name in self.names)
+
+
+def draw(dispersions: Dispersions, seed: int, index: int) -> dict[str, float]:
+    """The values run ``index`` of a campaign seeded ``seed`` draws: {quantity: SI value},
+    in :data:`DISPERSED` order, each from its own stream (module docstring)."""
+    order = list(DISPERSED)
+    values: dict[str, float] = {}
+    for name, dist in dispersions.items:
+        ss = np.random.SeedSequence(_seed(seed), spawn_key=(_index(index), 1 + order.index(name)))
+        values[name] = dist.sample(np.random.default_rng(ss))
+    return values
+
+
+def draw_many(dispersions: Dispersions, seed: int, runs: int) -> dict[str, np.ndarray]:
+    """{quantity: (runs,) values} of runs 0 .. runs - 1 (what :func:`draw` gives each)."""
+    rows = [draw(dispersions, seed, i) for i in range(runs)]
+    return {name: np.array([r[name] for r in rows]) for name in dispersions.names}
+
+
+def loop_seed(seed: int, index: int) -> int:
+    """Seed of run ``index``'s closed loop (noise, drop-outs, relative dispersion), an
+    integer in [0, 2^63), from the campaign's stream ``spawn_key=(index, 0)``."""
+    ss = np.random.SeedSequence(_seed(seed), spawn_key=(_index(index), 0))
+    return int(ss.generate_state(1, np.uint64)[0] >> np.uint64(1))
+
+
+def _seed(seed: object) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise OptionError(f"campaign seed must be an integer >= 0, got {seed!r}")
+    return int(seed)
+
+
+def _index(index: object) -> int:
+    if isinstance(index, bool) or not isinstance(index, int | np.integer) or index < 0:
+        raise OptionError(f"run index must be an integer >= 0, got {index!r}")
+    return int(index)
+
+
+def _finite(v: object) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)

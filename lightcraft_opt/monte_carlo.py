@@ -1,0 +1,211 @@
+"""Monte Carlo campaigns: many dispersed flights, on local processes or a Dask cluster.
+
+``run_campaign(campaign, runs, seed, out_dir)`` makes runs 0 .. runs - 1 of a
+:class:`~lightcraft_opt.monte_carlo_run.Campaign` (each by
+:func:`~lightcraft_opt.monte_carlo_run.run_one`: a run depends only on the campaign, the
+seed and its index) and writes, in ``out_dir``:
+
+* ``campaign.json``: the campaign's fingerprint (sha256 of the spec and the seed), title,
+  seed, runs and columns. A folder holding another campaign's fingerprint is refused.
+* ``runs.csv``: one row per run, appended and fsynced as each finishes (run_table.py):
+  index, drawn inputs, outputs, SI with the unit in the column name. Finished runs found
+  there are skipped, so an interrupted campaign resumes and loses none; when every run
+  is in, the table is rewritten sorted by index, byte-identical whatever the engine,
+  order or worker count.
+* ``timings.csv``: wall time and solve-time statistics per run (machine-dependent, so
+  kept out of runs.csv).
+* ``summary.json``: :func:`~lightcraft_opt.monte_carlo_summary.campaign_summary`, once
+  the campaign is complete.
+
+Engines (monte_carlo_engines.py): ``workers=1`` this process; else local "spawn"
+processes (default: one per CPU); ``scheduler="tcp://host:port"`` a Dask cluster.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lightcraft_opt import monte_carlo_engines as engines
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.monte_carlo_run import TIMING_COLUMNS, Campaign, run_one
+from lightcraft_opt.monte_carlo_summary import campaign_summary
+from lightcraft_opt.progress import Progress
+from lightcraft_opt.run_table import RunTable, read_table
+
+__all__ = ["CampaignResult", "campaign_fingerprint", "run_campaign", "write_json"]
+
+MANIFEST, RUNS, TIMINGS, SUMMARY = "campaign.json", "runs.csv", "timings.csv", "summary.json"
+
+
+@dataclass(frozen=True)
+class CampaignResult:
+    """What :func:`run_campaign` did.
+
+    Attributes
+    ----------
+    out_dir : the folder of campaign.json, runs.csv, timings.csv, summary.json.
+    runs : runs asked for; ``made`` of them by this call, ``skipped`` found finished.
+    complete : every run 0 .. runs - 1 is in the table.
+    table : {column: (n,) array} of runs.csv (sorted by run when complete).
+    summary : :func:`campaign_summary` of the table (empty when not complete).
+    engine : "serial", "processes (N workers)" or "dask <address>".
+    elapsed : wall time of this call [s].
+    """
+
+    out_dir: Path
+    runs: int
+    made: int
+    skipped: int
+    complete: bool
+    table: dict[str, np.ndarray]
+    summary: dict[str, Any]
+    engine: str
+    elapsed: float
+
+    @property
+    def runs_per_minute(self) -> float:
+        """Runs made per minute of this call's wall time."""
+        return 60.0 * self.made / self.elapsed if self.elapsed > 0 else math.nan
+
+
+def campaign_fingerprint(campaign: Campaign, seed: int) -> str:
+    """sha256 of the campaign's spec and the seed: what a run table is made from."""
+    return hashlib.sha256(f"{campaign.fingerprint}\0{int(seed)}".encode()).hexdigest()
+
+
+def run_campaign(
+    campaign: Campaign,
+    runs: int,
+    seed: int,
+    out_dir: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> CampaignResult:
+    """Make (or resume) runs 0 .. ``runs`` - 1 of ``campaign`` (module docstring).
+
+    Parameters
+    ----------
+    campaign : what every run flies and draws.
+    runs : number of runs, >= 1.
+    seed : the campaign seed, an integer >= 0.
+    out_dir : output folder (created); resumes the campaign found there.
+    workers : local worker processes (1: this process; default one per CPU); ignored
+        with ``scheduler``.
+    scheduler : address of a Dask scheduler, "tcp://host:port".
+    progress : show a progress line on stderr.
+
+    Raises
+    ------
+    ParameterError : bad runs, seed or workers; ``out_dir`` holds another campaign;
+        the scheduler cannot be reached.
+    """
+    for name, value, low in (("runs", runs, 1), ("seed", seed, 0), ("workers", workers, 1)):
+        if value is None and name == "workers":
+            continue
+        if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
+            raise ParameterError(name, f"must be an integer >= {low}, got {value!r}")
+    start = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    _check_manifest(out, campaign, runs, seed)
+    table = RunTable(out / RUNS, campaign.columns)
+    timings = RunTable(out / TIMINGS, TIMING_COLUMNS)
+    todo = [i for i in range(runs) if i not in table.done]
+    if scheduler is not None:
+        name = f"dask {scheduler}"
+        outcomes = engines.dask_cluster(run_one, campaign, seed, todo, scheduler)
+    else:
+        n = min(workers or engines.default_workers(), max(1, len(todo)))
+        if n == 1:
+            name, outcomes = "serial", engines.serial(run_one, campaign, seed, todo)
+        else:
+            name = f"processes ({n} workers)"
+            outcomes = engines.local_processes(run_one, campaign, seed, todo, n)
+    bar = Progress(runs, runs - len(todo), enabled=progress)
+    try:
+        for outcome in outcomes:
+            table.append(outcome.row)
+            timings.append(outcome.timing)
+            bar.update()
+    finally:
+        bar.close()
+    complete = all(i in table.done for i in range(runs))
+    summary: dict[str, Any] = {}
+    if complete:
+        table.finish()
+        timings.finish()
+        summary = campaign_summary(*(_first(read_table(t.path), runs) for t in (table, timings)))
+        summary = {"title": campaign.title, "seed": seed, **summary}
+        write_json(summary, out / SUMMARY)
+    return CampaignResult(
+        out_dir=out,
+        runs=runs,
+        made=len(todo),
+        skipped=runs - len(todo),
+        complete=complete,
+        table=read_table(table.path),
+        summary=summary,
+        engine=name,
+        elapsed=time.perf_counter() - start,
+    )
+
+
+def _first(table: dict[str, np.ndarray], runs: int) -> dict[str, np.ndarray]:
+    """The rows of runs 0 .. runs - 1 (a folder may hold more, from a longer campaign)."""
+    keep = table["run"] < runs
+    return {name: column[keep] for name, column in table.items()}
+
+
+def _check_manifest(out: Path, campaign: Campaign, runs: int, seed: int) -> None:
+    """Write campaign.json, or check that the folder's is this campaign's."""
+    path = out / MANIFEST
+    fingerprint = campaign_fingerprint(campaign, seed)
+    if path.exists():
+        try:
+            old = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as err:
+            raise ParameterError("out", f"cannot read {path}: {err}") from err
+        if old.get("fingerprint") != fingerprint:
+            raise ParameterError(
+                "out",
+                f"{out} holds another campaign ({old.get('title')!r}, seed {old.get('seed')}): "
+                "its file, model or seed differ from this one's; use another output folder",
+            )
+    manifest = {
+        "fingerprint": fingerprint,
+        "title": campaign.title,
+        "seed": seed,
+        "runs": runs,
+        "controller": campaign.controller.value,
+        "columns": list(campaign.columns),
+    }
+    write_json(manifest, path)
+
+
+def write_json(data: dict[str, Any], path: Path) -> None:
+    """``data`` as indented JSON, NaN written as null, replaced atomically."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(_plain(data), indent=2) + "\n", encoding="utf-8")
+    tmp.replace(path)
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_plain(x) for x in v]
+    if isinstance(v, float | np.floating):
+        return float(v) if math.isfinite(v) else None
+    if isinstance(v, np.integer):
+        return int(v)
+    return v

@@ -1,0 +1,215 @@
+"""Campaign files: a closed-loop file with the distributions of a Monte Carlo campaign.
+
+A campaign file is a closed-loop file (closed_loop_files.py: the model, ``[initial]``,
+``[controller]``, ``[plant]`` with its noise, relative dispersion, drop-outs, faults and
+wind) with two more tables::
+
+    [campaign]
+    controller = "mpc"                     # "lqr", or "none": the open loop (default)
+    compiled = false                       # fly Φ compiled to C (compiled.py)
+
+    [dispersions.mass]                     # one table per dispersed quantity
+    distribution = "normal"
+    relative_sigma = 0.02                  # or sigma_g = 2.0 (absolute, unit in the key)
+    truncate_sigmas = 3.0                  # optional: redraw beyond 3 sigma
+    # mean_g = ...                         # optional: default the nominal value
+
+    [dispersions.wind_speed]
+    distribution = "uniform"
+    low_mps = 0.0
+    high_mps = 3.0
+
+Quantities (:data:`~lightcraft_opt.dispersions.DISPERSED`, in drawing order), their
+units, and their nominal value (the normal's default mean, what a relative sigma is
+relative to): ``mass`` (mass: the dry mass), ``inertia_axial``, ``inertia_transverse``
+(inertia: the dry rotor's), ``coupling`` (impulse: impulse_per_pulse), ``dropout_rate``
+(bare: [plant] dropout_rate; clipped to [0, 0.99] when drawn), ``offset_east``,
+``offset_north`` (length, added to [initial]'s position: nominal 0), ``tilt``,
+``tilt_azimuth`` (angle: a tilt composed on top of [initial]'s attitude, leaning toward
+the azimuth clockwise from north; nominal 0; a ``tilt`` without ``tilt_azimuth`` gets a
+uniform azimuth over 0-360°), ``wind_speed`` (speed) and ``wind_direction_from`` (angle),
+the plant's reference wind ([plant.wind], else the model's).
+
+``[plant] seed`` is refused: each run's closed-loop seed comes from the campaign seed and
+the run index (dispersions.py). Problems raise
+:class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from pathlib import Path
+from typing import Any
+
+from lightcraft_opt import model_files as mf
+from lightcraft_opt.closed_loop import plant_parameters
+from lightcraft_opt.closed_loop_files import ClosedLoopProblem, _closed_loop
+from lightcraft_opt.dispersions import DISPERSED, Dispersions, Normal, Uniform
+from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
+from lightcraft_opt.layout import PARAMETERS
+from lightcraft_opt.monte_carlo_run import Campaign, CampaignController
+from lightcraft_opt.problem_files import _problem_errors
+from lightcraft_opt.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
+
+__all__ = ["load_campaign"]
+
+_CAMPAIGN: dict[str, Spec] = {"controller": choice(CampaignController), "compiled": Spec("switch")}
+#: Quantity of each dispersed value's keys (None: bare numbers).
+_KIND: dict[str, str | None] = {
+    "mass": "mass",
+    "inertia_axial": "inertia",
+    "inertia_transverse": "inertia",
+    "coupling": "impulse",
+    "dropout_rate": None,
+    "offset_east": "length",
+    "offset_north": "length",
+    "tilt": "angle",
+    "tilt_azimuth": "angle",
+    "wind_speed": "speed",
+    "wind_direction_from": "angle",
+}
+_PARAMETER = {
+    "mass": "rotor_mass_dry",
+    "inertia_axial": "rotor_axial_inertia_dry",
+    "inertia_transverse": "rotor_transverse_inertia_dry",
+    "coupling": "impulse_per_pulse",
+    "wind_speed": "wind_speed_ref",
+    "wind_direction_from": "wind_direction_from",
+}
+_DISTRIBUTIONS = ("normal", "uniform")
+
+
+def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:
+    """Read a campaign file (module docstring) and the model file it names.
+
+    Parameters
+    ----------
+    path : the file.
+    duration : replaces the file's ``duration`` [s] of each flight.
+
+    Raises
+    ------
+    ProblemFileError naming the file and the key as written.
+    """
+    file = Path(path)
+    with _problem_errors():
+        src, data = mf._read_toml(file)
+        raw_campaign = data.pop("campaign", {})
+        raw_dispersions = data.pop("dispersions", {})
+        plant = data.get("plant", {})
+        if isinstance(plant, dict) and "seed" in plant:
+            raise ProblemFileError(
+                src,
+                "plant.seed",
+                "a campaign seeds each run from its seed (--seed) and the run index: "
+                "remove plant.seed",
+            )
+        problem = _closed_loop(src, file, data, duration)
+        table = read_table(src, raw_campaign, "campaign", _CAMPAIGN)
+        dispersions = _dispersions(src, raw_dispersions, _nominal(problem))
+        return Campaign(
+            model=problem.model,
+            duration=problem.duration,
+            controller=table.values.get("controller", CampaignController.NONE),
+            x0=problem.x0,
+            mpc=problem.mpc,
+            loop=problem.loop,
+            plant_parameters=problem.plant_parameters,
+            dispersions=dispersions,
+            compiled=table.values.get("compiled", False),
+            title=problem.title,
+        )
+
+
+def _nominal(problem: ClosedLoopProblem) -> dict[str, float]:
+    """Each dispersed quantity's value without the campaign (SI)."""
+    p = plant_parameters(problem.model, problem.plant_parameters)
+    out = {name: float(p[PARAMETERS.index(slot)][0]) for name, slot in _PARAMETER.items()}
+    out["dropout_rate"] = problem.loop.dropout_rate
+    for name in ("offset_east", "offset_north", "tilt", "tilt_azimuth"):
+        out[name] = 0.0
+    return out
+
+
+def _dispersions(src: str, raw: Any, nominal: dict[str, float]) -> Dispersions:
+    if not isinstance(raw, dict):
+        raise ProblemFileError(src, "dispersions", f"must be a table [dispersions], got {raw!r}")
+    items: list[tuple[str, Normal | Uniform]] = []
+    for name, table in raw.items():
+        where = f"dispersions.{name}"
+        if name not in DISPERSED:
+            close = difflib.get_close_matches(name, list(DISPERSED), n=1, cutoff=0.6)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise ProblemFileError(
+                src, where, f"unknown dispersion; {hint}allowed: {', '.join(DISPERSED)}"
+            )
+        items.append((name, _distribution(src, where, table, _KIND[name], nominal[name])))
+    if "tilt" in raw and "tilt_azimuth" not in raw:
+        items.append(("tilt_azimuth", Uniform(0.0, 2.0 * math.pi)))
+    return Dispersions(tuple(items))
+
+
+def _distribution(
+    src: str, where: str, raw: Any, kind: str | None, nominal: float
+) -> Normal | Uniform:
+    value = quantity(kind) if kind else NUMBER
+    schema = {
+        "distribution": TEXT,
+        "mean": value,
+        "sigma": value,
+        "relative_sigma": NUMBER,
+        "truncate_sigmas": NUMBER,
+        "low": value,
+        "high": value,
+    }
+    table = read_table(src, raw, where, schema, required=("distribution",))
+    v = table.values
+    name = v["distribution"]
+    if name not in _DISTRIBUTIONS:
+        close = difflib.get_close_matches(str(name), _DISTRIBUTIONS, n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise ProblemFileError(
+            src,
+            table.key("distribution"),
+            f"unknown distribution {name!r}; {hint}allowed: {', '.join(_DISTRIBUTIONS)}",
+        )
+    allowed = {"normal": ("mean", "sigma", "relative_sigma", "truncate_sigmas"),
+               "uniform": ("low", "high")}[name]  # fmt: skip
+    for field in v:
+        if field != "distribution" and field not in allowed:
+            raise ProblemFileError(
+                src, table.key(field), f"not a key of a {name} distribution: {', '.join(allowed)}"
+            )
+    try:
+        if name == "uniform":
+            for field in ("low", "high"):
+                if field not in v:
+                    raise ProblemFileError(src, table.key(field), "missing required key")
+            if v["low"] > v["high"]:
+                raise ProblemFileError(
+                    src, table.key("low"), f"must be <= high, got {v['low']!r} > {v['high']!r} (SI)"
+                )
+            return Uniform(v["low"], v["high"])
+        if ("sigma" in v) == ("relative_sigma" in v):
+            raise ProblemFileError(
+                src, table.key("sigma"), "give one of sigma (absolute) or relative_sigma"
+            )
+        field = "sigma" if "sigma" in v else "relative_sigma"
+        if v[field] < 0:
+            raise ProblemFileError(src, table.key(field), f"must be >= 0, got {v[field]!r}")
+        if field == "relative_sigma" and nominal == 0.0:
+            raise ProblemFileError(
+                src,
+                table.key(field),
+                "the nominal value is 0: give an absolute sigma (with its unit in the key)",
+            )
+        sigma = v["sigma"] if field == "sigma" else v["relative_sigma"] * abs(nominal)
+        truncate = v.get("truncate_sigmas")
+        if truncate is not None and not truncate > 0:
+            raise ProblemFileError(
+                src, table.key("truncate_sigmas"), f"must be > 0, got {truncate!r}"
+            )
+        return Normal(v.get("mean", nominal), sigma, truncate)
+    except (OptionError, ParameterError) as err:
+        raise ProblemFileError(src, where, str(err)) from err

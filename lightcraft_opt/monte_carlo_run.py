@@ -1,0 +1,342 @@
+"""One run of a Monte Carlo campaign: the campaign spec and an index in, a table row out.
+
+:func:`run_one` is the picklable, top-level function every engine calls (in this process,
+in worker processes, on Dask workers). It draws the run's values
+(:func:`~lightcraft_opt.dispersions.draw`), applies them to the plant's parameters, the
+initial state and the drop-out rate, flies :func:`~lightcraft_opt.closed_loop.closed_loop`
+under the campaign's controller ("none" is the open loop: the nominal input every pulse)
+and returns the row of the run table (inputs and outputs, SI, unit in the column name) and
+a row of wall-clock timings, kept apart so that tables can be compared bit for bit.
+
+The plant Φ and the controller are built once per process and thread (keyed by the
+campaign's fingerprint), not per run. Determinism: the MPC normally discards a solve that
+overruns its wall-clock ``time_budget`` and flies its fallback plan, which would make a run
+depend on the machine's load; campaign runs use :data:`CAMPAIGN_TIME_BUDGET` instead (a
+solve is never late, injected ``late`` faults still are), so a run depends only on
+(campaign, seed, index). A run that raises is a row with status ``error`` and the message.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import math
+import threading
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+from functools import cached_property
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop, plant_parameters
+from lightcraft_opt.closed_loop_results import ClosedLoopResult
+from lightcraft_opt.dispersions import Dispersions, draw, loop_seed
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import STATE, _quat_mul, checked_vector, initial_state
+from lightcraft_opt.layout import quaternion_from_tilt as _tilted
+from lightcraft_opt.options import ClosedLoopOptions, MpcOptions, PulseMapOptions
+from lightcraft_opt.params import Model
+from lightcraft_opt.results import SimulationStatus
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+
+if TYPE_CHECKING:
+    from lightcraft_opt.controllers import Controller
+
+__all__ = [
+    "CAMPAIGN_TIME_BUDGET",
+    "OUTPUT_COLUMNS",
+    "TIMING_COLUMNS",
+    "Campaign",
+    "CampaignController",
+    "RunOutcome",
+    "run_one",
+]
+
+#: The MPC's wall-clock budget in campaign runs [s]: large enough that no solve is late.
+CAMPAIGN_TIME_BUDGET = 3600.0
+
+#: Outputs of a run, after its index and drawn inputs (SI; angles in rad).
+OUTPUT_COLUMNS = (
+    "status",
+    "message",
+    "apogee_m",
+    "apogee_time_s",
+    "flight_time_s",
+    "final_east_m",
+    "final_north_m",
+    "final_up_m",
+    "landing_east_m",
+    "landing_north_m",
+    "left_beam",
+    "pulses",
+    "dropped_pulses",
+    "max_tilt_rad",
+    "max_coning_rad",
+    "final_coning_rad",
+    "max_offset_m",
+    "rcs_used_kg",
+    "fallbacks",
+    "iterations_total",
+    "iterations_max",
+)
+#: Wall-clock columns of timings.csv (machine-dependent, never in the run table).
+TIMING_COLUMNS = (
+    "run",
+    "wall_s",
+    "solve_time_median_s",
+    "solve_time_p99_s",
+    "solve_time_max_s",
+    "solve_time_total_s",
+)
+_PARAMETER_OF = {
+    "mass": "rotor_mass_dry",
+    "inertia_axial": "rotor_axial_inertia_dry",
+    "inertia_transverse": "rotor_transverse_inertia_dry",
+    "coupling": "impulse_per_pulse",
+    "wind_speed": "wind_speed_ref",
+    "wind_direction_from": "wind_direction_from",
+}
+_MAX_DROPOUT = 0.99
+
+
+class CampaignController(Enum):
+    """Who flies the runs: the MPC, the LQR, or nobody (the open loop)."""
+
+    MPC = "mpc"
+    LQR = "lqr"
+    NONE = "none"
+
+
+@dataclass(frozen=True, eq=False)
+class Campaign:
+    """What every run of a campaign flies, before its draws (SI).
+
+    Attributes
+    ----------
+    model : the controller's model; the plant's before the campaign's draws.
+    duration : of each flight [s].
+    controller : :class:`CampaignController`.
+    x0 : (STATE.size,) state at the first pulse (default: on the pad, upright).
+    mpc : the MPC's options (the LQR takes their weights); ``time_budget`` is replaced
+        by :data:`CAMPAIGN_TIME_BUDGET` in runs.
+    loop : the closed loop's noise, relative dispersion, drop-outs and injected faults;
+        its ``seed`` is replaced by each run's (:func:`~lightcraft_opt.dispersions.loop_seed`).
+    plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not
+        (its wind), before the draws.
+    dispersions : what each run draws (:class:`~lightcraft_opt.dispersions.Dispersions`).
+    compiled : fly the plant Φ compiled to C (compiled.py; cached on disk).
+    title : a name for reports.
+    """
+
+    model: Model
+    duration: float
+    controller: CampaignController = CampaignController.NONE
+    x0: np.ndarray | None = None
+    mpc: MpcOptions = field(default_factory=MpcOptions)
+    loop: ClosedLoopOptions = field(default_factory=ClosedLoopOptions)
+    plant_parameters: Mapping[str, Any] = field(default_factory=dict)
+    dispersions: Dispersions = field(default_factory=Dispersions)
+    compiled: bool = False
+    title: str = "campaign"
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.duration, int | float) and math.isfinite(self.duration)):
+            raise ParameterError("duration", f"must be a number of seconds, got {self.duration!r}")
+        if self.duration <= 0:
+            raise ParameterError("duration", f"must be positive, got {self.duration!r} s")
+        if not isinstance(self.controller, CampaignController):
+            allowed = [c.value for c in CampaignController]
+            raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")
+        if not isinstance(self.dispersions, Dispersions):
+            raise ParameterError("dispersions", f"must be Dispersions, got {self.dispersions!r}")
+        x0 = initial_state(self.model) if self.x0 is None else self.x0
+        object.__setattr__(self, "x0", checked_vector("x0", x0, STATE.size).copy())
+
+    @cached_property
+    def fingerprint(self) -> str:
+        """sha256 of everything a run depends on (not the title): equal fingerprints fly
+        equal runs."""
+        p = {k: np.ravel(v).tolist() for k, v in sorted(self.plant_parameters.items())}
+        parts = (
+            repr(self.model),
+            repr(float(self.duration)),
+            self.controller.value,
+            repr(np.asarray(self.x0).tolist()),
+            repr(self.mpc),
+            repr(self.loop),
+            repr(p),
+            repr(self.dispersions),
+            repr(self.compiled),
+        )
+        return hashlib.sha256("\0".join(parts).encode()).hexdigest()
+
+    @property
+    def input_columns(self) -> tuple[str, ...]:
+        """Columns of the drawn inputs, then the run's closed-loop seed."""
+        return (*self.dispersions.columns, "loop_seed")
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The run table's header."""
+        return ("run", *self.input_columns, *OUTPUT_COLUMNS)
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """Run ``index``'s row of the run table and of the timings ({column: value})."""
+
+    index: int
+    row: dict[str, Any]
+    timing: dict[str, Any]
+
+
+def run_one(campaign: Campaign, seed: int, index: int) -> RunOutcome:
+    """Fly run ``index`` of ``campaign`` seeded ``seed`` (module docstring); never raises
+    for a failing run: its row has status ``error`` and the exception's message."""
+    draws = draw(campaign.dispersions, seed, index)
+    names = zip(campaign.dispersions.names, campaign.dispersions.columns, strict=True)
+    inputs: dict[str, Any] = {col: draws[name] for name, col in names}
+    inputs["loop_seed"] = loop_seed(seed, index)
+    start = time.perf_counter()
+    try:
+        flyer = _flyer(campaign)  # built once per process and thread: not the run's time
+        start = time.perf_counter()
+        result = flyer.fly(draws, inputs["loop_seed"])
+        outputs = _outputs(result)
+        solve = result.log.solve_time
+    except Exception as err:  # a run's failure is a row, not a crashed campaign
+        outputs = {c: math.nan for c in OUTPUT_COLUMNS}
+        outputs.update(status="error", message=f"{type(err).__name__}: {err}")
+        for c in ("left_beam", "pulses", "dropped_pulses", "fallbacks"):
+            outputs[c] = -1
+        outputs["iterations_total"] = outputs["iterations_max"] = -1
+        solve = np.empty(0)
+    wall = time.perf_counter() - start
+    nan = math.nan
+    timing = {
+        "run": index,
+        "wall_s": wall,
+        "solve_time_median_s": float(np.median(solve)) if solve.size else nan,
+        "solve_time_p99_s": float(np.percentile(solve, 99)) if solve.size else nan,
+        "solve_time_max_s": float(np.max(solve)) if solve.size else nan,
+        "solve_time_total_s": float(np.sum(solve)),
+    }
+    return RunOutcome(index, {"run": index, **inputs, **outputs}, timing)
+
+
+def _outputs(result: ClosedLoopResult) -> dict[str, Any]:
+    flight = result.flight
+    r = flight.state("r_L")
+    k = int(np.argmax(r[:, 2]))
+    landed = flight.status is SimulationStatus.LANDED
+    log = result.log
+    return {
+        "status": flight.status.value,
+        "message": flight.message,
+        "apogee_m": float(r[k, 2]),
+        "apogee_time_s": float(flight.t[k]),
+        "flight_time_s": flight.air_time,
+        "final_east_m": float(r[-1, 0]),
+        "final_north_m": float(r[-1, 1]),
+        "final_up_m": float(r[-1, 2]),
+        "landing_east_m": float(r[-1, 0]) if landed else math.nan,
+        "landing_north_m": float(r[-1, 1]) if landed else math.nan,
+        "left_beam": int(flight.status is SimulationStatus.LEFT_BEAM),
+        "pulses": result.pulses,
+        "dropped_pulses": int(np.sum(result.dropped)),
+        "max_tilt_rad": float(np.max(flight.tilt)),
+        "max_coning_rad": float(np.max(flight.coning)),
+        "final_coning_rad": float(result.coning[-1]),
+        "max_offset_m": float(np.max(result.offset)) if result.offset.size else math.nan,
+        "rcs_used_kg": float(result.rcs_used[-1]),
+        "fallbacks": int(np.sum(log.fallbacks)),
+        "iterations_total": int(np.sum(log.iterations)),
+        "iterations_max": int(np.max(log.iterations)) if log.iterations.size else 0,
+    }
+
+
+class _Flyer:
+    """The plant Φ and the controller of one campaign, built once (per process and
+    thread): ``fly(draws, seed)`` makes a run."""
+
+    def __init__(self, campaign: Campaign) -> None:
+        self.campaign = c = campaign
+        # the closed loop's plant; a craft without RCS: Φ's defaults (no RCS profile)
+        plant = build_pulse_map(c.model, PLANT_MAP if c.model.craft.rcs else PulseMapOptions())
+        assert plant.inputs is not None  # build_pulse_map always records it
+        self.controller = _controller(c, plant)
+        if c.compiled:
+            from lightcraft_opt.compiled import compile_pulse_map
+
+            plant = compile_pulse_map(plant)
+        self.plant: PulseMap = plant
+
+    def fly(self, draws: Mapping[str, float], seed: int) -> ClosedLoopResult:
+        c = self.campaign
+        parameters = dict(c.plant_parameters)
+        for name, slot in _PARAMETER_OF.items():
+            if name in draws:
+                parameters[slot] = draws[name]
+        plant_parameters(c.model, parameters)  # a bad value: ParameterError naming it
+        x0 = np.array(c.x0, dtype=float)
+        r = STATE.index("r_L")
+        x0[r.start] += draws.get("offset_east", 0.0)
+        x0[r.start + 1] += draws.get("offset_north", 0.0)
+        if draws.get("tilt", 0.0):
+            q = STATE.index("q_LB")
+            # the tilt as a rotation in L: q_tilt(θ, ψ) q_upright⁻¹, then on top of x0's
+            upright = _tilted(0.0, 0.0)
+            turn = _quat_mul(_tilted(draws["tilt"], draws.get("tilt_azimuth", 0.0)),
+                             upright * np.array([1.0, -1.0, -1.0, -1.0]))  # fmt: skip
+            x0[q] = _quat_mul(turn, x0[q])
+        loop = dataclasses.replace(c.loop, seed=seed)
+        if "dropout_rate" in draws:
+            rate = min(max(draws["dropout_rate"], 0.0), _MAX_DROPOUT)
+            loop = dataclasses.replace(loop, dropout_rate=rate)
+        return closed_loop(
+            c.model,
+            self.controller,
+            c.duration,
+            x0=x0,
+            parameters=parameters,
+            pulse_map=self.plant,
+            options=loop,
+        )
+
+
+def _controller(c: Campaign, plant: PulseMap) -> Controller:
+    # here, not at the top: they import python-control (~1 s) that an open loop never needs
+    from lightcraft_opt.controllers import LqrController, OpenLoopController
+
+    assert plant.inputs is not None
+    if c.controller is CampaignController.NONE:
+        return OpenLoopController(c.model, plant.inputs)
+    from lightcraft_opt.linearize import coning_model
+    from lightcraft_opt.mpc import MpcController
+
+    prediction = coning_model(c.model, pulse_map=plant, cache=True)
+    if c.controller is CampaignController.MPC:
+        options = dataclasses.replace(c.mpc, time_budget=CAMPAIGN_TIME_BUDGET)
+        return MpcController(c.model, options, prediction=prediction)
+    return LqrController(c.model, prediction, c.mpc.weights)
+
+
+_BUILT = threading.local()
+
+
+def _flyer(campaign: Campaign) -> _Flyer:
+    """This thread's flyer of ``campaign`` (the last one built is kept; so is a failure to
+    build it, raised again for every run rather than built again)."""
+    cached = getattr(_BUILT, "flyer", None)
+    if cached is None or cached[0] != campaign.fingerprint:
+        try:
+            cached = (campaign.fingerprint, _Flyer(campaign))
+        except Exception as err:
+            cached = (campaign.fingerprint, err)
+        _BUILT.flyer = cached
+    if isinstance(cached[1], Exception):
+        raise cached[1]
+    return cached[1]

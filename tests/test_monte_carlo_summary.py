@@ -1,0 +1,124 @@
+"""Campaign statistics and the run table.
+
+Wilson's interval is checked against its closed form at the ends (0 of n: upper bound
+z²/(n + z²)) and a published value (Newcombe 1998, Table I: 81 of 263 -> 0.2553-0.3662);
+the 95 % ellipse against the fraction of normal samples it holds; the run table against
+being cut mid-line.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.monte_carlo_summary import (
+    CHI2_2DOF_95,
+    Z_95,
+    campaign_summary,
+    ellipse,
+    wilson_interval,
+)
+from lightcraft_opt.run_table import RunTable, read_table
+
+
+def test_wilson_interval():
+    n = 10
+    assert wilson_interval(0, n) == (0.0, pytest.approx(Z_95**2 / (n + Z_95**2), rel=1e-12))
+    low, high = wilson_interval(n, n)
+    assert high == 1.0 and low == pytest.approx(n / (n + Z_95**2), rel=1e-12)
+    low, high = wilson_interval(81, 263)
+    assert (low, high) == (pytest.approx(0.2553, abs=5e-5), pytest.approx(0.3662, abs=5e-5))
+    assert all(math.isnan(v) for v in wilson_interval(0, 0))
+
+
+def test_ellipse_axes_orientation_and_coverage():
+    theta = math.radians(30.0)
+    R = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+    C = R @ np.diag([4.0, 1.0]) @ R.T
+    e = ellipse(C)
+    assert (e["major_m"], e["minor_m"]) == (pytest.approx(2.0), pytest.approx(1.0))
+    assert e["angle_deg"] == pytest.approx(30.0)
+    e95 = ellipse(C, CHI2_2DOF_95)
+    assert e95["major_m"] == pytest.approx(2.0 * math.sqrt(CHI2_2DOF_95))
+    # 95 % of normal points fall inside x^T C^-1 x <= χ²₂(0.95)
+    n = 20000
+    xy = np.random.default_rng(0).multivariate_normal([0, 0], C, n)
+    inside = np.mean(np.einsum("ij,jk,ik->i", xy, np.linalg.inv(C), xy) <= CHI2_2DOF_95)
+    assert abs(inside - 0.95) < 4 * math.sqrt(0.95 * 0.05 / n)
+
+
+def _table(n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    status = np.where(rng.random(n) < 0.2, "left_beam", "landed")
+    status[0] = "error"
+    east, north = rng.normal(0.0, 0.3, n), rng.normal(1.0, 0.1, n)
+    landed = status == "landed"
+    t = {
+        "run": np.arange(n),
+        "status": status,
+        "left_beam": (status == "left_beam").astype(int),
+        "apogee_m": rng.normal(30.0, 2.0, n),
+        "apogee_time_s": rng.normal(2.0, 0.1, n),
+        "final_east_m": east,
+        "final_north_m": north,
+        "landing_east_m": np.where(landed, east, np.nan),
+        "landing_north_m": np.where(landed, north, np.nan),
+    }
+    for name in (
+        "max_tilt_rad",
+        "max_coning_rad",
+        "final_coning_rad",
+        "max_offset_m",
+        "rcs_used_kg",
+        "fallbacks",
+        "iterations_total",
+        "iterations_max",
+        "pulses",
+    ):
+        t[name] = rng.random(n)  # fmt: skip
+    t["apogee_m"][0] = np.nan  # the error row
+    return t
+
+
+def test_summary_reads_the_table():
+    rng = np.random.default_rng(1)
+    t = _table(400, rng)
+    s = campaign_summary(t)
+    flown = t["status"] != "error"
+    assert s["runs"] == 400 and s["status_counts"]["error"] == 1
+    assert s["apogee_m"]["n"] == 399
+    assert s["apogee_m"]["mean"] == pytest.approx(np.mean(t["apogee_m"][flown]), rel=1e-12)
+    left = int(np.sum(t["left_beam"][flown]))
+    assert s["left_beam"]["count"] == left
+    assert s["left_beam"]["probability"] == pytest.approx(left / 399)
+    low, high = s["left_beam"]["wilson_95"]
+    assert low < left / 399 < high
+    landed = t["status"] == "landed"
+    assert s["landing"]["n"] == int(landed.sum())
+    assert s["landing"]["mean_m"][0] == pytest.approx(np.mean(t["final_east_m"][landed]))
+    # the sample covariance of the drawn points: σ_east = 0.3 m, σ_north = 0.1 m
+    e = s["final_position"]["ellipse_1sigma"]
+    assert e["major_m"] == pytest.approx(0.3, rel=0.15) and abs(e["angle_deg"]) < 15
+    assert e["minor_m"] == pytest.approx(0.1, rel=0.15)
+
+
+def test_run_table_repairs_a_cut_line_and_sorts_when_finished(tmp_path):
+    path = tmp_path / "runs.csv"
+    table = RunTable(path, ("run", "x", "status"))
+    values = [0.1 + 0.2, 1e-300, -0.0, math.nan, 2.0 / 3.0]
+    for i in (3, 1, 4, 0, 2):
+        table.append({"run": i, "x": values[i], "status": "ok, with a comma"})
+    with open(path, "ab") as f:
+        f.write(b"5,0.12")  # killed mid-row
+    again = RunTable(path, ("run", "x", "status"))
+    assert again.done == {0, 1, 2, 3, 4}
+    again.append({"run": 1, "x": 9.0, "status": "a duplicate"})
+    again.finish()
+    t = read_table(path)
+    assert list(t["run"]) == [0, 1, 2, 3, 4]
+    assert [repr(float(v)) for v in t["x"]] == [repr(v) for v in values]  # exact round trip
+    assert set(t["status"]) == {"ok, with a comma"}
+    with pytest.raises(ParameterError, match="different campaign"):
+        RunTable(path, ("run", "y", "status"))
