@@ -48,7 +48,7 @@ from lightcraft_opt.closed_loop_files import ClosedLoopProblem, _closed_loop
 from lightcraft_opt.dispersions import DISPERSED, Dispersions, Normal, Uniform
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.monte_carlo_run import Campaign, CampaignController
+from lightcraft_opt.monte_carlo_run import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.problem_files import _problem_errors
 from lightcraft_opt.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
 
@@ -68,14 +68,6 @@ _KIND: dict[str, str | None] = {
     "tilt_azimuth": "angle",
     "wind_speed": "speed",
     "wind_direction_from": "angle",
-}
-_PARAMETER = {
-    "mass": "rotor_mass_dry",
-    "inertia_axial": "rotor_axial_inertia_dry",
-    "inertia_transverse": "rotor_transverse_inertia_dry",
-    "coupling": "impulse_per_pulse",
-    "wind_speed": "wind_speed_ref",
-    "wind_direction_from": "wind_direction_from",
 }
 _DISTRIBUTIONS = ("normal", "uniform")
 
@@ -125,7 +117,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
 def _nominal(problem: ClosedLoopProblem) -> dict[str, float]:
     """Each dispersed quantity's value without the campaign (SI)."""
     p = plant_parameters(problem.model, problem.plant_parameters)
-    out = {name: float(p[PARAMETERS.index(slot)][0]) for name, slot in _PARAMETER.items()}
+    out = {name: float(p[PARAMETERS.index(slot)][0]) for name, slot in DISPERSED_PARAMETER.items()}
     out["dropout_rate"] = problem.loop.dropout_rate
     for name in ("offset_east", "offset_north", "tilt", "tilt_azimuth"):
         out[name] = 0.0

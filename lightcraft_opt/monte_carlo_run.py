@@ -47,6 +47,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CAMPAIGN_TIME_BUDGET",
+    "DISPERSED_PARAMETER",
     "OUTPUT_COLUMNS",
     "TIMING_COLUMNS",
     "Campaign",
@@ -91,7 +92,8 @@ TIMING_COLUMNS = (
     "solve_time_max_s",
     "solve_time_total_s",
 )
-_PARAMETER_OF = {
+#: The PARAMETERS slot of each dispersed quantity that is a model parameter.
+DISPERSED_PARAMETER = {
     "mass": "rotor_mass_dry",
     "inertia_axial": "rotor_axial_inertia_dry",
     "inertia_transverse": "rotor_transverse_inertia_dry",
@@ -277,7 +279,7 @@ class _Flyer:
     def fly(self, draws: Mapping[str, float], seed: int) -> ClosedLoopResult:
         c = self.campaign
         parameters = dict(c.plant_parameters)
-        for name, slot in _PARAMETER_OF.items():
+        for name, slot in DISPERSED_PARAMETER.items():
             if name in draws:
                 parameters[slot] = draws[name]
         plant_parameters(c.model, parameters)  # a bad value: ParameterError naming it
