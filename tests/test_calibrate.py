@@ -141,7 +141,9 @@ def test_fitted_model_file_reloads_to_the_fitted_parameters(recovery, tmp_path, 
     result, _ = recovery
     path = write_fitted_model(result, MODEL_FILE, tmp_path / "fitted.toml")
     reloaded = load_model(path)
-    np.testing.assert_array_equal(parameter_values(reloaded), result.p)
+    # equal to rounding: derived slots (spent_coupling from the coupling written in the
+    # file's units) may differ in the last bit
+    np.testing.assert_allclose(parameter_values(reloaded), result.p, rtol=1e-15, atol=0)
     assert reloaded.craft.engine.blast_angle == result.value("blast_angle")
     assert reloaded.flight.impulse_per_pulse == pytest.approx(
         result.value("cm") * model.flight.pulse_energy, rel=1e-15
