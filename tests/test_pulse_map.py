@@ -76,6 +76,29 @@ def test_pulse_map_coast_equals_cvodes_between_pulses(flight5, substeps, tol):
     assert np.max(np.abs(x_next - ref) / scale) < tol
 
 
+def test_pulse_map_depends_on_the_quaternion_direction_only(flight5):
+    """Φ(c q) = Φ(q) for c > 0: a solver's trial point off the unit sphere gets the
+    rotation of its direction (and stays finite), not a DCM scaled by c^2. Tipped,
+    coning, off-centre craft, so every term of the jump and coast sees the attitude."""
+    model = flight5
+    phi = build_pulse_map(model, PulseMapOptions(substeps=8))
+    p = parameter_values(model)
+    x0 = initial_state(
+        model, r_L=(0.02, -0.01, 12.0), v_L=(0.5, 0.0, 9.0), tilt=0.05, w_B=(0.0, 2.0, -1.0)
+    )
+    u = nominal_inputs(model)
+    q = STATE.index("q_LB")
+    x_unit, e_unit = (np.asarray(v).ravel() for v in phi.step(x0, u, p, 0.0))
+    assert abs(np.linalg.norm(x_unit[q]) - 1.0) < 1e-12
+    for c in (0.3, 2.0, 5.0):
+        xc = x0.copy()
+        xc[q] *= c
+        x_c, e_c = (np.asarray(v).ravel() for v in phi.step(xc, u, p, 0.0))
+        assert np.all(np.isfinite(x_c))
+        assert np.max(np.abs(x_c - x_unit) / np.maximum(np.abs(x_unit), 1.0)) < 1e-12
+        assert np.max(np.abs(e_c - e_unit) / np.maximum(np.abs(e_unit), 1e-9)) < 1e-9
+
+
 def test_cli_simulate_writes_trajectory_pulses_summary_and_plot(tmp_path):
     out = tmp_path / "f5"
     assert (

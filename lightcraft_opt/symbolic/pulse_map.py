@@ -7,6 +7,13 @@ piecewise constant on sub-intervals, or phase-locked to the coning mode; layout
 ``map_input_layout``), evaluated at the coast scheme's stage times. One Function
 serves simulation, optimal control, MPC, linearisation, calibration and Monte Carlo
 (STYLE rule 1).
+
+The attitude quaternion is scaled to unit length on the way in and on the way out, so
+Φ depends on the direction of ``q_LB`` only: Φ(c q) = Φ(q) for any c > 0. On the unit
+sphere this changes nothing; off it (the trial points of a Newton-type solver over a
+multiple-shooting NLP, where q is a free variable) Φ stays finite and flat along |q|.
+Without the entry scaling the DCM of a non-unit q grows like |q|^2, the coast returned NaN
+from |q| ~ 2 on, and IPOPT stalled on problems/crosswind_climb.toml (its header).
 """
 
 from __future__ import annotations
@@ -95,7 +102,7 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
     t = ca.SX.sym("t")
     pulse = u[: PULSE_INPUT.size]
 
-    x_plus, eng = pulse_jump(x, pulse, p, model)
+    x_plus, eng = pulse_jump(_normalised(x), pulse, p, model)  # Φ(c q) = Φ(q)
     f = _coast_rhs(model, opts, ulay, n_thr, u, p, t, x_plus)
     if opts.scheme is CoastScheme.RK4:
         states = rk4_coast(f, t, x_plus, period, opts.substeps)
