@@ -15,9 +15,8 @@ Problem (a) is ``problems/crosswind_climb.toml``; at a ``--horizon`` other than 
 130 pulses (5 s) the terminal altitude of 50 m is dropped (too high for a short horizon; at
 260 pulses the Flight 5 engine has overheated near the 100th pulse and the craft sinks back
 below 50 m before 10 s), and the problem becomes: stay in the beam and near the pad's
-vertical for the whole flight. NOTE: at 130 pulses or more the problem does not converge yet
-(problems/crosswind_climb.toml's header); ``--horizon 30`` is its launch second, which
-does. Each solver's optimum is compared with the first solver's (largest pointing
+vertical for the whole flight. ``--horizon 30`` is its launch second, a quick look. Each
+solver's optimum is compared with the first solver's (largest pointing
 difference, cost difference), and the fastest converged solver's times are checked
 against the issue's targets (<= 1 s cold, <= 100 ms warm).
 

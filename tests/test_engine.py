@@ -201,6 +201,26 @@ def test_offset_restores_and_tips_away(model: Model, direction_deg: float) -> No
     assert lateral[3] < 1e-2 * lateral[2] and tipping[3] < 1e-2 * tipping[2]
 
 
+@pytest.mark.parametrize(("altitude", "sign"), [(10.0, -1.0), (40.0, 1.0)])
+def test_a_hollow_beam_wider_than_the_optic_pushes_away_and_tips_toward(
+    altitude: float, sign: float
+) -> None:
+    """Flight 5's hollow square grows from 7.2 cm at launch to 11.2 cm at 40 m, wider than
+    the 11 cm optic. An offset then no longer takes the optic's far side out of the beam,
+    it moves its near side onto the beam's dark centre: the energy dipole turns round, so
+    the lateral impulse points away from the beam axis and the axis tips toward it (the
+    reverse of test_offset_restores_and_tips_away, which still holds at 10 m). Above about
+    30 m the beam no longer centres the craft (problems/crosswind_climb.toml)."""
+    d_hat = np.array([1.0, 0.0, 0.0])  # beam axis to craft, L
+    for offset in (0.005, 0.01):
+        x = initial_state(F5, r_L=(offset, 0.0, altitude))
+        out = _run(F5, x)
+        along = float(_in_L(x, out["impulse_B"]) @ d_hat)
+        turn = float(np.cross(_in_L(x, out["angular_impulse_B"]), [0.0, 0.0, 1.0]) @ d_hat)
+        assert sign * along > 0.0 and sign * turn < 0.0
+        assert abs(along) > 1e-3 * out["impulse_B"][0]  # at least 0.1 % of the axial kick
+
+
 def test_negative_blast_angle_pushes_away() -> None:
     """The sign of beta alone decides: beta < 0 turns the lateral impulse outward."""
     p = _params(F5, blast_angle=-0.15)

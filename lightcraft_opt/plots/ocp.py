@@ -167,7 +167,8 @@ def plot_beam_offset(
 
 # --------------------------------------------------------------------------- figures
 def _title(result: OcpResult, title: str) -> str:
-    head = f"{title}: " if title else ""
+    """The problem's title over the line of how the solve went."""
+    head = f"{title}\n" if title else ""
     return (
         f"{head}{result.status.value}, cost {result.cost:.4g}, {result.iterations} iterations "
         f"({result.solver}, {result.solve_time:.2f} s)"
