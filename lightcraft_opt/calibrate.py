@@ -148,11 +148,9 @@ def calibrate(
     lower, upper = _bounds(comps, bounds)
     start = _start(comps, initial_values(comps, model, problem.x0), initial, lower, upper)
     t0 = time.perf_counter()
-    status, message, theta, iterations, costs = _solve(problem, start, lower, upper, opts)
+    stopped = _solve(problem, start, lower, upper, opts)
     solve_time = time.perf_counter() - t0
-    return _result(
-        problem, status, message, theta, start, lower, upper, iterations, costs, solve_time, opts
-    )
+    return _result(problem, stopped, start, lower, upper, solve_time, opts)
 
 
 def _bounds(
@@ -206,22 +204,48 @@ def _evaluate(problem: CalibrationProblem, theta: np.ndarray) -> tuple[np.ndarra
     return np.asarray(r).ravel(), np.asarray(J)
 
 
+@dataclass(frozen=True)
+class _Stop:
+    """Where the solver stopped: θ [SI], its residual r [m] and Jacobian J, the costs."""
+
+    status: CalibrationStatus
+    message: str
+    theta: np.ndarray
+    iterations: int
+    initial_cost: float
+    cost: float
+    r: np.ndarray
+    J: np.ndarray
+
+
 def _solve(
     problem: CalibrationProblem,
     start: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
     opts: CalibrationOptions,
-) -> tuple[CalibrationStatus, str, np.ndarray, int, tuple[float, float]]:
-    """Projected Levenberg-Marquardt in z = θ / scale. Returns (status, message, θ,
-    iterations, (initial cost, final cost))."""
+) -> _Stop:
+    """Projected Levenberg-Marquardt in z = θ / scale."""
     scale = np.array([c.scale for c in problem.components])
     lo, hi = lower / scale, upper / scale
     z = start / scale
     r, J = _evaluate(problem, z * scale)
     if not (np.all(np.isfinite(r)) and np.all(np.isfinite(J))):
-        return CalibrationStatus.FAILED, "non-finite residual at the start", start, 0, (np.nan,) * 2
+        return _Stop(
+            CalibrationStatus.FAILED,
+            "non-finite residual at the start",
+            start,
+            0,
+            np.nan,
+            np.nan,
+            r,
+            J,
+        )
     cost0 = cost = 0.5 * float(r @ r)
+
+    def stop(status: CalibrationStatus, message: str, iterations: int) -> _Stop:
+        return _Stop(status, message, z * scale, iterations, cost0, cost, r, J)
+
     Js = J * scale
     H = Js.T @ Js
     lam = opts.damping * max(float(np.max(np.diag(H))), 1e-30)
@@ -232,13 +256,7 @@ def _solve(
         held = ((z <= lo + tiny) & (g > 0)) | ((z >= hi - tiny) & (g < 0))
         free = ~held
         if not np.any(free) or np.max(np.abs(g[free])) <= opts.gtol:
-            return (
-                CalibrationStatus.CONVERGED,
-                "projected gradient vanished",
-                z * scale,
-                it - 1,
-                (cost0, cost),
-            )
+            return stop(CalibrationStatus.CONVERGED, "projected gradient vanished", it - 1)
         while True:
             step = np.zeros_like(z)
             Hf = H[np.ix_(free, free)]
@@ -254,17 +272,11 @@ def _solve(
             if rho > 0:
                 break
             if small:
-                return CalibrationStatus.CONVERGED, "step below xtol", z * scale, it, (cost0, cost)
+                return stop(CalibrationStatus.CONVERGED, "step below xtol", it)
             lam *= nu
             nu *= 2.0
             if lam > 1e20 * max(float(np.max(np.diag(H))), 1e-30):
-                return (
-                    CalibrationStatus.FAILED,
-                    "no descent step found",
-                    z * scale,
-                    it,
-                    (cost0, cost),
-                )
+                return stop(CalibrationStatus.FAILED, "no descent step found", it)
         decrease = cost - cost_new
         z, r, J, cost = z_new, r_new, J_new, cost_new
         Js = J * scale
@@ -278,41 +290,30 @@ def _solve(
                 flush=True,
             )
         if decrease <= opts.ftol * cost:
-            return (
-                CalibrationStatus.CONVERGED,
-                "cost decrease below ftol",
-                z * scale,
-                it,
-                (cost0, cost),
-            )
+            return stop(CalibrationStatus.CONVERGED, "cost decrease below ftol", it)
         if small:
-            return CalibrationStatus.CONVERGED, "step below xtol", z * scale, it, (cost0, cost)
-    return (
+            return stop(CalibrationStatus.CONVERGED, "step below xtol", it)
+    return stop(
         CalibrationStatus.MAX_ITER,
         f"stopped after max_iter = {opts.max_iter} iterations",
-        z * scale,
         opts.max_iter,
-        (cost0, cost),
     )
 
 
 def _result(
     problem: CalibrationProblem,
-    status: CalibrationStatus,
-    message: str,
-    theta: np.ndarray,
+    fit: _Stop,
     start: np.ndarray,
     lower: np.ndarray,
     upper: np.ndarray,
-    iterations: int,
-    costs: tuple[float, float],
     solve_time: float,
     opts: CalibrationOptions,
 ) -> CalibrationResult:
+    """The result at the solver's stop, from the residual and Jacobian it evaluated there."""
     comps = problem.components
     n = len(comps)
     track = problem.track
-    r, J = _evaluate(problem, theta)
+    theta, r, J = fit.theta, fit.r, fit.J
     scale = np.array([c.scale for c in comps])
     m_obs = r.size
     rss = float(r @ r)
@@ -342,8 +343,8 @@ def _result(
     X = np.asarray(problem.flight(theta)).T
     residuals = r.reshape(-1, 3)
     return CalibrationResult(
-        status=status,
-        message=message,
+        status=fit.status,
+        message=fit.message,
         names=tuple(c.name for c in comps),
         units=tuple(c.unit for c in comps),
         values=theta,
@@ -356,9 +357,9 @@ def _result(
         singular_values=sv,
         condition=float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf"),
         flags=flags,
-        iterations=iterations,
+        iterations=fit.iterations,
         cost=0.5 * rss,
-        initial_cost=costs[0],
+        initial_cost=fit.initial_cost,
         sigma=float(np.sqrt(sigma2)),
         rms=np.sqrt(np.mean(residuals**2, axis=0)),
         residuals=residuals,

@@ -234,7 +234,8 @@ def build_calibration_problem(
 
     spent = model.craft.engine.spent_coupling is None
     theta = ca.MX.sym("theta", len(comps))
-    p, x = apply_fit(theta, comps, p0, base, spent)
+    p, x_start = apply_fit(theta, comps, p0, base, spent)
+    x = x_start
     columns = []
     for k in range(n_pulses):
         X, _ = pulse_map.dense(x, u, p, k * pulse_map.period)
@@ -243,7 +244,6 @@ def build_calibration_problem(
     X_all = ca.horzcat(*columns)
     pos = ca.mtimes(X_all[0:3, :], A) + ca.mtimes(X_all[3:6, :], B)  # (3, m)
     r = ca.reshape(pos - ca.DM(track.r_L.T), -1, 1)  # (east, north, up) per point
-    _, x_start = apply_fit(theta, comps, p0, base, spent)
     residual = ca.Function("calibration_residual", [theta], [r], ["theta"], ["r"])
     jacobian = ca.Function(
         "calibration_jacobian", [theta], [r, ca.jacobian(r, theta)], ["theta"], ["r", "J"]
