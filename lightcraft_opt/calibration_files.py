@@ -14,7 +14,6 @@ the unit in every key; a standard deviation that is infinite (not identifiable) 
 from __future__ import annotations
 
 import json
-import math
 import os
 import tomllib
 from collections.abc import Mapping
@@ -28,7 +27,7 @@ from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.model_files import QUANTITIES, SCHEMA
 from lightcraft_opt.params import Model
-from lightcraft_opt.run_files import model_hash
+from lightcraft_opt.run_files import finite_or_none, model_hash
 
 __all__ = ["MODEL_KEYS", "write_calibration_report", "write_fitted_model"]
 
@@ -147,11 +146,6 @@ def write_fitted_model(result: CalibrationResult, model_file: str | Path, path: 
     return path
 
 
-def _number(v: float) -> float | None:
-    """``v``, or None (JSON null) when it is inf or NaN."""
-    return float(v) if math.isfinite(v) else None
-
-
 def write_calibration_report(
     result: CalibrationResult,
     model: Model,
@@ -166,7 +160,7 @@ def write_calibration_report(
         entry: dict[str, Any] = {
             "unit": unit,
             "value": float(result.values[i]),
-            "std": _number(result.std[i]),
+            "std": finite_or_none(result.std[i]),
             "initial": float(result.initial[i]),
             "lower": float(result.lower[i]),
             "upper": float(result.upper[i]),
@@ -175,7 +169,7 @@ def write_calibration_report(
         }
         if name == "cm":  # the usual unit of the coupling coefficient
             entry["value_n_per_mw"] = float(result.values[i]) * 1e6
-            entry["std_n_per_mw"] = _number(result.std[i] * 1e6)
+            entry["std_n_per_mw"] = finite_or_none(result.std[i] * 1e6)
         parameters[name] = entry
     corr = np.where(np.isfinite(result.correlation), result.correlation, 0.0)
     report: dict[str, Any] = {
@@ -187,10 +181,10 @@ def write_calibration_report(
         "solve_time_s": result.solve_time,
         "points": int(result.t.size),
         "gaps_dropped": result.gaps,
-        "cost_m2": _number(result.cost),
-        "initial_cost_m2": _number(result.initial_cost),
-        "sigma_m": _number(result.sigma),
-        "rms_m": dict(zip(("east", "north", "up"), map(_number, result.rms), strict=True)),
+        "cost_m2": finite_or_none(result.cost),
+        "initial_cost_m2": finite_or_none(result.initial_cost),
+        "sigma_m": finite_or_none(result.sigma),
+        "rms_m": dict(zip(("east", "north", "up"), map(finite_or_none, result.rms), strict=True)),
         "parameters": parameters,
         "unidentified": list(result.unidentified),
         "flags": [
@@ -198,8 +192,8 @@ def write_calibration_report(
             for f in result.flags
         ],
         "correlation": {"names": list(result.names), "matrix": corr.tolist()},
-        "singular_values_m": [_number(v) for v in result.singular_values],
-        "condition": _number(result.condition),
+        "singular_values_m": [finite_or_none(v) for v in result.singular_values],
+        "condition": finite_or_none(result.condition),
         **extra,
     }
     path.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n", encoding="utf-8")

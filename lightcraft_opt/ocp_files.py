@@ -8,7 +8,6 @@ written too: its status is in the summary, its last iterate in the CSV.
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +18,7 @@ from lightcraft_opt.ocp_problem import CaptureFraction, OcpProblem
 from lightcraft_opt.ocp_results import OcpResult
 from lightcraft_opt.problem_files import ProblemFile, objective_names
 from lightcraft_opt.results import PulseRecord
-from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, model_hash
+from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, finite_or_none, model_hash
 from lightcraft_opt.symbolic.invariants import build_invariants
 from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS
 
@@ -140,12 +139,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
         "max_capture_fraction": float(np.max(fractions)) if fractions.size else 0.0,
         "capture_fraction_limit": min(limits) if limits else None,
-        "constraint_violation": _finite_or_none(result.constraint_violation),
+        "constraint_violation": finite_or_none(result.constraint_violation),
     }
     path.write_text(json.dumps(summary, indent=2) + "\n")
     return summary
-
-
-def _finite_or_none(value: float) -> float | None:
-    """JSON has no NaN: an unknown value is null."""
-    return float(value) if math.isfinite(value) else None

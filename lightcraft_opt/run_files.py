@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,13 @@ from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.params import Model
 from lightcraft_opt.results import SimulationResult
 
-__all__ = ["model_hash", "write_pulses_csv", "write_summary", "write_trajectory_csv"]
+__all__ = [
+    "finite_or_none",
+    "model_hash",
+    "write_pulses_csv",
+    "write_summary",
+    "write_trajectory_csv",
+]
 
 TRAJECTORY_COLUMNS = (
     "t_s",
@@ -42,6 +49,11 @@ TRAJECTORY_COLUMNS = (
     "tilt_deg",
     "coning_deg",
 )
+
+
+def finite_or_none(value: float) -> float | None:
+    """JSON has no NaN or inf: an unknown or unbounded value is written as null."""
+    return float(value) if math.isfinite(value) else None
 
 
 def model_hash(model: Model) -> str:
