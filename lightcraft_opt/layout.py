@@ -54,6 +54,7 @@ __all__ = [
     "parameter_values",
     "quaternion_from_tilt",
     "rcs_levels",
+    "tilted_attitude",
 ]
 
 T = TypeVar("T")
@@ -473,14 +474,21 @@ def quaternion_from_tilt(tilt: float = 0.0, azimuth: float = 0.0) -> np.ndarray:
     horizontal axis perpendicular to the lean direction.
     """
     # Upright: R_LB = [up, east, north] as columns, i.e. q0 = (1/2)(1, -1, -1, -1).
-    q0 = np.array([0.5, -0.5, -0.5, -0.5])
+    return tilted_attitude(np.array([0.5, -0.5, -0.5, -0.5]), tilt, azimuth)
+
+
+def tilted_attitude(q_LB: np.ndarray, tilt: float, azimuth: float = 0.0) -> np.ndarray:
+    """The attitude q_LB (w, x, y, z) turned in L by a lean of ``tilt`` [rad] toward
+    ``azimuth`` [rad, clockwise from north]: about the horizontal L axis perpendicular to
+    the lean, so an upright b1 ends tilted by ``tilt`` toward ``azimuth``."""
+    q = np.asarray(q_LB, dtype=float)
     if tilt == 0.0:
-        return q0
+        return q
     lean_L = np.array([math.sin(azimuth), math.cos(azimuth), 0.0])
     axis_L = np.cross(np.array([0.0, 0.0, 1.0]), lean_L)  # rotating up toward lean
     h = 0.5 * tilt
     q_tilt = np.concatenate([[math.cos(h)], math.sin(h) * axis_L])
-    return _quat_mul(q_tilt, q0)
+    return _quat_mul(q_tilt, q)
 
 
 def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:

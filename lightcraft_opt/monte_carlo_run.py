@@ -35,8 +35,7 @@ from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop, plant_parameters
 from lightcraft_opt.closed_loop_results import ClosedLoopResult
 from lightcraft_opt.dispersions import Dispersions, draw, loop_seed
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, _quat_mul, checked_vector, initial_state
-from lightcraft_opt.layout import quaternion_from_tilt as _tilted
+from lightcraft_opt.layout import STATE, checked_vector, initial_state, tilted_attitude
 from lightcraft_opt.options import ClosedLoopOptions, MpcOptions, PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.results import SimulationStatus
@@ -287,13 +286,8 @@ class _Flyer:
         r = STATE.index("r_L")
         x0[r.start] += draws.get("offset_east", 0.0)
         x0[r.start + 1] += draws.get("offset_north", 0.0)
-        if draws.get("tilt", 0.0):
-            q = STATE.index("q_LB")
-            # the tilt as a rotation in L: q_tilt(θ, ψ) q_upright⁻¹, then on top of x0's
-            upright = _tilted(0.0, 0.0)
-            turn = _quat_mul(_tilted(draws["tilt"], draws.get("tilt_azimuth", 0.0)),
-                             upright * np.array([1.0, -1.0, -1.0, -1.0]))  # fmt: skip
-            x0[q] = _quat_mul(turn, x0[q])
+        q = STATE.index("q_LB")  # the drawn lean, turning x0's attitude in L
+        x0[q] = tilted_attitude(x0[q], draws.get("tilt", 0.0), draws.get("tilt_azimuth", 0.0))
         loop = dataclasses.replace(c.loop, seed=seed)
         if "dropout_rate" in draws:
             rate = min(max(draws["dropout_rate"], 0.0), _MAX_DROPOUT)
