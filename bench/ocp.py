@@ -81,7 +81,7 @@ def main() -> None:
     base = replace(loaded.options, max_iter=args.max_iter, threads=args.threads)
     start = time.perf_counter()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(base.pulse_map))
-    wind = float(problem.p[PARAMETERS.index("wind_speed_ref")][0])
+    wind = float(PARAMETERS.get("wind_speed_ref", problem.p))
     print(
         f"{loaded.title}: {problem.horizon} pulses, wind {wind:.2f} m/s at the reference "
         f"height; Φ built in {time.perf_counter() - start:.2f} s"
