@@ -43,11 +43,18 @@ from scipy.integrate import solve_ivp
 
 from lightcraft_opt import load_model
 from lightcraft_opt.compiled import compile_pulse_map
-from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, initial_state, parameter_values
+from lightcraft_opt.layout import (
+    PARAMETERS,
+    PULSE_INPUT,
+    STATE,
+    initial_state,
+    nominal_inputs,
+    parameter_values,
+)
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import SimulationResult, SimulationStatus
-from lightcraft_opt.simulate import nominal_inputs, simulate
+from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, PulseMap, build_pulse_map

@@ -24,8 +24,8 @@ from lightcraft_opt.monte_carlo_run import Campaign
 from lightcraft_opt.monte_carlo_summary import campaign_summary
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.problem_files import ProblemFile, load_problem
-from lightcraft_opt.results import SimulationResult, SimulationStatus
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.track_files import read_track
 
 __all__ = [

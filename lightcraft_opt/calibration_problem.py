@@ -2,8 +2,8 @@
 casadi.Function of the fit vector θ (the components of
 :mod:`lightcraft_opt.calibration_parameters`).
 
-The flight is the model's open-loop flight (:func:`~lightcraft_opt.simulate.nominal_inputs`
-at every pulse, as :func:`~lightcraft_opt.simulate.simulate` flies it) from the initial
+The flight is the model's open-loop flight (:func:`~lightcraft_opt.layout.nominal_inputs`
+at every pulse, as :func:`~lightcraft_opt.simulation.simulate.simulate` flies it) from the initial
 state x0, stepped with the pulse map Φ's dense output, ``pulse_map_dense(x, u, p, t)``,
 pulse by pulse in one expression graph (STYLE rule 1: the same Φ as everything else).
 θ enters through the parameter vector p and the initial state x0 only
@@ -36,10 +36,10 @@ from lightcraft_opt.layout import (
     STATE,
     checked_vector,
     initial_state,
+    nominal_inputs,
     parameter_values,
 )
 from lightcraft_opt.params import Model
-from lightcraft_opt.simulate import nominal_inputs
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.rotation import quat_multiply
 

@@ -12,7 +12,6 @@ from pathlib import Path
 from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.closed_loop_files import load_closed_loop
 from lightcraft_opt.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
-from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
@@ -24,7 +23,8 @@ from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
 from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.run_files import write_pulses_csv, write_summary, write_trajectory_csv
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
 __all__ = ["main"]

@@ -27,7 +27,6 @@ import numpy as np
 
 from lightcraft_opt.closed_loop_results import ClosedLoopResult, ControllerLog, StepStats
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.layout import (
     ERROR_STATE,
     PARAMETERS,
@@ -44,8 +43,9 @@ from lightcraft_opt.options import (
     RcsProfile,
 )
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import PulseRecord
-from lightcraft_opt.simulate import _Flight  # simulate's own end-of-flight rules
+from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end-of-flight rule
+from lightcraft_opt.simulation.flight_measures import flight_result
+from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.error_state import build_error_state
 from lightcraft_opt.symbolic.invariants import build_invariants
 from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, PulseMap, build_pulse_map
@@ -53,27 +53,12 @@ from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, PulseMap, build_pu
 if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
     from lightcraft_opt.controllers import Controller
 
-__all__ = ["closed_loop", "disperse", "measured", "plant_parameters"]
+__all__ = ["closed_loop", "disperse", "measured"]
 
 #: Map of the plant unless given: Φ's defaults with the phase-locked RCS profile.
 PLANT_MAP = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED)
 _NAMES = [name for name, _, _ in ENGINE_OUTPUTS]
 _OFFSET = sum(size for _, size, _ in ENGINE_OUTPUTS[: _NAMES.index("offset_L")])
-
-
-def plant_parameters(
-    model: Model, overrides: Mapping[str, float | Sequence[float]] | None = None
-) -> np.ndarray:
-    """The model's parameter vector with ``overrides`` {PARAMETERS slot: value} (SI)."""
-    p = parameter_values(model)
-    for name, value in (overrides or {}).items():
-        if name not in PARAMETERS:
-            raise ParameterError(
-                f"parameters.{name}", f"no such parameter; see {list(PARAMETERS.names)}"
-            )
-        size = PARAMETERS.slot(name).size
-        p[PARAMETERS.index(name)] = checked_vector(f"parameters.{name}", np.ravel(value), size)
-    return p
 
 
 def disperse(p: np.ndarray, dispersion: Dispersion, rng: np.random.Generator) -> np.ndarray:
@@ -156,12 +141,12 @@ def closed_loop(
     if lay is None:
         raise ParameterError("pulse_map", "needs its input layout (build_pulse_map gives it)")
     rng = np.random.default_rng(opts.seed)
-    p = disperse(plant_parameters(model, parameters), opts.dispersion, rng)
+    p = disperse(parameter_values(model, parameters), opts.dispersion, rng)
     x = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     n = int(np.ceil(duration / phi.period - 1e-9))
     dropped = rng.random(n) < opts.dropout_rate if opts.dropout_rate else np.zeros(n, bool)
     i_energy = lay.slot("energy").start
-    flight = _Flight(x, phi.period, duration, i_energy)
+    flight = FlightLog(x, phi.period, duration, i_energy)
     faults = set(opts.faults)
     controller.reset()
     steps: list[StepStats] = []

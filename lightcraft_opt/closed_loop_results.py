@@ -3,7 +3,7 @@
 A controller reports each pulse as a :class:`StepStats` with a :class:`ControllerStatus`;
 a failed or late solve is a status (the controller fell back to its shifted plan), never
 an exception. :class:`ClosedLoopResult` holds the flight (a
-:class:`~lightcraft_opt.results.SimulationResult` of the plant), the controller log and
+:class:`~lightcraft_opt.simulation.result.SimulationResult` of the plant), the controller log and
 the per-pulse measures the acceptance criteria read.
 """
 
@@ -16,7 +16,7 @@ from enum import Enum
 
 import numpy as np
 
-from lightcraft_opt.results import SimulationResult
+from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
     "ClosedLoopResult",

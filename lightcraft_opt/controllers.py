@@ -23,11 +23,10 @@ import numpy as np
 
 from lightcraft_opt.closed_loop_results import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, VectorLayout, parameter_values
+from lightcraft_opt.layout import STATE, VectorLayout, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import ConingModel, dlqr_gain, turn
 from lightcraft_opt.options import ControllerFault, ControlWeights
 from lightcraft_opt.params import Model
-from lightcraft_opt.simulate import nominal_inputs
 from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
 
 __all__ = [
@@ -241,7 +240,7 @@ def stage_weights(weights: ControlWeights, inputs: tuple[str, ...]) -> StageWeig
 
 class OpenLoopController:
     """"none": the nominal input every pulse (beam on the pad axis, focus at the far end,
-    the flight's pulse energy, RCS off: ``simulate.nominal_inputs``).
+    the flight's pulse energy, RCS off: ``layout.nominal_inputs``).
 
     Parameters
     ----------

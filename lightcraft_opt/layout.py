@@ -51,6 +51,7 @@ __all__ = [
     "initial_state",
     "input_layout",
     "map_input_layout",
+    "nominal_inputs",
     "parameter_values",
     "quaternion_from_tilt",
     "rcs_levels",
@@ -392,8 +393,26 @@ def checked_vector(name: str, value: Sequence[float] | np.ndarray, size: int) ->
     return v
 
 
-def parameter_values(model: Model) -> np.ndarray:
-    """The numeric parameter vector p of ``model`` (SI, order of :data:`PARAMETERS`)."""
+def parameter_values(
+    model: Model, overrides: Mapping[str, float | Sequence[float]] | None = None
+) -> np.ndarray:
+    """The numeric parameter vector p of ``model`` (SI, order of :data:`PARAMETERS`), with
+    ``overrides`` {PARAMETERS slot: value (SI, the slot's frame)} set on top: the one way
+    a problem, a closed loop or a campaign changes the model's parameters (wind, gusts,
+    aerodynamics ...). An unknown slot or a wrong size raises a ParameterError naming
+    ``parameters.<slot>``."""
+    p = _model_parameter_values(model)
+    for name, value in (overrides or {}).items():
+        if name not in PARAMETERS:
+            raise ParameterError(
+                f"parameters.{name}", f"no such parameter; see {list(PARAMETERS.names)}"
+            )
+        size = PARAMETERS.slot(name).size
+        p[PARAMETERS.index(name)] = checked_vector(f"parameters.{name}", np.ravel(value), size)
+    return p
+
+
+def _model_parameter_values(model: Model) -> np.ndarray:
     craft = model.craft
     j_dry, i_dry = craft.dry_rotor_inertia()
     liner = craft.liner
@@ -460,6 +479,23 @@ def parameter_values(model: Model) -> np.ndarray:
             ),
         }
     )
+
+
+def nominal_inputs(model: Model, layout: VectorLayout | None = None) -> np.ndarray:
+    """The map input of an unsteered flight: beam on the pad axis, focus at the far end of
+    the laser's range, the flight's pulse energy, RCS and motor off. ``layout``: the map
+    input layout (a pulse map's ``inputs``); default the model's with held RCS levels."""
+    craft = model.craft
+    lay = layout or map_input_layout(
+        len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
+    )
+    values: dict[str, object] = {
+        "pointing_L": (0.0, 0.0),
+        "focus": model.laser.focus_range[1],
+        "energy": model.flight.pulse_energy,
+    }
+    values.update({s.name: np.zeros(s.size) for s in lay.slots if s.name not in values})
+    return lay.pack(values)
 
 
 def quaternion_from_tilt(tilt: float = 0.0, azimuth: float = 0.0) -> np.ndarray:

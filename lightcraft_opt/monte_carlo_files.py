@@ -43,11 +43,10 @@ from pathlib import Path
 from typing import Any
 
 from lightcraft_opt import model_files as mf
-from lightcraft_opt.closed_loop import plant_parameters
 from lightcraft_opt.closed_loop_files import ClosedLoopProblem, _closed_loop
 from lightcraft_opt.dispersions import DISPERSED, Dispersions, Normal, Uniform
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
-from lightcraft_opt.layout import PARAMETERS
+from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.monte_carlo_run import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.problem_files import _problem_errors
 from lightcraft_opt.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
@@ -116,7 +115,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
 
 def _nominal(problem: ClosedLoopProblem) -> dict[str, float]:
     """Each dispersed quantity's value without the campaign (SI)."""
-    p = plant_parameters(problem.model, problem.plant_parameters)
+    p = parameter_values(problem.model, problem.plant_parameters)
     out = {name: float(p[PARAMETERS.index(slot)][0]) for name, slot in DISPERSED_PARAMETER.items()}
     out["dropout_rate"] = problem.loop.dropout_rate
     for name in ("offset_east", "offset_north", "tilt", "tilt_azimuth"):

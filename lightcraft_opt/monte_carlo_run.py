@@ -31,14 +31,20 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop, plant_parameters
+from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.closed_loop_results import ClosedLoopResult
 from lightcraft_opt.dispersions import Dispersions, draw, loop_seed
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, checked_vector, initial_state, tilted_attitude
+from lightcraft_opt.layout import (
+    STATE,
+    checked_vector,
+    initial_state,
+    parameter_values,
+    tilted_attitude,
+)
 from lightcraft_opt.options import ClosedLoopOptions, MpcOptions, PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import SimulationStatus
+from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 if TYPE_CHECKING:
@@ -281,7 +287,7 @@ class _Flyer:
         for name, slot in DISPERSED_PARAMETER.items():
             if name in draws:
                 parameters[slot] = draws[name]
-        plant_parameters(c.model, parameters)  # a bad value: ParameterError naming it
+        parameter_values(c.model, parameters)  # a bad value: ParameterError naming it
         x0 = np.array(c.x0, dtype=float)
         r = STATE.index("r_L")
         x0[r.start] += draws.get("offset_east", 0.0)

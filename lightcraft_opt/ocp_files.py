@@ -17,8 +17,8 @@ from lightcraft_opt.layout import PARAMETERS, VectorLayout
 from lightcraft_opt.ocp_problem import CaptureFraction, OcpProblem
 from lightcraft_opt.ocp_results import OcpResult
 from lightcraft_opt.problem_files import ProblemFile, objective_names
-from lightcraft_opt.results import PulseRecord
 from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, finite_or_none, model_hash
+from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.invariants import build_invariants
 from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS
 

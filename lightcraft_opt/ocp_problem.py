@@ -41,12 +41,12 @@ import numpy as np
 
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import (
-    PARAMETERS,
     STATE,
     VectorLayout,
     checked_vector,
     initial_state,
     map_input_layout,
+    nominal_inputs,
     parameter_values,
 )
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
@@ -520,11 +520,7 @@ class OcpProblem:
     def nominal_input(self) -> np.ndarray:
         """The flight's own map input (beam on the pad axis, focus at the far end, the
         flight's pulse energy, RCS and motor off) clipped to the bounds."""
-        lay = self.inputs
-        u = np.zeros(lay.size)
-        u[lay.index("focus")] = self.model.laser.focus_range[1]
-        u[lay.index("energy")] = self.model.flight.pulse_energy
-        return np.clip(u, self.lower, self.upper)
+        return np.clip(nominal_inputs(self.model, self.inputs), self.lower, self.upper)
 
     def reference(self) -> np.ndarray:
         """(N + 1, size) path of the TrackReference terms side by side (size 0 if none)."""
@@ -600,15 +596,7 @@ class OcpProblem:
                 )
 
     def _parameter_vector(self) -> np.ndarray:
-        p = parameter_values(self.model)
-        for name, value in (self.parameters or {}).items():
-            if name not in PARAMETERS:
-                raise ParameterError(
-                    f"parameters.{name}", f"no such parameter; see {list(PARAMETERS.names)}"
-                )
-            size = PARAMETERS.slot(name).size
-            p[PARAMETERS.index(name)] = _values(f"parameters.{name}", value, size)
-        return p
+        return parameter_values(self.model, self.parameters)
 
     def _set_bounds(self) -> None:
         lay, laser, craft = self.inputs, self.model.laser, self.model.craft

@@ -16,7 +16,7 @@ import numpy as np
 
 from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import SimulationResult
+from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
     "finite_or_none",

@@ -10,11 +10,11 @@ import pytest
 from conftest import table1_flight5
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import STATE, initial_state
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, SimulationOptions
 from lightcraft_opt.params import Craft, Site
+from lightcraft_opt.simulation.coast_reference import simulate_coast
 
 
 def test_nan_initial_state_names_the_field():

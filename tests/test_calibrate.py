@@ -27,7 +27,7 @@ from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 from lightcraft_opt.track_files import read_track
 

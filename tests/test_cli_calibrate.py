@@ -17,7 +17,7 @@ from lightcraft_opt.cli import main
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.simulate import simulate
 
 MODEL_FILE = Path(__file__).resolve().parents[1] / "models" / "flight5.toml"
 

@@ -40,7 +40,7 @@ from lightcraft_opt.options import (
     MpcOptions,
 )
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import SimulationStatus
+from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 MODEL = load_model(Path(__file__).resolve().parents[1] / "models" / "flight5-rcs.toml")

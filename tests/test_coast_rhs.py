@@ -12,10 +12,10 @@ from jacobian_check import assert_jacobians_match_finite_differences
 from test_mass_and_rcs import LINER, RCS
 from test_rotational_dynamics import GYROSTAT_CARRIER
 
-from lightcraft_opt.coast_reference import simulate_coast
 from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Aerodynamics, Environment, Wind
+from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.gravity import EARTH_GM, dcm_EL, site_position_E
 from lightcraft_opt.symbolic.invariants import build_invariants

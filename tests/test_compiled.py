@@ -31,12 +31,12 @@ from lightcraft_opt.compiled import (
     compile_pulse_map,
     library_path,
 )
-from lightcraft_opt.layout import initial_state, map_input_layout, parameter_values
+from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
 from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine
-from lightcraft_opt.results import SimulationResult, SimulationStatus
-from lightcraft_opt.simulate import nominal_inputs, simulate
+from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
 MODELS = Path(__file__).resolve().parents[1] / "models"

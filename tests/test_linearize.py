@@ -48,8 +48,8 @@ from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine, Model, Rcs, SpinDecay, Thruster
 from lightcraft_opt.plots import plot_multipliers, plot_stability_map
-from lightcraft_opt.results import SimulationStatus
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.result import SimulationStatus
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
 from lightcraft_opt.symbolic.gravity import EARTH_GM, build_gravity
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map

@@ -37,7 +37,7 @@ from lightcraft_opt.closed_loop import PLANT_MAP
 from lightcraft_opt.closed_loop_results import ControllerStatus
 from lightcraft_opt.controllers import stage_weights
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.layout import STATE, initial_state, parameter_values
+from lightcraft_opt.layout import STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import (
     ConingModel,
     PulseMapJacobian,
@@ -60,7 +60,6 @@ from lightcraft_opt.options import (
     MpcSolver,
 )
 from lightcraft_opt.params import Model
-from lightcraft_opt.simulate import nominal_inputs
 from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.invariants import build_invariants
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map

@@ -62,7 +62,7 @@ from lightcraft_opt.params import (
     SpinDecay,
     SpinDecayModel,
 )
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.gravity import EARTH_GM, WGS84_A, WGS84_F
 from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map

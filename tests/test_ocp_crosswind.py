@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lightcraft_opt.layout import PARAMETERS
+from lightcraft_opt.layout import PARAMETERS, nominal_inputs
 from lightcraft_opt.ocp import CompiledOcp
 from lightcraft_opt.ocp_problem import TerminalAltitude
 from lightcraft_opt.ocp_results import OcpStatus
 from lightcraft_opt.problem_files import load_problem
-from lightcraft_opt.results import SimulationStatus
-from lightcraft_opt.simulate import nominal_inputs, simulate
+from lightcraft_opt.simulation.result import SimulationStatus
+from lightcraft_opt.simulation.simulate import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 PULSES = 30

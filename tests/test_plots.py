@@ -22,8 +22,8 @@ from lightcraft_opt.plots import (
     track_figure,
 )
 from lightcraft_opt.plots.track import plot_track_xy
-from lightcraft_opt.results import PulseRecord, SimulationResult
-from lightcraft_opt.simulate import simulate
+from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
+from lightcraft_opt.simulation.simulate import simulate
 
 R = STATE.slot("r_L").start
 V = STATE.slot("v_L").start

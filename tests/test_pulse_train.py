@@ -27,7 +27,14 @@ import pytest
 from conftest import table1_flight5
 from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
-from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, initial_state, parameter_values
+from lightcraft_opt.layout import (
+    PARAMETERS,
+    PULSE_INPUT,
+    STATE,
+    initial_state,
+    nominal_inputs,
+    parameter_values,
+)
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import (
     Aerodynamics,
@@ -42,7 +49,6 @@ from lightcraft_opt.params import (
     SpinDecayModel,
     Wind,
 )
-from lightcraft_opt.simulate import nominal_inputs
 from lightcraft_opt.symbolic.coast_rhs import coast_terms
 from lightcraft_opt.symbolic.gravity import (
     EARTH_GM,

@@ -36,7 +36,6 @@ import pytest
 from conftest import torque_free
 from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
-from lightcraft_opt.coast_reference import coast_integrator, simulate_coast
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import (
     PARAMETERS,
@@ -65,6 +64,7 @@ from lightcraft_opt.options import (
     SimulationOptions,
 )
 from lightcraft_opt.params import Model
+from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
 from lightcraft_opt.symbolic.coast import coning_rate_B
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.gyrostat import angular_momentum

@@ -16,7 +16,7 @@ import pytest
 
 from lightcraft_opt import load_model, simulate
 from lightcraft_opt.layout import initial_state
-from lightcraft_opt.results import SimulationResult, SimulationStatus
+from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, build_pulse_map
 
 MODELS = Path(__file__).resolve().parents[1] / "models"

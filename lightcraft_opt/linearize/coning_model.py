@@ -44,7 +44,13 @@ import numpy as np
 
 from lightcraft_opt.compiled import cache_dir
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, VectorLayout, initial_state, parameter_values
+from lightcraft_opt.layout import (
+    STATE,
+    VectorLayout,
+    initial_state,
+    nominal_inputs,
+    parameter_values,
+)
 from lightcraft_opt.linearize.operating_points import (
     PulseMapJacobian,
     climb_point,
@@ -54,7 +60,6 @@ from lightcraft_opt.linearize.signal_names import _names, _select
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.simulate import nominal_inputs
 from lightcraft_opt.symbolic.coning_coordinates import (
     CONING_COORDINATES,
     build_coning_coordinates,

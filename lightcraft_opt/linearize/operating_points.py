@@ -30,12 +30,12 @@ from lightcraft_opt.layout import (
     checked_vector,
     initial_state,
     map_input_layout,
+    nominal_inputs,
     parameter_values,
 )
 from lightcraft_opt.linearize.signal_names import _select
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.simulate import nominal_inputs
 from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 

@@ -29,7 +29,7 @@ from lightcraft_opt.plots.trajectory import (
     plot_track,
     plot_vertical_speed,
 )
-from lightcraft_opt.results import SimulationResult
+from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
     "PLOT_DPI",

@@ -20,7 +20,7 @@ from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.ocp_problem import CaptureFraction, OcpProblem
 from lightcraft_opt.ocp_results import OcpResult
 from lightcraft_opt.plots.labels import auto_length_unit, length_factor, state_label
-from lightcraft_opt.results import PulseRecord
+from lightcraft_opt.simulation.result import PulseRecord
 
 __all__ = [
     "capture_figure",

@@ -19,7 +19,7 @@ from matplotlib.patches import Circle
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.plots.labels import length_factor, state_label
-from lightcraft_opt.results import SimulationResult
+from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = ["beam_axis_L", "plot_pulse_offsets", "plot_track_xy", "plot_track_xyt"]
 

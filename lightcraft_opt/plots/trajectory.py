@@ -15,7 +15,7 @@ from matplotlib.figure import Figure
 
 from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.plots.labels import state_label
-from lightcraft_opt.results import SimulationResult
+from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
     "mark_apogee",

@@ -13,7 +13,6 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
@@ -24,7 +23,8 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import SimulationResult, SimulationStatus
+from lightcraft_opt.simulation.flight_measures import flight_result
+from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 
 __all__ = ["coast_integrator", "simulate_coast"]

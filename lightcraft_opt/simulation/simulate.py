@@ -17,7 +17,6 @@ import numpy as np
 
 from lightcraft_opt.compiled import compile_pulse_map
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.flight_measures import flight_result
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
@@ -25,39 +24,22 @@ from lightcraft_opt.layout import (
     checked_vector,
     initial_state,
     map_input_layout,
+    nominal_inputs,
     parameter_values,
 )
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.results import PulseRecord, SimulationResult, SimulationStatus
+from lightcraft_opt.simulation.flight_log import FlightLog
+from lightcraft_opt.simulation.flight_measures import flight_result
+from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
-__all__ = ["InputPolicy", "nominal_inputs", "simulate"]
+__all__ = ["InputPolicy", "simulate"]
 
 #: A per-pulse input policy: (pulse index k, time t [s], state x) -> map input u.
 InputPolicy = Callable[[int, float, np.ndarray], Sequence[float] | np.ndarray]
 
-LEFT_BEAM_FRACTION = 0.01
-LEFT_BEAM_PULSES = 3
 CHUNK_SECONDS = 1.0  # open-loop inputs: pulses per mapaccum call, in seconds of flight
-_Z_UP = STATE.slot("r_L").start + 2  # altitude above the pad in x
-
-
-def nominal_inputs(model: Model, layout: VectorLayout | None = None) -> np.ndarray:
-    """The map input of an unsteered flight: beam on the pad axis, focus at the far end of
-    the laser's range, the flight's pulse energy, RCS and motor off. ``layout``: the map
-    input layout (a pulse map's ``inputs``); default the model's with held RCS levels."""
-    craft = model.craft
-    lay = layout or map_input_layout(
-        len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
-    )
-    values: dict[str, object] = {
-        "pointing_L": (0.0, 0.0),
-        "focus": model.laser.focus_range[1],
-        "energy": model.flight.pulse_energy,
-    }
-    values.update({s.name: np.zeros(s.size) for s in lay.slots if s.name not in values})
-    return lay.pack(values)
 
 
 def _input_rows(
@@ -133,7 +115,7 @@ def simulate(
     rng = np.random.default_rng(seed)
     dropped = rng.random(n_pulses) < dropout_rate if dropout_rate else np.zeros(n_pulses, bool)
     i_energy = lay.slot("energy").start
-    flight = _Flight(xk, phi.period, duration, i_energy)
+    flight = FlightLog(xk, phi.period, duration, i_energy)
     if callable(inputs):
         for k in range(n_pulses):
             t = k * phi.period
@@ -160,7 +142,7 @@ def simulate(
 
 
 def _step_in_chunks(
-    phi: PulseMap, U: np.ndarray, x0: np.ndarray, p: np.ndarray, flight: _Flight, chunk: int
+    phi: PulseMap, U: np.ndarray, x0: np.ndarray, p: np.ndarray, flight: FlightLog, chunk: int
 ) -> None:
     """Step Φ over the rows of ``U`` (n, map-input size), ``chunk`` pulses per call of its
     mapaccum, checking each pulse in order and stopping at the first that ends the flight
@@ -195,57 +177,3 @@ def _chunk_map(phi: PulseMap, m: int) -> ca.Function:
         ["x_next", "X", "engine"],
     )
     return one.mapaccum(f"pulse_map_chunk{m}", m)
-
-
-class _Flight:
-    """The record of a flight as its pulses come in, and the checks that end it: landing
-    (interpolated to the pad), leaving the beam, a non-finite state."""
-
-    def __init__(self, x0: np.ndarray, period: float, duration: float, i_energy: int) -> None:
-        self.period, self.duration, self.i_energy = period, duration, i_energy
-        self.times: list[float] = [0.0]
-        self.states: list[np.ndarray] = [x0]
-        self.pulse_t: list[float] = []
-        self.pulse_u: list[np.ndarray] = []
-        self.pulse_e: list[np.ndarray] = []
-        self.status, self.message = SimulationStatus.DURATION_REACHED, ""
-        self.weak = 0
-
-    def ended_by(self, t: float, u: np.ndarray, X: np.ndarray, eng: np.ndarray) -> bool:
-        """Record the pulse fired at ``t`` [s] with map input ``u``: ``X`` (STATE.size,
-        dense) states after it, ``eng`` (11,) engine outputs. True when the flight ends."""
-        iz = _Z_UP
-        if not (np.all(np.isfinite(X)) and np.all(np.isfinite(eng))):
-            k = len(self.pulse_t)
-            self.status, self.message = SimulationStatus.FAILED, f"non-finite state after pulse {k}"
-            return True
-        self.pulse_t.append(t)
-        self.pulse_u.append(u)
-        self.pulse_e.append(eng)
-        X = X.T
-        tb = t + self.period * np.arange(1, len(X) + 1) / len(X)
-        keep = tb <= self.duration + 1e-12
-        below = X[:, iz] < 0.0
-        if np.any(below & keep):
-            i = int(np.argmax(below))
-            t_prev, x_prev = (self.times[-1], self.states[-1]) if i == 0 else (tb[i - 1], X[i - 1])
-            frac = x_prev[iz] / (x_prev[iz] - X[i, iz])
-            self.times.extend(tb[:i])
-            self.states.extend(X[:i])
-            self.times.append(t_prev + frac * (tb[i] - t_prev))
-            self.states.append(x_prev + frac * (X[i] - x_prev))
-            self.status = SimulationStatus.LANDED
-            return True
-        self.times.extend(tb[keep])
-        self.states.extend(X[keep])
-        energy = u[self.i_energy]
-        if energy > 0:  # a dropped pulse neither counts nor resets the count
-            self.weak = self.weak + 1 if eng[0] < LEFT_BEAM_FRACTION * energy else 0
-        if self.weak >= LEFT_BEAM_PULSES:
-            self.status = SimulationStatus.LEFT_BEAM
-            self.message = (
-                f"optic captured < {LEFT_BEAM_FRACTION:.0%} of the pulse energy for "
-                f"{LEFT_BEAM_PULSES} fired pulses"
-            )
-            return True
-        return False
