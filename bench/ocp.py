@@ -3,7 +3,7 @@ per solver (on demand, not in CI).
 
 For each solver in ``--solvers`` (``name:hessian``, e.g. ``ipopt:exact``), in one process:
 
-* **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.CompiledOcp`;
+* **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.solve.CompiledOcp`;
   the pulse map Φ is built once and shared, so only the first build pays for casadi's
   derivative generation);
 * **cold**: the first solve from the nominal rollout, with the problem file's wind
@@ -41,10 +41,10 @@ from pathlib import Path
 import numpy as np
 
 from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.ocp import CompiledOcp
-from lightcraft_opt.ocp_problem import TerminalAltitude
-from lightcraft_opt.ocp_results import OcpResult
-from lightcraft_opt.options import HessianApproximation, OcpSolver
+from lightcraft_opt.ocp.options import HessianApproximation, OcpSolver
+from lightcraft_opt.ocp.problem import TerminalAltitude
+from lightcraft_opt.ocp.result import OcpResult
+from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
@@ -91,7 +91,7 @@ def main() -> None:
         f"{'s/it':>6s} {'w.iter':>6s} {'warm':>9s} {'cost':>12s} {'|du|max':>9s}"
     )
 
-    moved = problem.x_start.copy()
+    moved = problem.x0.copy()
     moved[STATE.slot("r_L").start] += 0.002  # 2 mm east
     first: OcpResult | None = None
     rows = []

@@ -15,9 +15,9 @@ from lightcraft_opt.closed_loop_outputs import write_closed_loop_summary, write_
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
-from lightcraft_opt.ocp import CompiledOcp
+from lightcraft_opt.ocp.options import OcpSolver
+from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.ocp_files import write_ocp_summary, write_solution_csv
-from lightcraft_opt.options import OcpSolver
 from lightcraft_opt.plots.closed_loop import closed_loop_figures
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
 from lightcraft_opt.plots.ocp import ocp_figures

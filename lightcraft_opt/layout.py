@@ -265,7 +265,7 @@ def map_input_layout(
         Φ does not clip the thrust (a smooth map for the optimiser): whoever sets the
         inputs keeps 0 <= thrust_i(τ) <= max_thrust_i at every τ, e.g. for
         ``PHASE_LOCKED`` sqrt(cos_i^2 + sin_i^2) <= min(mean_i, max_i - mean_i)
-        (:class:`lightcraft_opt.ocp_problem.RcsEnvelope`).
+        (:class:`lightcraft_opt.ocp.problem.RcsEnvelope`).
     rcs_subintervals : m >= 1; more than 1 only with ``SUBINTERVALS``.
     """
     if not isinstance(rcs_profile, RcsProfile):

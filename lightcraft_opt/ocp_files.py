@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.layout import PARAMETERS, VectorLayout
-from lightcraft_opt.ocp_problem import CaptureFraction, OcpProblem
-from lightcraft_opt.ocp_results import OcpResult
+from lightcraft_opt.ocp.problem import CaptureFraction, OcpProblem
+from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.problem_files import ProblemFile, objective_names
 from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, finite_or_none, model_hash
 from lightcraft_opt.simulation.result import PulseRecord

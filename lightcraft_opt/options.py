@@ -9,14 +9,13 @@ from enum import Enum
 from lightcraft_opt.errors import OptionError
 
 __all__ = [
-    "OCP_PULSE_MAP",
     "CoastScheme",
-    "HessianApproximation",
-    "OcpOptions",
-    "OcpSolver",
     "PulseMapOptions",
     "RcsProfile",
     "SimulationOptions",
+    "checked_int",
+    "checked_nonnegative",
+    "checked_number",
 ]
 
 
@@ -127,143 +126,6 @@ class SimulationOptions:
             )
 
 
-class OcpSolver(Enum):
-    """NLP solver of an optimal control problem (ocp.py), with the QP solver of SQP.
-
-    ``IPOPT`` is the reference (interior point, sparse). ``FATROP`` is an interior point
-    method that exploits the stage structure of the multiple-shooting NLP (Riccati
-    recursion). The ``SQP_*`` choices are CasADi's ``sqpmethod`` with the named QP solver:
-    ``qrqp`` (active set, sparse QR), ``hpipm`` (interior point on the OCP structure),
-    ``osqp`` (ADMM, first order, convex QPs only: takes the limited-memory Hessian).
-    """
-
-    IPOPT = "ipopt"
-    FATROP = "fatrop"
-    SQP_QRQP = "sqp_qrqp"
-    SQP_HPIPM = "sqp_hpipm"
-    SQP_OSQP = "sqp_osqp"
-
-
-class HessianApproximation(Enum):
-    """Second derivatives the NLP solver uses.
-
-    ``EXACT``: the Hessian of the Lagrangian by automatic differentiation through Φ
-    (quadratic convergence; its construction dominates the first build). ``LIMITED_MEMORY``:
-    quasi-Newton (L-BFGS in IPOPT, BFGS in sqpmethod): cheaper iterations, more of them.
-    ``GAUSS_NEWTON``: 2 J^T J of the objective's least-squares residuals, the constraints'
-    curvature dropped (transcription.MultipleShooting.gauss_newton_hessian): iterations
-    need Φ's first derivatives only and the QPs are convex; linear convergence. Linear
-    terms (laser energy, final altitude) contribute no curvature.
-    FATROP takes only ``EXACT``, SQP_OSQP (convex QPs only) not ``EXACT``.
-    """
-
-    EXACT = "exact"
-    LIMITED_MEMORY = "limited_memory"
-    GAUSS_NEWTON = "gauss_newton"
-
-
-#: Pulse map of an OCP prediction unless told otherwise: Φ's 4th-order splitting with 8
-#: substeps (~150k instructions) instead of 32 (~510k): the exact-Hessian build takes
-#: ~30 s instead of minutes, for a coast error ~1e2 times Φ's default (still ~1e-5 m in
-#: position over one pulse of Flight 5).
-OCP_PULSE_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT4, substeps=8, dense=8)
-
-
-@dataclass(frozen=True)
-class OcpOptions:
-    """How an optimal control problem (ocp_problem.py) is transcribed and solved.
-
-    Attributes
-    ----------
-    solver : NLP solver (and QP solver of SQP).
-    pulse_map : options of the prediction map Φ; defaults to :data:`OCP_PULSE_MAP`
-        (cheaper than :class:`PulseMapOptions`'s default, whose derivatives cost ~4x
-        more). Re-simulate an optimum with the same options to reproduce it.
-    hessian : exact or quasi-Newton second derivatives.
-    max_iter : NLP iterations, >= 1.
-    tol : convergence tolerance on the (scaled) KKT conditions and on the constraint
-        violation, in (0, 1).
-    move_blocking : hold each control for this many pulses (an int), or for the given
-        block lengths in pulses (a tuple, summing to the horizon); 1 means free every pulse.
-    threads : evaluate Φ over the horizon on this many threads (casadi map), >= 1.
-    print_level : 0 is silent; 1..12 the solver's own verbosity (IPOPT's scale).
-    wind_ramp : continuation steps on the wind, >= 0. With n > 0 a cold solve first
-        solves the problem in calm air, then with the wind (reference speed and gust)
-        scaled by 1/n, 2/n, ... 1, each solve warm-started from the last: a crosswind can
-        blow the nominal rollout out of the beam, where Φ gives the solver no gradient.
-    """
-
-    solver: OcpSolver = OcpSolver.IPOPT
-    pulse_map: PulseMapOptions = OCP_PULSE_MAP
-    hessian: HessianApproximation = HessianApproximation.EXACT
-    max_iter: int = 200
-    tol: float = 1e-8
-    move_blocking: int | tuple[int, ...] = 1
-    threads: int = 1
-    print_level: int = 0
-    wind_ramp: int = 0
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.solver, OcpSolver):
-            allowed = [s.value for s in OcpSolver]
-            raise OptionError(f"OcpOptions.solver must be one of {allowed}, got {self.solver!r}")
-        if not isinstance(self.pulse_map, PulseMapOptions):
-            raise OptionError(
-                f"OcpOptions.pulse_map must be a PulseMapOptions, got {self.pulse_map!r}"
-            )
-        if not isinstance(self.hessian, HessianApproximation):
-            allowed = [h.value for h in HessianApproximation]
-            raise OptionError(f"OcpOptions.hessian must be one of {allowed}, got {self.hessian!r}")
-        if self.solver is OcpSolver.FATROP and self.hessian is not HessianApproximation.EXACT:
-            raise OptionError(
-                "OcpOptions.hessian: fatrop takes only 'exact' (its casadi interface builds "
-                "its own Hessian)"
-            )
-        if self.solver is OcpSolver.SQP_OSQP and self.hessian is HessianApproximation.EXACT:
-            raise OptionError(
-                "OcpOptions.hessian: sqp_osqp needs convex QPs, which the exact Hessian of Φ "
-                "does not give (casadi's convexification fails on these NLPs); use "
-                "'gauss_newton' or 'limited_memory'"
-            )
-        for name, low, high in (
-            ("max_iter", 1, None),
-            ("threads", 1, None),
-            ("print_level", 0, 12),
-            ("wind_ramp", 0, None),
-        ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < low or (high and v > high):
-                span = f">= {low}" if high is None else f"in [{low}, {high}]"
-                raise OptionError(f"OcpOptions.{name} must be an integer {span}, got {v!r}")
-        if not (
-            isinstance(self.tol, int | float)
-            and not isinstance(self.tol, bool)
-            and math.isfinite(self.tol)
-            and 0 < self.tol < 1
-        ):
-            raise OptionError(f"OcpOptions.tol must be in (0, 1), got {self.tol!r}")
-        blocks = self.move_blocking
-        items = blocks if isinstance(blocks, tuple) else (blocks,)
-        if not items or any(isinstance(b, bool) or not isinstance(b, int) or b < 1 for b in items):
-            raise OptionError(
-                "OcpOptions.move_blocking must be a positive integer or a non-empty tuple of "
-                f"positive integers (pulses per block), got {blocks!r}"
-            )
-
-    def blocks(self, horizon: int) -> tuple[int, ...]:
-        """Block lengths [pulses] covering ``horizon`` pulses (the last uniform block may be
-        shorter); raises OptionError when a tuple does not sum to the horizon."""
-        if isinstance(self.move_blocking, tuple):
-            if sum(self.move_blocking) != horizon:
-                raise OptionError(
-                    f"OcpOptions.move_blocking {self.move_blocking} sums to "
-                    f"{sum(self.move_blocking)} pulses, the horizon is {horizon}"
-                )
-            return self.move_blocking
-        n = self.move_blocking
-        return tuple(min(n, horizon - k) for k in range(0, horizon, n))
-
-
 # --------------------------------------------------------------------------- MPC and closed loop
 __all__ += [
     "ClosedLoopOptions",
@@ -276,13 +138,13 @@ __all__ += [
 ]
 
 
-def _checked_int(owner: str, name: str, value: object, low: int) -> None:
+def checked_int(owner: str, name: str, value: object, low: int) -> None:
     """Raise OptionError unless ``value`` is an integer (not a bool) >= ``low``."""
     if isinstance(value, bool) or not isinstance(value, int) or value < low:
         raise OptionError(f"{owner}.{name} must be an integer >= {low}, got {value!r}")
 
 
-def _checked_number(
+def checked_number(
     owner: str, name: str, value: object, low: float, high: float = math.inf
 ) -> None:
     """Raise OptionError unless ``value`` is a finite number in the open interval
@@ -297,7 +159,7 @@ def _checked_number(
         raise OptionError(f"{owner}.{name} must be {span}, got {value!r}")
 
 
-def _checked_nonnegative(owner: str, name: str, value: object) -> None:
+def checked_nonnegative(owner: str, name: str, value: object) -> None:
     """Raise OptionError unless ``value`` is a finite number >= 0."""
     if not (
         isinstance(value, int | float)
@@ -370,8 +232,8 @@ class ControlWeights:
 
     def __post_init__(self) -> None:
         for name in ("coning", "tilt", "offset", "drift", "velocity", "pointing", "propellant"):
-            _checked_nonnegative("ControlWeights", name, getattr(self, name))
-        _checked_number("ControlWeights", "rcs", self.rcs, 0.0)
+            checked_nonnegative("ControlWeights", name, getattr(self, name))
+        checked_number("ControlWeights", "rcs", self.rcs, 0.0)
 
 
 @dataclass(frozen=True)
@@ -405,16 +267,16 @@ class MpcOptions:
     warm_start: bool = True
 
     def __post_init__(self) -> None:
-        _checked_int("MpcOptions", "horizon", self.horizon, 1)
+        checked_int("MpcOptions", "horizon", self.horizon, 1)
         if not isinstance(self.weights, ControlWeights):
             raise OptionError(f"MpcOptions.weights must be a ControlWeights, got {self.weights!r}")
         if not isinstance(self.solver, MpcSolver):
             allowed = [s.value for s in MpcSolver]
             raise OptionError(f"MpcOptions.solver must be one of {allowed}, got {self.solver!r}")
-        _checked_int("MpcOptions", "max_iter", self.max_iter, 1)
-        _checked_number("MpcOptions", "tol", self.tol, 0.0, 1.0)
-        _checked_number("MpcOptions", "time_budget", self.time_budget, 0.0)
-        _checked_int("MpcOptions", "envelope_directions", self.envelope_directions, 2)
+        checked_int("MpcOptions", "max_iter", self.max_iter, 1)
+        checked_number("MpcOptions", "tol", self.tol, 0.0, 1.0)
+        checked_number("MpcOptions", "time_budget", self.time_budget, 0.0)
+        checked_int("MpcOptions", "envelope_directions", self.envelope_directions, 2)
         c = self.capture_fraction
         if not (
             isinstance(c, int | float)
@@ -451,7 +313,7 @@ class MeasurementNoise:
 
     def __post_init__(self) -> None:
         for name in ("position", "velocity", "attitude", "rate", "spin"):
-            _checked_nonnegative("MeasurementNoise", name, getattr(self, name))
+            checked_nonnegative("MeasurementNoise", name, getattr(self, name))
 
 
 @dataclass(frozen=True)
@@ -545,4 +407,4 @@ class ClosedLoopOptions:
             raise OptionError(
                 f"ClosedLoopOptions.fault must be one of {allowed}, got {self.fault!r}"
             )
-        _checked_int("ClosedLoopOptions", "seed", self.seed, 0)
+        checked_int("ClosedLoopOptions", "seed", self.seed, 0)

@@ -1,7 +1,7 @@
 """Problem files: TOML in ``problems/`` read into an optimal control problem and its options.
 
-The edge of :mod:`lightcraft_opt.ocp_problem` (what to solve) and
-:class:`~lightcraft_opt.options.OcpOptions` (how), as :mod:`lightcraft_opt.model_files` is
+The edge of :mod:`lightcraft_opt.ocp.problem` (what to solve) and
+:class:`~lightcraft_opt.ocp.options.OcpOptions` (how), as :mod:`lightcraft_opt.model_files` is
 the edge of the model: the same units and spellings (its :data:`QUANTITIES`), converted to
 SI here and nowhere else. A quantity carries its unit in the key (``tilt_deg``,
 ``clearance_cm``, ``total_kj``); numbers, text and choices are bare. One exception: a
@@ -121,21 +121,15 @@ from lightcraft_opt import model_files as mf
 from lightcraft_opt import params
 from lightcraft_opt.errors import ModelFileError, OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.layout import initial_state
-from lightcraft_opt.ocp_problem import (
+from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
     LateralOffset,
     OcpProblem,
     TrackReference,
 )
-from lightcraft_opt.options import (
-    OCP_PULSE_MAP,
-    HessianApproximation,
-    OcpOptions,
-    OcpSolver,
-    PulseMapOptions,
-    RcsProfile,
-)
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.problem_tables import (
     BLOCKS,
     CONSTRAINTS,

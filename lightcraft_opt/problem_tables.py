@@ -26,7 +26,7 @@ import numpy as np
 from lightcraft_opt import model_files as mf
 from lightcraft_opt.errors import ParameterError, ProblemFileError
 from lightcraft_opt.layout import STATE
-from lightcraft_opt.ocp_problem import (
+from lightcraft_opt.ocp.problem import (
     CaptureFraction,
     ControlBound,
     ControlEffort,

@@ -34,7 +34,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import lightcraft_opt as lc
-from lightcraft_opt.ocp import CompiledOcp
+from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.plots.ocp import plot_beam_offset, plot_drift, plot_pointing
 from lightcraft_opt.plots.track import plot_track_xy
 from lightcraft_opt.layout import nominal_inputs

@@ -22,13 +22,13 @@ import pytest
 
 from lightcraft_opt.cli import main
 from lightcraft_opt.layout import STATE, initial_state, map_input_layout
-from lightcraft_opt.ocp import rollout
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.solve import rollout
+from lightcraft_opt.ocp.transcription import state_scale
 from lightcraft_opt.ocp_files import solution_columns
-from lightcraft_opt.ocp_results import OcpResult, OcpStatus
 from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.transcription import state_scale
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 CAPTURE_RADIUS = 0.055  # models/flight5.toml capture_radius_mm = 55
@@ -124,7 +124,7 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     x_columns = slice(col["x_m"], col["pulses"] + 1)
     X = np.vstack([values[:, x_columns], last[x_columns]])
     U = values[:, col["pointing_x_m"] : col["energy_J"] + 1]
-    assert X[0] == pytest.approx(problem.x_start, rel=1e-11, abs=1e-12)
+    assert X[0] == pytest.approx(problem.x0, rel=1e-11, abs=1e-12)
     phi = build_pulse_map(problem.model, pf.options.pulse_map)
     X_sim, _ = rollout(problem, phi, U)
     assert X_sim.shape == (5, STATE.size)

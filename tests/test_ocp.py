@@ -30,8 +30,8 @@ from jacobian_check import assert_jacobians_match_finite_differences
 
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
-from lightcraft_opt.ocp import CompiledOcp, solve
-from lightcraft_opt.ocp_problem import (
+from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.problem import (
     CaptureFraction,
     ControlBound,
     ControlEffort,
@@ -45,14 +45,9 @@ from lightcraft_opt.ocp_problem import (
     TerminalAltitude,
     TrackReference,
 )
-from lightcraft_opt.ocp_results import OcpStatus
-from lightcraft_opt.options import (
-    CoastScheme,
-    HessianApproximation,
-    OcpOptions,
-    OcpSolver,
-    PulseMapOptions,
-)
+from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.solve import CompiledOcp, solve
+from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.params import (
     Aerodynamics,
     Engine,
@@ -302,7 +297,7 @@ def test_resimulated_optimal_inputs_reproduce_the_prediction(lateral):
         problem.model,
         problem.horizon * phi.period,
         inputs=result.u,
-        x0=problem.x_start,
+        x0=problem.x0,
         p=problem.p,
         pulse_map=phi,
     )
@@ -326,7 +321,7 @@ def test_warm_start_and_the_compiled_function_reuse_the_solver(lateral):
     assert warm.status is OcpStatus.SOLVED and warm.iterations <= 3
     assert np.max(np.abs(warm.u - reference.u)) < 1e-6 * 0.05
 
-    moved = problem.x_start.copy()
+    moved = problem.x0.copy()
     moved[STATE.index("r_L")] += (0.002, 0.0, 0.0)
     cold = compiled.solve(x0=moved)
     warm = compiled.solve(x0=moved, warm_start=reference)
@@ -337,7 +332,7 @@ def test_warm_start_and_the_compiled_function_reuse_the_solver(lateral):
 
     fn = compiled.function
     U, _X, cost = fn(
-        problem.x_start,
+        problem.x0,
         problem.p,
         problem.t0,
         np.zeros(problem.inputs.size),  # u_previous: unused, the problem has none

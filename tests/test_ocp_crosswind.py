@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 
 from lightcraft_opt.layout import PARAMETERS, nominal_inputs
-from lightcraft_opt.ocp import CompiledOcp
-from lightcraft_opt.ocp_problem import TerminalAltitude
-from lightcraft_opt.ocp_results import OcpStatus
+from lightcraft_opt.ocp.problem import TerminalAltitude
+from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate

@@ -18,7 +18,8 @@ from lightcraft_opt import load_problem
 from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state
 from lightcraft_opt.model_files import load_model
-from lightcraft_opt.ocp_problem import (
+from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.problem import (
     CaptureFraction,
     ControlEffort,
     EnergyBudget,
@@ -29,14 +30,7 @@ from lightcraft_opt.ocp_problem import (
     TiltLimit,
     TrackReference,
 )
-from lightcraft_opt.options import (
-    OCP_PULSE_MAP,
-    CoastScheme,
-    HessianApproximation,
-    OcpOptions,
-    OcpSolver,
-    RcsProfile,
-)
+from lightcraft_opt.options import CoastScheme, RcsProfile
 from lightcraft_opt.problem_files import objective_names
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
@@ -153,7 +147,7 @@ def test_a_problem_file_reaches_the_problem_in_si(folder: Path) -> None:
         w_B=(0.0, 0.5, 0.0),
         spin=9000 * RPM,
     )
-    assert pr.x_start == pytest.approx(expected_x0, rel=1e-15, abs=1e-15)
+    assert pr.x0 == pytest.approx(expected_x0, rel=1e-15, abs=1e-15)
 
     offset, effort = pr.objective
     assert offset == LateralOffset(1e4, OffsetFrom.BEAM)
@@ -190,7 +184,7 @@ def test_a_minimal_file_takes_the_defaults(folder: Path) -> None:
     pf = load_problem(write(folder, text, "least_energy.toml"))
     assert pf.title == "least_energy"
     assert pf.options == OcpOptions() and pf.options.pulse_map == OCP_PULSE_MAP
-    assert pf.problem.x_start == pytest.approx(initial_state(pf.problem.model), abs=0)
+    assert pf.problem.x0 == pytest.approx(initial_state(pf.problem.model), abs=0)
     assert pf.problem.t0 == 0.0 and pf.problem.controls == () and pf.problem.constraints == ()
 
 

@@ -46,23 +46,17 @@ from lightcraft_opt.layout import (
     rcs_levels,
 )
 from lightcraft_opt.model_files import load_model
-from lightcraft_opt.ocp import CompiledOcp, rollout
-from lightcraft_opt.ocp_problem import (
+from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions
+from lightcraft_opt.ocp.problem import (
     ControlBound,
     ControlEffort,
     OcpProblem,
     RcsEnvelope,
     TrackReference,
 )
-from lightcraft_opt.ocp_results import OcpStatus
-from lightcraft_opt.options import (
-    CoastScheme,
-    HessianApproximation,
-    OcpOptions,
-    PulseMapOptions,
-    RcsProfile,
-    SimulationOptions,
-)
+from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.solve import CompiledOcp, rollout
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile, SimulationOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
 from lightcraft_opt.symbolic.coast import coning_rate_B

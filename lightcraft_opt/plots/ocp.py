@@ -1,7 +1,7 @@
 """Figures of an optimal control solve: controls per pulse, trajectory at the nodes, and the
 beam's offset on the optic against the capture constraint.
 
-Axes-level functions take an :class:`~lightcraft_opt.ocp_results.OcpResult` and an
+Axes-level functions take an :class:`~lightcraft_opt.ocp.result.OcpResult` and an
 optional ``ax`` and return the artists; :func:`ocp_figures` builds the figures the CLI
 saves. Pulse k fires at ``t[k]`` and its input holds until the next pulse, so inputs are
 drawn as steps; states are drawn at the nodes. Positions in L (docs/frames.md: x east,
@@ -17,8 +17,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.ocp_problem import CaptureFraction, OcpProblem
-from lightcraft_opt.ocp_results import OcpResult
+from lightcraft_opt.ocp.problem import CaptureFraction, OcpProblem
+from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.plots.labels import auto_length_unit, length_factor, state_label
 from lightcraft_opt.simulation.result import PulseRecord
 
@@ -223,7 +223,7 @@ def ocp_figures(
     """Every figure of a solve by file name: controls.png, trajectory.png, capture.png.
 
     ``problem`` (the one solved) gives the capture radius, the tightest
-    :class:`~lightcraft_opt.ocp_problem.CaptureFraction` and whether the focus is free.
+    :class:`~lightcraft_opt.ocp.problem.CaptureFraction` and whether the focus is free.
     """
     radius = fraction = focus = None
     if problem is not None:

@@ -10,7 +10,7 @@ The initial guess, unless given, rolls Φ forward from x0 under a nominal policy
 flight's pulse energy, focus at the far end, the beam axis under the craft's mass centre,
 RCS and motor off, moved at most by the slew limits and clipped to the bounds (held
 inputs at their values).
-A failed or infeasible solve returns an :class:`~lightcraft_opt.ocp_results.OcpResult`
+A failed or infeasible solve returns an :class:`~lightcraft_opt.ocp.result.OcpResult`
 with a readable status and the solver's last iterate; bad inputs raise
 :class:`~lightcraft_opt.errors.ParameterError` or :class:`~lightcraft_opt.errors.OptionError`.
 """
@@ -20,18 +20,18 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
-from lightcraft_opt.ocp_problem import OcpProblem
-from lightcraft_opt.ocp_results import OcpResult, OcpStatus
-from lightcraft_opt.options import HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.problem import OcpProblem
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
-from lightcraft_opt.transcription import MultipleShooting
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
 
@@ -65,13 +65,13 @@ def rollout(
     U : (N, map-input size) the inputs applied.
     """
     N, lay = problem.horizon, problem.inputs
-    x_start = problem.x_start if x0 is None else x0
+    x_start = problem.x0 if x0 is None else x0
     pv = problem.p if p is None else p
     t_start = problem.t0 if t0 is None else t0
     nominal = problem.nominal_input()
     pointing = lay.index("pointing_L")
     X, U = [np.asarray(x_start, dtype=float)], []
-    u_last = problem.u_before
+    u_last = cast("np.ndarray | None", problem.u_previous)
     for k in range(N):
         if u is None:
             uk = nominal.copy()
@@ -218,7 +218,7 @@ class CompiledOcp:
     ----------
     pulse_map : the prediction map Φ: re-simulate with it to reproduce the predicted
         trajectory.
-    transcription : the :class:`~lightcraft_opt.transcription.MultipleShooting` NLP.
+    transcription : the :class:`~lightcraft_opt.ocp.transcription.MultipleShooting` NLP.
     solver : the casadi nlpsol Function.
     function : casadi.Function ``ocp_solve(x0, p, t0, u_previous, reference, w0) ->
         (U, X, cost)``: the parametric solve in one Function (U (size, N) map inputs,
@@ -319,12 +319,16 @@ class CompiledOcp:
         """
         pr, tr = self.problem, self.transcription
         nu = pr.inputs.size
-        x0v = checked_vector("x0", pr.x_start if x0 is None else x0, STATE.size)
+        x0v = checked_vector("x0", cast(np.ndarray, pr.x0) if x0 is None else x0, STATE.size)
         pv = checked_vector("p", pr.p if p is None else p, PARAMETERS.size)
         t0v = pr.t0 if t0 is None else float(checked_vector("t0", [t0], 1)[0])
         if (u_previous is None) != (pr.u_previous is None) and u_previous is not None:
             raise ParameterError("u_previous", "the compiled problem has no previous input")
-        u_prev = pr.u_before if u_previous is None else checked_vector("u_previous", u_previous, nu)
+        u_prev = (
+            cast("np.ndarray | None", pr.u_previous)
+            if u_previous is None
+            else checked_vector("u_previous", u_previous, nu)
+        )
         ref = pr.reference() if reference is None else np.asarray(reference, dtype=float)
         if ref.shape != pr.reference().shape or not np.all(np.isfinite(ref)):
             raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
@@ -495,8 +499,8 @@ def solve(
     Parameters
     ----------
     problem : what to solve (ocp_problem.py).
-    options : how (default :class:`~lightcraft_opt.options.OcpOptions`: IPOPT, exact
-        Hessian, Φ with :data:`~lightcraft_opt.options.OCP_PULSE_MAP`).
+    options : how (default :class:`~lightcraft_opt.ocp.options.OcpOptions`: IPOPT, exact
+        Hessian, Φ with :data:`~lightcraft_opt.ocp.options.OCP_PULSE_MAP`).
     initial_guess, warm_start : see :meth:`CompiledOcp.solve`.
     pulse_map : a prebuilt Φ (see :class:`CompiledOcp`).
 

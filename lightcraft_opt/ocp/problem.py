@@ -2,8 +2,8 @@
 
 A problem states the model, the horizon in pulses, the per-pulse controls with their bounds
 and slew-rate limits, the path and terminal constraints and a weighted sum of objective
-terms; how it is transcribed and solved (:mod:`lightcraft_opt.transcription`,
-:mod:`lightcraft_opt.ocp`, :class:`~lightcraft_opt.options.OcpOptions`) is chosen
+terms; how it is transcribed and solved (:mod:`lightcraft_opt.ocp.transcription`,
+:mod:`lightcraft_opt.ocp.solve`, :class:`~lightcraft_opt.ocp.options.OcpOptions`) is chosen
 separately. Everything is plain numpy and validated on creation: a bad value raises
 :class:`~lightcraft_opt.errors.ParameterError` naming the field.
 
@@ -35,7 +35,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from enum import Enum
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -407,10 +407,12 @@ class OcpProblem:
     objective : terms summed into the cost (at least one).
     constraints : path and terminal constraints.
     controls : one :class:`ControlBound` per slot to change the model's limits.
-    x0 : (STATE.size,) state at t0 (default: on the pad, upright, spinning).
+    x0 : (STATE.size,) state at t0 (default: on the pad, upright, spinning); validated
+        into a read-only array on construction.
     parameters : {PARAMETERS slot: value} overriding the model's p (wind, aerodynamics ...).
     t0 : time of the first pulse [s] (gusts depend on time).
-    u_previous : (map-input size,) input of the pulse before t0, for slew limits and
+    u_previous : (map-input size,) input of the pulse before t0 (a read-only array once
+        validated), for slew limits and
         control rates at k = 0 (default: none, pulse 0 is free of them).
     rcs_profile : how the RCS thrust varies over a pulse interval (module docstring); a
         profile other than HOLD needs a craft with an RCS.
@@ -470,16 +472,6 @@ class OcpProblem:
             getattr(self, name).setflags(write=False)
 
     # ----------------------------------------------------------------- derived
-    @property
-    def x_start(self) -> np.ndarray:
-        """(STATE.size,) the validated x0 (a read-only array)."""
-        return cast(np.ndarray, self.x0)
-
-    @property
-    def u_before(self) -> np.ndarray | None:
-        """(map-input size,) the validated u_previous, or None."""
-        return cast("np.ndarray | None", self.u_previous)
-
     @property
     def period(self) -> float:
         """Pulse period T [s]."""

@@ -1,6 +1,6 @@
 """Multiple shooting over pulses: one node per pulse, the pulse map Φ as the dynamics.
 
-The NLP of an :class:`~lightcraft_opt.ocp_problem.OcpProblem` (module docstring there for
+The NLP of an :class:`~lightcraft_opt.ocp.problem.OcpProblem` (module docstring there for
 nodes, pulses and units). Decision variables, stage by stage (k = 0..N-1, then N)::
 
     w = [x_0, a_0, v_0,  x_1, a_1, v_1,  ...,  x_N, a_N]
@@ -16,7 +16,7 @@ the NLP has the stage structure that fatrop and hpipm exploit. Constraints, in o
                       at pulse k (capture, RCS envelope), slew or hold of v_k - a_k
     then:             path and terminal constraints at node N
 
-The RCS envelope of a PHASE_LOCKED problem (:class:`~lightcraft_opt.ocp_problem.RcsEnvelope`)
+The RCS envelope of a PHASE_LOCKED problem (:class:`~lightcraft_opt.ocp.problem.RcsEnvelope`)
 is two rows per pulse and thruster (those with a free input),
 (c_i^2 + s_i^2 - m_i^2) / max_i^2 <= 0 and (c_i^2 + s_i^2 - (max_i - m_i)^2) / max_i^2 <= 0,
 m_i the mean level and c_i, s_i the cosine and sine amplitudes: the thrust then stays in
@@ -35,12 +35,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import assert_never
 
 import casadi as ca
 import numpy as np
 
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
-from lightcraft_opt.ocp_problem import (
+from lightcraft_opt.ocp.problem import (
     CaptureFraction,
     ControlEffort,
     ControlRate,
@@ -67,7 +68,7 @@ __all__ = ["MultipleShooting", "state_scale"]
 def state_scale(problem: OcpProblem) -> np.ndarray:
     """(STATE.size,) natural size of each state entry: 1 m, 1 m/s, 1, 1 rad/s, the launch
     spin, the craft mass for the propellant masses, the horizon for the pulse counter."""
-    spin = abs(float(STATE.get("spin", problem.x_start)))
+    spin = abs(float(STATE.get("spin", np.asarray(problem.x0))))
     mass = problem.model.craft.mass
     natural = {
         "r_L": 1.0,
@@ -231,16 +232,27 @@ class MultipleShooting:
 
         def node_path(k: int) -> None:
             for con in pr.constraints:
-                if isinstance(con, NoGroundContact):
-                    add(altitude[k], con.clearance, math.inf)
-                elif isinstance(con, TiltLimit):
-                    add(cos_tilt[k], math.cos(con.max_tilt), math.inf)
+                match con:
+                    case NoGroundContact():
+                        add(altitude[k], con.clearance, math.inf)
+                    case TiltLimit():
+                        add(cos_tilt[k], math.cos(con.max_tilt), math.inf)
+                    case (
+                        CaptureFraction()
+                        | TerminalAltitude()
+                        | TerminalState()
+                        | EnergyBudget()
+                        | RcsEnvelope()
+                    ):
+                        pass  # on pulses or the last node: below
+                    case _:
+                        assert_never(con)
 
         fractions = [c.fraction for c in pr.constraints if isinstance(c, CaptureFraction)]
         envelope = self._rcs_envelope()
         slew_rows = np.flatnonzero(np.isfinite(pr.slew[self.free]))
         limit = pr.slew[self.free][slew_rows]
-        has_previous = pr.u_before is not None
+        has_previous = pr.u_previous is not None
         for k in range(N):
             add(st.xs[k + 1] - st.x_next[:, k] / sx, 0.0, 0.0)  # gap
             if self.coupled:
@@ -265,12 +277,17 @@ class MultipleShooting:
         node_path(N)
         fired0 = build_node_measures()(x0, p)[3]
         for con in pr.constraints:
-            if isinstance(con, TerminalAltitude):
-                add(altitude[N], con.minimum, con.maximum)
-            elif isinstance(con, TerminalState):
-                add(st.X[STATE.index(con.slot), N], np.array(con.lower), np.array(con.upper))
-            elif isinstance(con, EnergyBudget):
-                add(fired[N] - fired0, -math.inf, con.total)
+            match con:
+                case TerminalAltitude():
+                    add(altitude[N], con.minimum, con.maximum)
+                case TerminalState():
+                    add(st.X[STATE.index(con.slot), N], np.array(con.lower), np.array(con.upper))
+                case EnergyBudget():
+                    add(fired[N] - fired0, -math.inf, con.total)
+                case NoGroundContact() | TiltLimit() | CaptureFraction() | RcsEnvelope():
+                    pass  # on the nodes and pulses: above
+                case _:
+                    assert_never(con)
         lbg = np.concatenate([b[0] for b in bounds]).astype(float)
         ubg = np.concatenate([b[1] for b in bounds]).astype(float)
         return ca.vertcat(*g), lbg, ubg
@@ -318,25 +335,28 @@ class MultipleShooting:
 
         col = 0
         for term in pr.objective:
-            if isinstance(term, LaserEnergy):
-                terms.append(term.weight * ca.sum2(st.U[lay.index("energy"), :]))
-            elif isinstance(term, FinalAltitude):
-                terms.append(-term.weight * altitude[N])
-            elif isinstance(term, TrackReference):
-                size = STATE.slot(term.slot).size
-                err = st.X[STATE.index(term.slot), 1:] - ref[col : col + size, 1:]
-                col += size
-                squares(ca.repmat(ca.DM(term.weights), 1, N), err)
-            elif isinstance(term, LateralOffset):
-                d = drift[:, 1:] if term.relative_to is OffsetFrom.PAD else offset
-                squares(term.weight, d)
-            elif isinstance(term, ControlEffort):
-                squares(term.weight, st.U[lay.index(term.slot), :] - ca.DM(term.reference))
-            else:  # ControlRate: on the free entries of the slot (held ones do not change)
-                slot = lay.slot(term.slot)
-                rows = [i for i, e in enumerate(self.free) if slot.start <= e < slot.stop]
-                rate = (st.V[rows, :] - st.A[rows, :N]) / self.period if rows else ca.MX(0, 1)
-                squares(term.weight, rate)
+            match term:
+                case LaserEnergy():
+                    terms.append(term.weight * ca.sum2(st.U[lay.index("energy"), :]))
+                case FinalAltitude():
+                    terms.append(-term.weight * altitude[N])
+                case TrackReference():
+                    size = STATE.slot(term.slot).size
+                    err = st.X[STATE.index(term.slot), 1:] - ref[col : col + size, 1:]
+                    col += size
+                    squares(ca.repmat(ca.DM(term.weights), 1, N), err)
+                case LateralOffset():
+                    d = drift[:, 1:] if term.relative_to is OffsetFrom.PAD else offset
+                    squares(term.weight, d)
+                case ControlEffort():
+                    squares(term.weight, st.U[lay.index(term.slot), :] - ca.DM(term.reference))
+                case ControlRate():  # on the free entries of the slot (held ones do not change)
+                    slot = lay.slot(term.slot)
+                    rows = [i for i, e in enumerate(self.free) if slot.start <= e < slot.stop]
+                    rate = (st.V[rows, :] - st.A[rows, :N]) / self.period if rows else ca.MX(0, 1)
+                    squares(term.weight, rate)
+                case _:
+                    assert_never(term)
         return ca.vertcat(*terms), ca.vertcat(*residuals) if residuals else ca.MX(0, 1)
 
     def gauss_newton_hessian(self, *, upper: bool = True) -> ca.Function:

@@ -1,0 +1,73 @@
+"""Optimal control over pulses: what is wanted (problem), how it is solved (options,
+transcription, solve) and what came out (result).
+
+- :mod:`.problem`: :class:`OcpProblem`, its objective terms and constraints (numpy only);
+- :mod:`.options`: :class:`OcpOptions` (solver, Hessian, prediction map, move blocking);
+- :mod:`.transcription`: :class:`MultipleShooting`, Φ as the dynamics of an NLP;
+- :mod:`.solve`: :class:`CompiledOcp` (built once, solved warm), :func:`solve`, :func:`rollout`;
+- :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus`.
+
+The what never imports the how (an import-linter contract).
+"""
+
+from lightcraft_opt.ocp.options import (
+    OCP_PULSE_MAP,
+    HessianApproximation,
+    OcpOptions,
+    OcpSolver,
+)
+from lightcraft_opt.ocp.problem import (
+    CaptureFraction,
+    Constraint,
+    ControlBound,
+    ControlEffort,
+    ControlRate,
+    EnergyBudget,
+    FinalAltitude,
+    LaserEnergy,
+    LateralOffset,
+    NoGroundContact,
+    ObjectiveTerm,
+    OcpProblem,
+    OffsetFrom,
+    RcsEnvelope,
+    TerminalAltitude,
+    TerminalState,
+    TiltLimit,
+    TrackReference,
+)
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.solve import CompiledOcp, rollout, solve
+from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
+
+__all__ = [
+    "OCP_PULSE_MAP",
+    "CaptureFraction",
+    "CompiledOcp",
+    "Constraint",
+    "ControlBound",
+    "ControlEffort",
+    "ControlRate",
+    "EnergyBudget",
+    "FinalAltitude",
+    "HessianApproximation",
+    "LaserEnergy",
+    "LateralOffset",
+    "MultipleShooting",
+    "NoGroundContact",
+    "ObjectiveTerm",
+    "OcpOptions",
+    "OcpProblem",
+    "OcpResult",
+    "OcpSolver",
+    "OcpStatus",
+    "OffsetFrom",
+    "RcsEnvelope",
+    "TerminalAltitude",
+    "TerminalState",
+    "TiltLimit",
+    "TrackReference",
+    "rollout",
+    "solve",
+    "state_scale",
+]
