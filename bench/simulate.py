@@ -44,6 +44,7 @@ from scipy.integrate import solve_ivp
 from lightcraft_opt import load_model
 from lightcraft_opt.compiled import compile_pulse_map
 from lightcraft_opt.layout import (
+    ENGINE,
     PARAMETERS,
     PULSE_INPUT,
     STATE,
@@ -57,7 +58,7 @@ from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -116,12 +117,12 @@ class CoastRhs:
 
 def build_jump(model: Model) -> ca.Function:
     """``pulse_jump(x, pulse, p) -> (x_plus, engine)``: the laser jump alone, engine outputs
-    stacked as in Φ (:data:`ENGINE_OUTPUTS`)."""
+    laid out as Φ's (:data:`~lightcraft_opt.layout.ENGINE`)."""
     x = ca.SX.sym("x", STATE.size)
     pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
     p = ca.SX.sym("p", PARAMETERS.size)
     x_plus, eng = pulse_jump(x, pulse, p, model)
-    engine = ca.vertcat(*(eng[name] for name, _, _ in ENGINE_OUTPUTS))
+    engine = ca.vertcat(*(eng[name] for name in ENGINE.names))
     return ca.Function(
         "pulse_jump", [x, pulse, p], [x_plus, engine], ["x", "pulse", "p"], ["x_plus", "engine"]
     )

@@ -9,9 +9,9 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.closed_loop_files import load_closed_loop
 from lightcraft_opt.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
+from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model_files import load_model
@@ -106,9 +106,9 @@ CONTROLLERS = ("mpc", "lqr", "none")
 
 def _closed_loop(args: argparse.Namespace) -> int:
     # here, not at the top: they import python-control (~1 s) that other commands never need
-    from lightcraft_opt.controllers import Controller, LqrController, OpenLoopController
-    from lightcraft_opt.linearize import coning_model
-    from lightcraft_opt.mpc import MpcController
+    from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
+    from lightcraft_opt.control.mpc import MpcController
+    from lightcraft_opt.control.prediction_model import coning_model
 
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)

@@ -77,17 +77,17 @@ import numpy as np
 
 from lightcraft_opt import model_files as mf
 from lightcraft_opt import params
-from lightcraft_opt.errors import ModelFileError, OptionError, ProblemFileError
-from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.options import (
+from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
     ControlWeights,
-    Dispersion,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
+    PlantDispersion,
 )
+from lightcraft_opt.errors import ModelFileError, OptionError, ProblemFileError
+from lightcraft_opt.layout import PARAMETERS, STATE
 
 # problem_files' own readers of the model and [initial] tables: one convention for both
 from lightcraft_opt.problem_files import _initial_state, _model, _problem_errors
@@ -295,7 +295,7 @@ def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
     try:
         return ClosedLoopOptions(
             noise=MeasurementNoise(**noise.values),
-            dispersion=Dispersion(tuple(dispersion.values.items())),
+            dispersion=PlantDispersion(tuple(dispersion.values.items())),
             faults=tuple(int(k) for k in faults),
             **values,
         )
@@ -306,7 +306,7 @@ def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
             for name in t.keys:
                 if f"{prefix}{name}" in message:
                     key = t.key(name)
-        if "Dispersion.relative[" in message:
+        if "PlantDispersion.relative[" in message:
             key = "plant.dispersion"
         if "ClosedLoopOptions.faults" in message:
             key = table.key("fault_pulses")

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.closed_loop_files import ClosedLoopProblem
-from lightcraft_opt.closed_loop_results import ClosedLoopResult, ControllerStatus
+from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.run_files import model_hash
 
 __all__ = ["STEP_COLUMNS", "write_closed_loop_summary", "write_steps_csv"]

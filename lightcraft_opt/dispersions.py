@@ -4,7 +4,7 @@ A campaign declares distributions of a fixed set of quantities (:data:`DISPERSED
 Each run ``index`` of a campaign with seed ``seed`` draws each declared quantity from its
 own stream, ``numpy.random.default_rng(SeedSequence(seed, spawn_key=(index, 1 + j)))``
 with ``j`` the quantity's place in :data:`DISPERSED`, and the closed loop's own seed (noise,
-drop-outs, :class:`~lightcraft_opt.options.Dispersion`) from ``spawn_key=(index, 0)``
+drop-outs, :class:`~lightcraft_opt.control.options.PlantDispersion`) from ``spawn_key=(index, 0)``
 (:func:`loop_seed`). A run therefore depends only on (campaign, seed, index): not on the
 order runs are made in, the worker count or the engine; and adding a dispersion leaves
 the draws of the others unchanged (common random numbers between campaigns).

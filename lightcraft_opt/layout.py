@@ -41,6 +41,8 @@ from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.params import Model
 
 __all__ = [
+    "CONING",
+    "ENGINE",
     "ERROR_STATE",
     "PARAMETERS",
     "PULSE_INPUT",
@@ -222,6 +224,32 @@ ERROR_STATE = VectorLayout(
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
         ("pulses", 1, "-", "", ()),
+    ],
+)
+
+#: Coning coordinates z of the nutation controllers (symbolic/coning_coordinates.py,
+#: docs/frames.md): lateral position and velocity and the tilt of H in the yaw-aligned
+#: frame Y, and the coning vector c_B (transverse over axial angular momentum, in B).
+CONING = VectorLayout(
+    "coning coordinates",
+    [
+        ("r_Y", 2, "m", "Y", ("y1", "y2")),
+        ("v_Y", 2, "m/s", "Y", ("y1", "y2")),
+        ("h_Y", 2, "rad", "Y", ("y1", "y2")),
+        ("c_B", 2, "rad", "B", ("b2", "b3")),
+    ],
+)
+
+#: Per-pulse engine quantities, Φ's second output (symbolic/pulse_map.py).
+ENGINE = VectorLayout(
+    "engine output",
+    [
+        ("energy_captured", 1, "J", "", ()),
+        ("impulse_B", 3, "N s", "B", B123),
+        ("angular_impulse_B", 3, "N m s", "B", B123),
+        ("offset_L", 2, "m", "L", ("east", "north")),
+        ("liner_loss", 1, "kg", "", ()),
+        ("health", 1, "-", "", ()),
     ],
 )
 

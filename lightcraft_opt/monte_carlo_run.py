@@ -3,7 +3,7 @@
 :func:`run_one` is the picklable, top-level function every engine calls (in this process,
 in worker processes, on Dask workers). It draws the run's values
 (:func:`~lightcraft_opt.dispersions.draw`), applies them to the plant's parameters, the
-initial state and the drop-out rate, flies :func:`~lightcraft_opt.closed_loop.closed_loop`
+initial state and the drop-out rate, flies :func:`~lightcraft_opt.control.closed_loop.closed_loop`
 under the campaign's controller ("none" is the open loop: the nominal input every pulse)
 and returns the row of the run table (inputs and outputs, SI, unit in the column name) and
 a row of wall-clock timings, kept apart so that tables can be compared bit for bit.
@@ -31,8 +31,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop
-from lightcraft_opt.closed_loop_results import ClosedLoopResult
+from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
+from lightcraft_opt.control.options import ClosedLoopOptions, MpcOptions
+from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.dispersions import Dispersions, draw, loop_seed
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
@@ -42,13 +43,13 @@ from lightcraft_opt.layout import (
     parameter_values,
     tilted_attitude,
 )
-from lightcraft_opt.options import ClosedLoopOptions, MpcOptions, PulseMapOptions
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 if TYPE_CHECKING:
-    from lightcraft_opt.controllers import Controller
+    from lightcraft_opt.control.controllers import Controller
 
 __all__ = [
     "CAMPAIGN_TIME_BUDGET",
@@ -311,13 +312,13 @@ class _Flyer:
 
 def _controller(c: Campaign, plant: PulseMap) -> Controller:
     # here, not at the top: they import python-control (~1 s) that an open loop never needs
-    from lightcraft_opt.controllers import LqrController, OpenLoopController
+    from lightcraft_opt.control.controllers import LqrController, OpenLoopController
 
     assert plant.inputs is not None
     if c.controller is CampaignController.NONE:
         return OpenLoopController(c.model, plant.inputs)
-    from lightcraft_opt.linearize import coning_model
-    from lightcraft_opt.mpc import MpcController
+    from lightcraft_opt.control.mpc import MpcController
+    from lightcraft_opt.control.prediction_model import coning_model
 
     prediction = coning_model(c.model, pulse_map=plant, cache=True)
     if c.controller is CampaignController.MPC:

@@ -13,14 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.layout import PARAMETERS, VectorLayout
+from lightcraft_opt.layout import ENGINE, PARAMETERS, VectorLayout
 from lightcraft_opt.ocp.problem import CaptureFraction, OcpProblem
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.problem_files import ProblemFile, objective_names
 from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, finite_or_none, model_hash
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.invariants import build_invariants
-from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS
 
 __all__ = [
     "capture_fractions",
@@ -59,7 +58,7 @@ def input_columns(inputs: VectorLayout) -> list[str]:
 def engine_columns() -> list[str]:
     """Column names of Φ's engine outputs (energy_captured_J, impulse_b1_Ns ...,
     offset_x_m, offset_y_m, liner_loss_kg, health), then capture_fraction."""
-    return [c for n, size, unit in ENGINE_OUTPUTS for c in _columns(n, size, unit)] + [
+    return [c for s in ENGINE.slots for c in _columns(s.name, s.size, s.unit)] + [
         "capture_fraction"
     ]
 

@@ -32,12 +32,12 @@ from dataclasses import replace
 import matplotlib.pyplot as plt
 import numpy as np
 
-from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop
+from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.closed_loop_files import load_closed_loop
-from lightcraft_opt.closed_loop_results import ControllerStatus
-from lightcraft_opt.controllers import LqrController, OpenLoopController
-from lightcraft_opt.linearize import coning_model
-from lightcraft_opt.mpc import MpcController
+from lightcraft_opt.control.result import ControllerStatus
+from lightcraft_opt.control.controllers import LqrController, OpenLoopController
+from lightcraft_opt.control.prediction_model import coning_model
+from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.plots.closed_loop import (
     closed_loop_figures,
     plot_closed_loop_coning,

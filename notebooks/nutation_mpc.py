@@ -37,18 +37,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import lightcraft_opt as lc
-from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop
-from lightcraft_opt.controllers import LqrController, OpenLoopController
-from lightcraft_opt.linearize import (
-    ModeKind,
-    climb_point,
-    coning_model,
-    linearize,
-    multipliers,
-    pulse_map_jacobian,
-)
-from lightcraft_opt.mpc import MpcController
-from lightcraft_opt.options import MpcOptions
+from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
+from lightcraft_opt.control.controllers import LqrController, OpenLoopController
+from lightcraft_opt.linearize import ModeKind, climb_point, linearize, multipliers, pulse_map_jacobian
+from lightcraft_opt.control.prediction_model import coning_model
+from lightcraft_opt.control.mpc import MpcController
+from lightcraft_opt.control.options import MpcOptions
 from lightcraft_opt.plots.closed_loop import (
     plot_closed_loop_coning,
     plot_closed_loop_offset,

@@ -25,20 +25,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lightcraft_opt.closed_loop import PLANT_MAP, closed_loop, disperse, measured
-from lightcraft_opt.closed_loop_results import ControllerStatus
-from lightcraft_opt.controllers import LqrController, OpenLoopController
-from lightcraft_opt.layout import PARAMETERS, initial_state, parameter_values
-from lightcraft_opt.linearize import ConingModel, coning_model
-from lightcraft_opt.model_files import load_model
-from lightcraft_opt.mpc import MpcController
-from lightcraft_opt.options import (
+from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop, disperse, measured
+from lightcraft_opt.control.controllers import LqrController, OpenLoopController
+from lightcraft_opt.control.mpc import MpcController
+from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
-    Dispersion,
     MeasurementNoise,
     MpcOptions,
+    PlantDispersion,
 )
+from lightcraft_opt.control.prediction_model import ConingModel, coning_model
+from lightcraft_opt.control.result import ControllerStatus
+from lightcraft_opt.layout import PARAMETERS, initial_state, parameter_values
+from lightcraft_opt.model_files import load_model
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
@@ -49,7 +49,7 @@ HALF_DEGREE = math.radians(0.5)
 #: The plant a controller does not know: inertias 1 %, mass 1 %, impulse, blast angle and
 #: Isp 5 %, spin decay and pitching moment 20 % (1 sigma); noise of a good IMU and
 #: tracker; one pulse in twenty dropped.
-DISPERSION = Dispersion(
+DISPERSION = PlantDispersion(
     (
         ("rotor_axial_inertia_dry", 0.01),
         ("rotor_transverse_inertia_dry", 0.01),

@@ -33,16 +33,24 @@ import pytest
 from conftest import torque_free
 from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
-from lightcraft_opt.closed_loop import PLANT_MAP
-from lightcraft_opt.closed_loop_results import ControllerStatus
-from lightcraft_opt.controllers import stage_weights
+from lightcraft_opt.control.closed_loop import PLANT_MAP
+from lightcraft_opt.control.controllers import stage_weights
+from lightcraft_opt.control.mpc import MpcController, input_basis
+from lightcraft_opt.control.mpc_qp import NutationQp, QpData, QpStatus
+from lightcraft_opt.control.options import (
+    ClosedLoopOptions,
+    ControllerFault,
+    ControlWeights,
+    MpcOptions,
+    MpcSolver,
+)
+from lightcraft_opt.control.prediction_model import ConingModel, coning_model
+from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.layout import STATE, initial_state, nominal_inputs, parameter_values
+from lightcraft_opt.layout import CONING, STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import (
-    ConingModel,
     PulseMapJacobian,
     climb_point,
-    coning_model,
     dlqr_gain,
     linearize,
     lqr,
@@ -50,15 +58,6 @@ from lightcraft_opt.linearize import (
     pulse_map_jacobian,
 )
 from lightcraft_opt.model_files import load_model
-from lightcraft_opt.mpc import MpcController, input_basis
-from lightcraft_opt.mpc_qp import NutationQp, QpData, QpStatus
-from lightcraft_opt.options import (
-    ClosedLoopOptions,
-    ControllerFault,
-    ControlWeights,
-    MpcOptions,
-    MpcSolver,
-)
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.invariants import build_invariants
@@ -128,8 +127,9 @@ def test_coning_coordinates_read_the_coning_angle_and_turn_with_the_yaw():
     assert np.max(np.abs(np.asarray(f(initial_state(MODEL), p)[0]))) < 1e-15
     x = coned(MODEL, 5.0, 0.7, r_L=(0.03, -0.01, 4.0), v_L=(0.2, 0.1, 6.0))
     z, yaw, omega = (np.asarray(v).ravel() for v in f(x, p))
-    assert math.atan(np.hypot(*z[6:8])) == pytest.approx(float(inv(x, p)[3]), abs=1e-14)
-    assert math.degrees(math.atan(np.hypot(*z[6:8]))) == pytest.approx(5.0, rel=1e-12)
+    c = CONING.get("c_B", z)
+    assert math.atan(np.hypot(*c)) == pytest.approx(float(inv(x, p)[3]), abs=1e-14)
+    assert math.degrees(math.atan(np.hypot(*c))) == pytest.approx(5.0, rel=1e-12)
     assert abs(yaw[0]) < 1e-15
     assert omega[0] == pytest.approx(1356.43, abs=0.005)  # physics.md section 2
     psi = 0.9
@@ -140,9 +140,11 @@ def test_coning_coordinates_read_the_coning_angle_and_turn_with_the_yaw():
     assert yaw2[0] == pytest.approx(psi, abs=1e-14)
     c, s = math.cos(psi), math.sin(psi)
     back = np.array([[c, s], [-s, c]])
-    np.testing.assert_allclose(z2[0:2], back @ x[0:2], atol=1e-15)
-    np.testing.assert_allclose(z2[2:4], back @ x[3:5], atol=1e-15)
-    np.testing.assert_allclose(z2[6:8], z[6:8], atol=1e-15)  # c lives in B
+    r_L, v_L = STATE.get("r_L", x), STATE.get("v_L", x)
+    np.testing.assert_allclose(CONING.get("r_Y", z2), back @ r_L[:2], atol=1e-15)
+    np.testing.assert_allclose(CONING.get("v_Y", z2), back @ v_L[:2], atol=1e-15)
+    c_B = CONING.get("c_B", z)
+    np.testing.assert_allclose(CONING.get("c_B", z2), c_B, atol=1e-15)  # c lives in B
     x_scale = state_step_scale(MODEL.craft.mass)
     p_scale = np.where(p != 0.0, 1e-3 * np.abs(p), 1e-4)
     assert_jacobians_match_finite_differences(f, [x, p], scale=[x_scale, p_scale])
@@ -230,7 +232,12 @@ def _one_pulse_error(
     frame = controller.frame
     meas = frame.measure(x)
     A, B = controller.prediction.horizon(
-        meas.spin, meas.omega, meas.altitude, meas.climb_rate, 1, coning=np.hypot(*meas.z[6:8])
+        meas.spin,
+        meas.omega,
+        meas.altitude,
+        meas.climb_rate,
+        1,
+        coning=float(np.hypot(*CONING.get("c_B", meas.z))),
     )
     predicted = A[0] @ meas.z + B[0] @ du
     x_op = initial_state(MODEL, r_L=(0.0, 0.0, meas.altitude), v_L=(0.0, 0.0, meas.climb_rate))
@@ -238,12 +245,12 @@ def _one_pulse_error(
     drift = frame.measure(np.asarray(phi.step(x_op, u_op, p, 0.0)[0]).ravel()).z
     x1 = np.asarray(phi.step(x, frame.map_input(du, meas.yaw), p, 0.0)[0]).ravel()
     e = frame.measure(x1).z - drift - predicted
-    return np.array([np.hypot(*e[6:8]), np.hypot(*e[4:6]), np.hypot(*e[0:2]), np.hypot(*e[2:4])])
+    return _parts(e)
 
 
 def _parts(z: np.ndarray) -> np.ndarray:
     """(|c|, |h|, |r|, |v|) of z (8,)."""
-    return np.array([np.hypot(*z[6:8]), np.hypot(*z[4:6]), np.hypot(*z[0:2]), np.hypot(*z[2:4])])
+    return np.array([np.hypot(*CONING.get(n, z)) for n in ("c_B", "h_Y", "r_Y", "v_Y")])
 
 
 def test_prediction_error_is_second_order_and_measured_at_5_degrees(mpc):

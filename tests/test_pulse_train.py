@@ -28,6 +28,9 @@ from conftest import table1_flight5
 from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
 from lightcraft_opt.layout import (
+    ENGINE as ENGINE_LAYOUT,
+)
+from lightcraft_opt.layout import (
     PARAMETERS,
     PULSE_INPUT,
     STATE,
@@ -61,7 +64,7 @@ from lightcraft_opt.symbolic.gravity import (
 )
 from lightcraft_opt.symbolic.invariants import build_invariants
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.rotation import cross, dcm
 
 EPS = np.finfo(float).eps
@@ -83,13 +86,9 @@ ENGINE = Engine(
 
 
 def _engine_report(eng: ca.DM) -> dict[str, np.ndarray]:
-    """Φ's second output split by name (pulse_map.ENGINE_OUTPUTS)."""
+    """Φ's second output split by name (layout.ENGINE, imported as ENGINE_LAYOUT)."""
     flat = np.asarray(eng, dtype=float).ravel()
-    out, start = {}, 0
-    for name, size, _unit in ENGINE_OUTPUTS:
-        out[name] = flat[start : start + size]
-        start += size
-    return out
+    return {name: flat[ENGINE_LAYOUT.index(name)] for name in ENGINE_LAYOUT.names}
 
 
 def _R_LB(x: np.ndarray) -> np.ndarray:

@@ -15,20 +15,16 @@ import numpy as np
 import pytest
 
 from lightcraft_opt import load_model, simulate
-from lightcraft_opt.layout import initial_state
+from lightcraft_opt.layout import ENGINE, initial_state
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 
 
 def _engine_column(name: str) -> slice:
-    start = 0
-    for n, size, _ in ENGINE_OUTPUTS:
-        if n == name:
-            return slice(start, start + size)
-        start += size
-    raise KeyError(name)
+    slot = ENGINE.slot(name)
+    return slice(slot.start, slot.stop)
 
 
 def _offsets(result: SimulationResult) -> np.ndarray:

@@ -22,20 +22,14 @@ The modules, in the order they build on each other:
   (:func:`lqr_policy`);
 - :mod:`.stability_grid`: multipliers over spin rate × beam offset
   (:func:`stability_map`);
-- :mod:`.coning_model`: linear models in coning coordinates scheduled on spin and
-  altitude (:func:`coning_model`), the prediction model of the nutation MPC;
 - :mod:`.signal_names`: the names of layout entries, shared by the above.
+
+The nutation MPC's prediction model, linear models in coning coordinates scheduled on
+spin and altitude, is :mod:`lightcraft_opt.control.prediction_model`.
 
 Everything public is re-exported here: ``from lightcraft_opt.linearize import ...``.
 """
 
-from lightcraft_opt.linearize.coning_model import (
-    CONING_INPUTS,
-    CONING_STATES,
-    ConingModel,
-    coning_model,
-    turn,
-)
 from lightcraft_opt.linearize.modes import (
     Controllability,
     ModeKind,
@@ -58,10 +52,7 @@ from lightcraft_opt.linearize.state_feedback import LqrResult, dlqr_gain, lqr, l
 from lightcraft_opt.linearize.state_space import REDUCED_STATES, Coordinates, linearize
 
 __all__ = [
-    "CONING_INPUTS",
-    "CONING_STATES",
     "REDUCED_STATES",
-    "ConingModel",
     "Controllability",
     "Coordinates",
     "LqrResult",
@@ -73,7 +64,6 @@ __all__ = [
     "StabilityMap",
     "beam_riding_modes",
     "climb_point",
-    "coning_model",
     "controllability",
     "dlqr_gain",
     "error_state",
@@ -84,5 +74,4 @@ __all__ = [
     "pulse_map_jacobian",
     "stability_map",
     "trim_hover",
-    "turn",
 ]

@@ -33,7 +33,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.linearize.signal_names import _select
+from lightcraft_opt.linearize.signal_names import select_entries
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
@@ -119,7 +119,7 @@ def error_state(
     """
     x_op = point.x if isinstance(point, OperatingPoint) else point
     dx = np.asarray(_chart()[0](x_op, checked_vector("x", x, STATE.size))).ravel()
-    return dx[_select(ERROR_STATE, states, "states")]
+    return dx[select_entries(ERROR_STATE, states, "states")]
 
 
 # --------------------------------------------------------------------------- operating points

@@ -12,7 +12,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import VectorLayout
 
 
-def _names(layout: VectorLayout) -> list[str]:
+def entry_names(layout: VectorLayout) -> list[str]:
     """``slot[component]`` per entry (``slot`` for scalars): the signal names."""
     out: list[str] = []
     for s in layout.slots:
@@ -21,9 +21,9 @@ def _names(layout: VectorLayout) -> list[str]:
     return out
 
 
-def _select(layout: VectorLayout, wanted: Sequence[str] | None, what: str) -> list[int]:
+def select_entries(layout: VectorLayout, wanted: Sequence[str] | None, what: str) -> list[int]:
     """Indices of ``wanted`` entries (slot names or ``slot[component]``) in ``layout``."""
-    names = _names(layout)
+    names = entry_names(layout)
     if wanted is None:
         return list(range(layout.size))
     out: list[int] = []

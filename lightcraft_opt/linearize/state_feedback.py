@@ -22,7 +22,7 @@ from lightcraft_opt.linearize.modes import (
     multipliers,
 )
 from lightcraft_opt.linearize.operating_points import OperatingPoint, error_state
-from lightcraft_opt.linearize.signal_names import _select
+from lightcraft_opt.linearize.signal_names import select_entries
 from lightcraft_opt.params import Model
 
 
@@ -115,7 +115,7 @@ def lqr_policy(
     linear model stay at the point's values). The input layout is the point's
     (:meth:`OperatingPoint.input_layout`: that of the pulse map it was found with)."""
     ulay = point.input_layout(model)
-    iu = _select(ulay, gains.inputs, "gains.inputs")
+    iu = select_entries(ulay, gains.inputs, "gains.inputs")
     states = gains.states
 
     def policy(k: int, t: float, x: np.ndarray) -> np.ndarray:

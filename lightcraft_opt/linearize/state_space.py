@@ -36,7 +36,7 @@ from lightcraft_opt.linearize.operating_points import (
     _chart,
     _jacobian,
 )
-from lightcraft_opt.linearize.signal_names import _names, _select
+from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.error_state import ERROR_STATE
@@ -110,9 +110,9 @@ def linearize(
     else:
         allowed = [c.value for c in Coordinates]
         raise ParameterError("coordinates", f"must be one of {allowed}, got {coordinates!r}")
-    keep = _select(layout, wanted, "states")
-    ukeep = _select(ulay, inputs, "inputs")
-    names = [_names(layout)[i] for i in keep]
+    keep = select_entries(layout, wanted, "states")
+    ukeep = select_entries(ulay, inputs, "inputs")
+    names = [entry_names(layout)[i] for i in keep]
     A_k, B_k = A[np.ix_(keep, keep)], B[np.ix_(keep, ukeep)]
     return control.ss(
         A_k,
@@ -122,6 +122,6 @@ def linearize(
         jac.pulse_map.period,
         states=names,
         outputs=names,
-        inputs=[_names(ulay)[i] for i in ukeep],
+        inputs=[entry_names(ulay)[i] for i in ukeep],
         name=f"{model.name} pulse map ({coordinates.value})",
     )

@@ -44,7 +44,7 @@ class OcpResult:
     t : (N + 1,) node times [s]; pulse k fires at t[k].
     x : (N + 1, STATE.size) predicted states at the nodes (docs/frames.md), x[0] = x0.
     u : (N, map-input size) optimal map inputs, one row per pulse; labels in ``inputs``.
-    engine : (N, 11) Φ's engine outputs per pulse (pulse_map.ENGINE_OUTPUTS): captured
+    engine : (N, 11) Φ's engine outputs per pulse (layout.ENGINE): captured
         energy [J], impulse_B [N s, B], angular_impulse_B [N m s, B], offset_L [m, L],
         liner_loss [kg], health [-].
     inputs : layout of a row of ``u``.

@@ -1,7 +1,7 @@
 """Closed-loop flights: coning, tilt, beam offset and RCS use pulse by pulse, and the
 controller's solve times.
 
-Each axes-level function takes a :class:`~lightcraft_opt.closed_loop_results.ClosedLoopResult`
+Each axes-level function takes a :class:`~lightcraft_opt.control.result.ClosedLoopResult`
 and an optional axes, draws, labels the line with the controller's name (so that several
 controllers drawn on one axes compare), and returns the artists (STYLE rule 10); none
 calls ``show()``. :func:`closed_loop_figures` builds the files the CLI writes. Angles are
@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lightcraft_opt.closed_loop_results import ClosedLoopResult
+from lightcraft_opt.control.result import ClosedLoopResult
 
 __all__ = [
     "closed_loop_figures",

@@ -9,13 +9,11 @@ from __future__ import annotations
 
 import casadi as ca
 
-from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
 from lightcraft_opt.symbolic.rotation import dcm
 
 __all__ = ["build_node_measures", "build_pulse_measures"]
 
-ENGINE_SIZE = sum(size for _, size, _ in ENGINE_OUTPUTS)
 
 
 def build_node_measures() -> ca.Function:
@@ -53,7 +51,7 @@ def build_pulse_measures() -> ca.Function:
     """casadi.Function ``ocp_pulse_measures(engine, p) -> (offset_L, capture_use)``.
 
     Inputs: ``engine`` (11,) Φ's engine output of one pulse
-    (:data:`~lightcraft_opt.symbolic.pulse_map.ENGINE_OUTPUTS`); ``p`` (PARAMETERS.size,).
+    (:data:`~lightcraft_opt.layout.ENGINE`); ``p`` (PARAMETERS.size,).
 
     Outputs
     -------
@@ -61,14 +59,9 @@ def build_pulse_measures() -> ca.Function:
     capture_use : (|offset_L| / capture_radius)^2 [-], smooth everywhere: the squared
         fraction of the capture radius at which the beam axis meets the optic plane.
     """
-    eng = ca.SX.sym("engine", ENGINE_SIZE)
+    eng = ca.SX.sym("engine", ENGINE.size)
     p = ca.SX.sym("p", PARAMETERS.size)
-    start = 0
-    for name, size, _ in ENGINE_OUTPUTS:
-        if name == "offset_L":
-            break
-        start += size
-    offset = eng[start : start + 2]
+    offset = ENGINE.get("offset_L", eng)
     use = ca.sumsqr(offset) / PARAMETERS.get("capture_radius", p) ** 2
     return ca.Function(
         "ocp_pulse_measures", [eng, p], [offset, use], ["engine", "p"], ["offset_L", "capture_use"]

@@ -24,6 +24,7 @@ import casadi as ca
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import (
+    ENGINE,
     PARAMETERS,
     PULSE_INPUT,
     STATE,
@@ -40,18 +41,7 @@ from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.rcs import phase_locked_thrust
 
-__all__ = ["ENGINE_OUTPUTS", "PulseMap", "build_pulse_map"]
-
-#: Per-pulse engine quantities, in the order of Φ's second output.
-ENGINE_OUTPUTS = (
-    ("energy_captured", 1, "J"),
-    ("impulse_B", 3, "N s"),
-    ("angular_impulse_B", 3, "N m s"),
-    ("offset_L", 2, "m"),
-    ("liner_loss", 1, "kg"),
-    ("health", 1, "-"),
-)
-
+__all__ = ["PulseMap", "build_pulse_map"]
 
 @dataclass(frozen=True)
 class PulseMap:
@@ -60,7 +50,7 @@ class PulseMap:
     Attributes
     ----------
     step : casadi.Function ``pulse_map(x, u, p, t) -> (x_next, engine)``: state after
-        one pulse and its coast; ``engine`` stacks :data:`ENGINE_OUTPUTS`.
+        one pulse and its coast; ``engine`` is laid out as :data:`~lightcraft_opt.layout.ENGINE`.
     dense : casadi.Function ``pulse_map_dense(x, u, p, t) -> (X, engine)``:
         (STATE.size, dense) states at t + T k / dense, k = 1..dense, after the pulse
         (the last is x_next), and the engine outputs.
@@ -110,7 +100,7 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
         order = 2 if opts.scheme is CoastScheme.SPLIT else 4
         states = split_coast(f, p, model, t, x_plus, period, opts.substeps, order=order)
     x_next = _normalised(states[-1])
-    engine = ca.vertcat(*(eng[name] for name, _, _ in ENGINE_OUTPUTS))
+    engine = ca.vertcat(*(eng[name] for name in ENGINE.names))
     every = opts.substeps // opts.dense
     samples = [states[k - 1] for k in range(every, opts.substeps, every)] + [x_next]
     dense = ca.horzcat(*samples)

@@ -45,6 +45,7 @@ import numpy as np
 from lightcraft_opt.compiled import cache_dir
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
+    CONING,
     STATE,
     VectorLayout,
     initial_state,
@@ -56,7 +57,7 @@ from lightcraft_opt.linearize.operating_points import (
     climb_point,
     pulse_map_jacobian,
 )
-from lightcraft_opt.linearize.signal_names import _names, _select
+from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
@@ -98,7 +99,7 @@ DEFAULT_SPINS = tuple(round(0.80 + 0.01 * k, 2) for k in range(26))
 #: Altitudes of the default grid [m]: dense near the pad, where the beam-riding gains
 #: change fastest (17.5 -> 10.6 m/s of lateral velocity per m of offset from 0 to 10 m).
 DEFAULT_ALTITUDES = (0.0, 0.5, 1.0, 2.0, 4.0, 7.0, 11.0, 16.0, 22.0, 30.0)
-_C = slice(6, 8)  # the coning rows of z
+_C = CONING.index("c_B")  # the coning rows of z
 _L_ROWS = (slice(0, 2), slice(2, 4), slice(4, 6))  # rows of L vectors read in Y: r, v, h
 
 
@@ -347,13 +348,13 @@ def _linearise_grid(
     phi = jac.pulse_map
     lay = phi.inputs
     assert lay is not None
-    keep = _select(ERROR_STATE, CONING_STATES, "states")
+    keep = select_entries(ERROR_STATE, CONING_STATES, "states")
     coords = build_coning_coordinates()
     tjac = _coordinate_jacobian()
     ns, na = s_grid.size, a_grid.size
-    index = np.asarray(_select(lay, CONING_INPUTS, "inputs"))
-    A = np.empty((ns, na, 8, 8))
-    B = np.empty((ns, na, 8, index.size))
+    index = np.asarray(select_entries(lay, CONING_INPUTS, "inputs"))
+    A = np.empty((ns, na, CONING.size, CONING.size))
+    B = np.empty((ns, na, CONING.size, index.size))
     ratio = np.empty((ns, na))
     decay = np.empty((ns, na))
     ispin = STATE.slot("spin").start
@@ -383,7 +384,7 @@ def _linearise_grid(
         omega_per_spin=ratio,
         spin_decay=decay,
         period=phi.period,
-        inputs=tuple(_names(lay)[k] for k in index),
+        inputs=tuple(entry_names(lay)[k] for k in index),
         input_index=index,
         map_inputs=lay,
         u_op=u_op,
@@ -425,12 +426,12 @@ def _load(path: Path, lay: VectorLayout, u_op: np.ndarray, name: str) -> ConingM
     with np.load(path) as data:
         arrays = {k: np.array(data[k]) for k in _ARRAYS}
         period = float(data["period"])
-    index = np.asarray(_select(lay, CONING_INPUTS, "inputs"))
+    index = np.asarray(select_entries(lay, CONING_INPUTS, "inputs"))
     assert {f.name for f in fields(ConingModel)} >= set(_ARRAYS)
     return ConingModel(
         **arrays,
         period=period,
-        inputs=tuple(_names(lay)[k] for k in index),
+        inputs=tuple(entry_names(lay)[k] for k in index),
         input_index=index,
         map_inputs=lay,
         u_op=u_op,

@@ -2,7 +2,7 @@
 
 :class:`OpenLoopController` ("none") flies the nominal input; :class:`LqrController`
 ("lqr") is a discrete LQR on the same scheduled prediction model, objective and inputs
-as the MPC (:mod:`lightcraft_opt.mpc`), its input projected onto the thrust envelope. Both
+as the MPC (:mod:`lightcraft_opt.control.mpc`), its input projected onto the thrust envelope. Both
 share :class:`ConingFrame`: the measurement of the coning coordinates from a state and
 the conversion of the model's inputs (beam pointing in the yaw-aligned frame, RCS in B)
 back to Φ's map input (pointing in L).
@@ -21,11 +21,12 @@ from typing import Protocol
 
 import numpy as np
 
-from lightcraft_opt.closed_loop_results import ControllerStatus, StepStats
+from lightcraft_opt.control.options import ControllerFault, ControlWeights
+from lightcraft_opt.control.prediction_model import ConingModel, turn
+from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, VectorLayout, nominal_inputs, parameter_values
-from lightcraft_opt.linearize import ConingModel, dlqr_gain, turn
-from lightcraft_opt.options import ControllerFault, ControlWeights
+from lightcraft_opt.layout import CONING, STATE, VectorLayout, nominal_inputs, parameter_values
+from lightcraft_opt.linearize import dlqr_gain
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
 
@@ -204,7 +205,7 @@ class StageWeights:
 
 
 def stage_weights(weights: ControlWeights, inputs: tuple[str, ...]) -> StageWeights:
-    """The objective of :class:`~lightcraft_opt.options.ControlWeights` as matrices.
+    """The objective of :class:`~lightcraft_opt.control.options.ControlWeights` as matrices.
 
     z = (r_Y, v_Y, h_Y, c_B) (2 each); ``inputs`` the model inputs' names (pointing_L[...],
     rcs_thrust[i], rcs_cos[i], rcs_sin[i]). Coning |c|^2, tilt |h - c|^2 (the axis b1),
@@ -214,8 +215,8 @@ def stage_weights(weights: ControlWeights, inputs: tuple[str, ...]) -> StageWeig
     m = len(inputs)
     w = weights
     I2 = np.eye(2)
-    r, v, h, c = slice(0, 2), slice(2, 4), slice(4, 6), slice(6, 8)
-    Q = np.zeros((8, 8))
+    r, v, h, c = (CONING.index(name) for name in ("r_Y", "v_Y", "h_Y", "c_B"))
+    Q = np.zeros((CONING.size, CONING.size))
     Q[c, c] += w.coning * I2
     Q[h, h] += w.tilt * I2
     Q[c, c] += w.tilt * I2
@@ -229,7 +230,7 @@ def stage_weights(weights: ControlWeights, inputs: tuple[str, ...]) -> StageWeig
     if len(pointing) != 2 or not means:
         raise ParameterError("inputs", f"needs pointing_L and the RCS inputs, got {inputs}")
     R = np.zeros((m, m))
-    S = np.zeros((8, m))
+    S = np.zeros((CONING.size, m))
     g = np.zeros(m)
     R[np.ix_(pointing, pointing)] += (w.offset + w.pointing) * I2
     S[r, pointing] -= w.offset * I2
@@ -312,13 +313,13 @@ class LqrController:
     ) -> np.ndarray:
         start = time.perf_counter()
         meas = self.frame.measure(x)
-        phase = self.phase.update(meas.z[6:8])
+        phase = self.phase.update(CONING.get("c_B", meas.z))
         t0 = time.perf_counter()
         K, A, B = self.gain(meas.spin, meas.omega, meas.altitude, phase)
         solve = time.perf_counter() - t0
         du = -K @ meas.z
         u = self.frame.map_input(du, meas.yaw)
-        self.phase.expect((A @ meas.z + B @ du)[6:8])
+        self.phase.expect(CONING.get("c_B", A @ meas.z + B @ du))
         step = time.perf_counter() - start
         self.last = StepStats(ControllerStatus.FEEDBACK, solve, step, 0, "dlqr")
         return u

@@ -11,8 +11,8 @@ The loop is written out (STYLE rule 1)::
 The plant is the pulse map Φ (default options, PHASE_LOCKED RCS: SPLIT4 with 32
 substeps resolves the 216 Hz forcing) with its own parameters: the model's, with the
 problem's overrides (wind, gusts) and the dispersion of
-:class:`~lightcraft_opt.options.Dispersion` on top; the controller keeps the undispersed
-model and calm air. Flights end as :func:`lightcraft_opt.simulate`'s do (duration,
+:class:`~lightcraft_opt.control.options.PlantDispersion` on top; the controller keeps
+the undispersed model and calm air. Flights end as :func:`lightcraft_opt.simulate`'s do (duration,
 landing, leaving the beam, a non-finite state), by the same bookkeeping.
 """
 
@@ -25,9 +25,11 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.closed_loop_results import ClosedLoopResult, ControllerLog, StepStats
+from lightcraft_opt.control.options import ClosedLoopOptions, MeasurementNoise, PlantDispersion
+from lightcraft_opt.control.result import ClosedLoopResult, ControllerLog, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
+    ENGINE,
     ERROR_STATE,
     PARAMETERS,
     STATE,
@@ -35,33 +37,25 @@ from lightcraft_opt.layout import (
     initial_state,
     parameter_values,
 )
-from lightcraft_opt.options import (
-    ClosedLoopOptions,
-    Dispersion,
-    MeasurementNoise,
-    PulseMapOptions,
-    RcsProfile,
-)
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end-of-flight rule
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.error_state import build_error_state
 from lightcraft_opt.symbolic.invariants import build_invariants
-from lightcraft_opt.symbolic.pulse_map import ENGINE_OUTPUTS, PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
-    from lightcraft_opt.controllers import Controller
+    from lightcraft_opt.control.controllers import Controller
 
 __all__ = ["closed_loop", "disperse", "measured"]
 
 #: Map of the plant unless given: Φ's defaults with the phase-locked RCS profile.
 PLANT_MAP = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED)
-_NAMES = [name for name, _, _ in ENGINE_OUTPUTS]
-_OFFSET = sum(size for _, size, _ in ENGINE_OUTPUTS[: _NAMES.index("offset_L")])
 
 
-def disperse(p: np.ndarray, dispersion: Dispersion, rng: np.random.Generator) -> np.ndarray:
+def disperse(p: np.ndarray, dispersion: PlantDispersion, rng: np.random.Generator) -> np.ndarray:
     """``p`` with each named entry times 1 + σ n, n ~ N(0, 1) clipped to ±3, drawn in the
     order of ``dispersion.relative`` (one draw per component)."""
     out = np.array(p, dtype=float)
@@ -186,7 +180,7 @@ def closed_loop(
         pulse_t=record.t,
         coning=np.asarray(coning, dtype=float).ravel(),
         tilt=np.asarray(tilt, dtype=float).ravel(),
-        offset=np.hypot(*record.engine[:, _OFFSET : _OFFSET + 2].T) if k_done else np.empty(0),
+        offset=np.hypot(*ENGINE.get("offset_L", record.engine.T)) if k_done else np.empty(0),
         rcs_used=rcs[0] - rcs,
         commanded=np.array(commanded).reshape(-1, lay.size)[:k_done],
         dropped=dropped[:k_done],

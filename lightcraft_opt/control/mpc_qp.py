@@ -26,8 +26,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.control.options import ControllerFault, MpcSolver
 from lightcraft_opt.errors import OptionError, ParameterError
-from lightcraft_opt.options import ControllerFault, MpcSolver
 
 __all__ = ["NutationQp", "QpData", "QpSolution", "QpStatus", "shift_stages"]
 

@@ -54,12 +54,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from lightcraft_opt.closed_loop_results import ControllerStatus, StepStats
-from lightcraft_opt.controllers import ConingFrame, Measurement, PhaseTracker, stage_weights
+from lightcraft_opt.control.controllers import ConingFrame, Measurement, PhaseTracker, stage_weights
+from lightcraft_opt.control.mpc_qp import NutationQp, QpData, QpSolution, QpStatus
+from lightcraft_opt.control.options import ControllerFault, MpcOptions, MpcSolver
+from lightcraft_opt.control.prediction_model import ConingModel, coning_model
+from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.linearize import ConingModel, PulseMapJacobian, coning_model, dlqr_gain
-from lightcraft_opt.mpc_qp import NutationQp, QpData, QpSolution, QpStatus
-from lightcraft_opt.options import ControllerFault, MpcOptions, MpcSolver
+from lightcraft_opt.layout import CONING
+from lightcraft_opt.linearize import PulseMapJacobian, dlqr_gain
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 
@@ -125,7 +127,7 @@ def input_constraints(
         hi.append(high)
         soft.append(slack)
 
-    zero = np.zeros(8)
+    zero = np.zeros(CONING.size)
     for i, top in enumerate(max_thrust):
         im, ic, i_s = (names.index(f"{s}[{i}]") for s in ("rcs_thrust", "rcs_cos", "rcs_sin"))
         for phi in phis:
@@ -141,7 +143,7 @@ def input_constraints(
         a = np.zeros(m)
         a[ip] = n
         add(a, zero, -k * pointing_limit, k * pointing_limit, 0.0)
-        zrow = np.zeros(8)
+        zrow = np.zeros(CONING.size)
         zrow[0:2] = n  # r_Y
         add(-a, zrow, -np.inf, k * max_offset, -1.0)
         add(-a, zrow, -k * max_offset, np.inf, 1.0)
@@ -154,8 +156,8 @@ class MpcController:
     Parameters
     ----------
     model : the controller's model of the craft (its numbers are what it believes).
-    options : horizon, weights, solver, budget (:class:`~lightcraft_opt.options.MpcOptions`).
-    prediction : the scheduled linear model (``linearize.coning_model``); built from
+    options : horizon, weights, solver, budget (:class:`.options.MpcOptions`).
+    prediction : the scheduled linear model (``prediction_model.coning_model``); built from
         ``pulse_map`` when not given (~15 s for the Jacobian Function at 32 substeps).
     pulse_map : Φ with the PHASE_LOCKED profile, or its Jacobian Function.
     p : the controller's parameter vector (default the model's).
@@ -217,7 +219,7 @@ class MpcController:
         self.qp = NutationQp(data, opts.horizon, opts.solver, opts.max_iter, opts.tol)
         # the first call allocates the solver's memory (~5 ms): pay it here, not in flight
         A_h, B_h = pred.horizon(spin, omega, terminal_altitude, 0.0, opts.horizon)
-        self.qp.solve(np.zeros(8), A_h, B_h)
+        self.qp.solve(np.zeros(CONING.size), A_h, B_h)
         self.build_time = self.qp.build_time
         self.phase = PhaseTracker()
         self.reset()
@@ -251,7 +253,7 @@ class MpcController:
         start = time.perf_counter()
         opts = self.options
         meas = self.frame.measure(np.asarray(x, dtype=float))
-        self.phase.update(meas.z[6:8])
+        self.phase.update(CONING.get("c_B", meas.z))
         warm = self._start if opts.warm_start else None
         sol = self._solve(
             meas, self._expected_coning(meas.z, self.solution, self._age), warm, fault
@@ -272,7 +274,7 @@ class MpcController:
             self._start = self.qp.shifted(sol)
             u = self.frame.map_input(sol.du[0], meas.yaw)
             status, message = ControllerStatus.SOLVED, sol.message
-            self.phase.expect(sol.z[1, 6:8])
+            self.phase.expect(sol.z[1, CONING.index("c_B")])
         else:
             u = self._fallback()
             if late and sol.status is QpStatus.SOLVED:
@@ -306,13 +308,13 @@ class MpcController:
     def _expected_coning(self, z: np.ndarray, plan: QpSolution | None, age: int) -> np.ndarray:
         """(N,) |c| at each pulse of the horizon: measured now, then the prediction of
         ``plan`` made ``age + 1`` pulses ago (held at the measured value without one).
-        It sets the yaw turn of the prediction (linearize.coning_model), the one term of
+        It sets the yaw turn of the prediction (control.prediction_model), the one term of
         the model quadratic in the coning: evaluated along the last plan, as a real-time
         iteration linearises about the shifted previous solution."""
         N = self.options.horizon
-        c = np.full(N, float(np.hypot(z[6], z[7])))
+        c = np.full(N, float(np.hypot(*CONING.get("c_B", z))))
         if plan is not None:
-            ahead = np.hypot(*plan.z[age + 2 :, 6:8].T)
+            ahead = np.hypot(*plan.z[age + 2 :, CONING.index("c_B")].T)
             n = min(N - 1, ahead.size)
             c[1 : 1 + n] = ahead[:n]
         return c
@@ -325,5 +327,5 @@ class MpcController:
             self._start = self.qp.shifted(self._start)
         if self.solution is None or self._age >= self.options.horizon:
             return self.frame.project(self.prediction.u_op.copy())
-        self.phase.expect(self.solution.z[self._age + 1, 6:8])
+        self.phase.expect(self.solution.z[self._age + 1, CONING.index("c_B")])
         return self.frame.map_input(self.solution.du[self._age], self._yaw)

@@ -1,0 +1,80 @@
+"""Control at pulse rate: controllers, the nutation MPC and its QP, their prediction model,
+and the closed loop that flies them on the full pulse map Φ.
+
+- :mod:`.options`: :class:`MpcOptions`, :class:`ControlWeights`, :class:`ClosedLoopOptions`
+  (noise, plant dispersion, drop-outs, injected faults);
+- :mod:`.prediction_model`: linear models in coning coordinates scheduled on spin and
+  altitude (:func:`coning_model`), the MPC's and the LQR controller's prediction;
+- :mod:`.controllers`: the ``step(x)`` interface, :class:`OpenLoopController`,
+  :class:`LqrController`, and the coning frame and phase tracker they share;
+- :mod:`.mpc_qp`: the stage-structured QP (HPIPM, ...); :mod:`.mpc`: :class:`MpcController`;
+- :mod:`.closed_loop`: :func:`closed_loop`, ``u = controller.step(x); x = Φ(x, u, p)``;
+- :mod:`.result`: :class:`ClosedLoopResult` with the controller's log and step statistics.
+
+The what (options, result) never imports the how (an import-linter contract).
+"""
+
+from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
+from lightcraft_opt.control.controllers import (
+    Controller,
+    LqrController,
+    Measurement,
+    OpenLoopController,
+    StageWeights,
+    stage_weights,
+)
+from lightcraft_opt.control.mpc import MpcController
+from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
+from lightcraft_opt.control.options import (
+    ClosedLoopOptions,
+    ControllerFault,
+    ControlWeights,
+    MeasurementNoise,
+    MpcOptions,
+    MpcSolver,
+    PlantDispersion,
+)
+from lightcraft_opt.control.prediction_model import (
+    CONING_INPUTS,
+    CONING_STATES,
+    ConingModel,
+    coning_model,
+    turn,
+)
+from lightcraft_opt.control.result import (
+    ClosedLoopResult,
+    ControllerLog,
+    ControllerStatus,
+    StepStats,
+)
+
+__all__ = [
+    "CONING_INPUTS",
+    "CONING_STATES",
+    "ClosedLoopOptions",
+    "ClosedLoopResult",
+    "ConingModel",
+    "ControlWeights",
+    "Controller",
+    "ControllerFault",
+    "ControllerLog",
+    "ControllerStatus",
+    "LqrController",
+    "Measurement",
+    "MeasurementNoise",
+    "MpcController",
+    "MpcOptions",
+    "MpcSolver",
+    "NutationQp",
+    "OpenLoopController",
+    "PlantDispersion",
+    "QpStatus",
+    "StageWeights",
+    "StepStats",
+    "closed_loop",
+    "coning_model",
+    "disperse",
+    "measured",
+    "stage_weights",
+    "turn",
+]
