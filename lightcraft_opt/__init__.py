@@ -3,9 +3,9 @@
 Frames and units: docs/frames.md. Everything inside is SI.
 """
 
-from lightcraft_opt.calibrate import CalibrationOptions, calibrate
-from lightcraft_opt.calibration_problem import Track
-from lightcraft_opt.calibration_results import CalibrationResult, CalibrationStatus
+from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
+from lightcraft_opt.calibration.problem import Track
+from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
 from lightcraft_opt.closed_loop_files import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.result import ClosedLoopResult

@@ -7,7 +7,7 @@ its key, in SI with the unit in the key (``impulse_per_pulse_ns``, ``blast_angle
 new file; a fitted beam divergence goes into a copy of the laser file beside it. The
 initial offset and tilt are not model parameters: they are in the report only. Comments
 of the original are not kept. The report (JSON) holds everything in
-:class:`~lightcraft_opt.calibration_results.CalibrationResult` but the trajectories, with
+:class:`~lightcraft_opt.calibration.result.CalibrationResult` but the trajectories, with
 the unit in every key; a standard deviation that is infinite (not identifiable) is null.
 """
 
@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.calibration_results import CalibrationResult
+from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.model_files import QUANTITIES, SCHEMA

@@ -200,7 +200,7 @@ def _montecarlo(args: argparse.Namespace) -> int:
 
 def _calibrate(args: argparse.Namespace) -> int:
     # here, not at the top: only this command needs them
-    from lightcraft_opt.calibrate import CalibrationOptions, calibrate
+    from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
     from lightcraft_opt.calibration_files import write_calibration_report, write_fitted_model
     from lightcraft_opt.errors import ParameterError
     from lightcraft_opt.options import PulseMapOptions

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lightcraft_opt.calibration_problem import Track
+from lightcraft_opt.calibration.problem import Track
 from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.model_files import QUANTITIES
 

@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lightcraft_opt.calibrate import CalibrationOptions, calibrate
+from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
+from lightcraft_opt.calibration.parameters import fit_components
+from lightcraft_opt.calibration.problem import Track, build_calibration_problem, initial_values
+from lightcraft_opt.calibration.result import CalibrationStatus, FlagKind
 from lightcraft_opt.calibration_files import write_fitted_model
-from lightcraft_opt.calibration_parameters import fit_components
-from lightcraft_opt.calibration_problem import Track, build_calibration_problem, initial_values
-from lightcraft_opt.calibration_results import CalibrationStatus, FlagKind
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.model_files import load_model

@@ -1,6 +1,6 @@
 """Plots of a calibration: residuals per axis, the track against the fitted flight, the
 parameter correlations. Positions in L (east, north, up; docs/frames.md). Each function
-takes a :class:`~lightcraft_opt.calibration_results.CalibrationResult` and an optional
+takes a :class:`~lightcraft_opt.calibration.result.CalibrationResult` and an optional
 ``ax`` and returns the artists (STYLE rule 10); :func:`calibration_figures` builds the
 figures the CLI saves.
 """
@@ -12,7 +12,7 @@ from typing import Any
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lightcraft_opt.calibration_results import CalibrationResult
+from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.layout import ENU, STATE
 from lightcraft_opt.plots.labels import state_label
 

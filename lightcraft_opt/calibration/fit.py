@@ -1,7 +1,7 @@
 """Calibration: fit engine, beam, aerodynamic and launch parameters to a tracked flight.
 
 Least squares over the pulse map Φ (STYLE rule 1): minimise ½ |r(θ)|² with r the
-predicted minus the tracked positions (:mod:`lightcraft_opt.calibration_problem`), by
+predicted minus the tracked positions (:mod:`lightcraft_opt.calibration.problem`), by
 Gauss-Newton with Levenberg-Marquardt damping (Nielsen's update of the damping; Madsen,
 Nielsen & Tingleff, *Methods for non-linear least squares problems*, 2004, Sec. 3.2)
 and box bounds (an active set: a component on a bound whose gradient pushes outward is
@@ -11,7 +11,7 @@ held there; a step is clipped into the box). The fit works in scaled variables �
 Statistics at the optimum (Seber & Wild, *Nonlinear Regression*, 1989, Sec. 2.1):
 σ² = RSS / (3 m - n), covariance σ² (JᵀJ)⁺ from the SVD of the scaled Jacobian
 (pseudo-inverse: never a singular-matrix exception), standard deviations, correlations.
-Identifiability flags (:class:`~lightcraft_opt.calibration_results.FlagKind`), each with
+Identifiability flags (:class:`~lightcraft_opt.calibration.result.FlagKind`), each with
 its reason: a null direction of J that loads on the parameter (the data do not depend on
 it, or only on a combination), a standard deviation above ``rel_std_max`` times
 max(|value|, scale), a correlation above ``correlation_max``, a value on its bound.
@@ -25,15 +25,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lightcraft_opt.calibration_parameters import FitComponent, fit_components
-from lightcraft_opt.calibration_problem import (
+from lightcraft_opt.calibration.parameters import FitComponent, fit_components
+from lightcraft_opt.calibration.problem import (
     CalibrationProblem,
     Track,
     build_calibration_problem,
     initial_values,
 )
-from lightcraft_opt.calibration_results import CalibrationResult, CalibrationStatus
-from lightcraft_opt.calibration_statistics import fit_statistics, identifiability_flags
+from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
+from lightcraft_opt.calibration.statistics import fit_statistics, identifiability_flags
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model

@@ -49,7 +49,7 @@ class CalibrationResult:
     Attributes
     ----------
     status, message : how the fit ended, in words.
-    names, units : (n,) fitted components (:data:`~lightcraft_opt.calibration_problem.FIT_GROUPS`)
+    names, units : (n,) fitted components (:data:`~lightcraft_opt.calibration.problem.FIT_GROUPS`)
         and their SI units.
     values, initial : (n,) fitted and starting values [SI, per ``units``].
     lower, upper : (n,) bounds used [SI].

@@ -15,8 +15,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from lightcraft_opt.calibration_parameters import FitComponent
-from lightcraft_opt.calibration_results import FitFlag, FlagKind
+from lightcraft_opt.calibration.parameters import FitComponent
+from lightcraft_opt.calibration.result import FitFlag, FlagKind
 
 __all__ = ["fit_statistics", "identifiability_flags"]
 

@@ -1,6 +1,6 @@
 """What a calibration fits to: the tracked positions, and the residual r(θ) as one
 casadi.Function of the fit vector θ (the components of
-:mod:`lightcraft_opt.calibration_parameters`).
+:mod:`lightcraft_opt.calibration.parameters`).
 
 The flight is the model's open-loop flight (:func:`~lightcraft_opt.layout.nominal_inputs`
 at every pulse, as :func:`~lightcraft_opt.simulation.simulate.simulate` flies it) from the initial
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.calibration_parameters import FitComponent
+from lightcraft_opt.calibration.parameters import FitComponent
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     PARAMETERS,
