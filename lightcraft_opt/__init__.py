@@ -6,6 +6,9 @@ Frames and units: docs/frames.md. Everything inside is SI.
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.calibration.problem import Track
 from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
+from lightcraft_opt.campaign.run import Campaign
+from lightcraft_opt.campaign.runner import CampaignResult, run_campaign
+from lightcraft_opt.campaign.summary import campaign_summary
 from lightcraft_opt.closed_loop_files import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.result import ClosedLoopResult
@@ -18,10 +21,7 @@ from lightcraft_opt.errors import (
 )
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.model_files import load_model
-from lightcraft_opt.monte_carlo import CampaignResult, run_campaign
 from lightcraft_opt.monte_carlo_files import load_campaign
-from lightcraft_opt.monte_carlo_run import Campaign
-from lightcraft_opt.monte_carlo_summary import campaign_summary
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.problem_files import ProblemFile, load_problem
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus

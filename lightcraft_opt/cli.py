@@ -162,7 +162,7 @@ def _closed_loop(args: argparse.Namespace) -> int:
 
 
 def _montecarlo(args: argparse.Namespace) -> int:
-    from lightcraft_opt.monte_carlo import run_campaign
+    from lightcraft_opt.campaign.runner import run_campaign
     from lightcraft_opt.monte_carlo_files import load_campaign
     from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 

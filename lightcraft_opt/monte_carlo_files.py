@@ -19,7 +19,7 @@ wind) with two more tables::
     low_mps = 0.0
     high_mps = 3.0
 
-Quantities (:data:`~lightcraft_opt.dispersions.DISPERSED`, in drawing order), their
+Quantities (:data:`~lightcraft_opt.campaign.dispersions.DISPERSED`, in drawing order), their
 units, and their nominal value (the normal's default mean, what a relative sigma is
 relative to): ``mass`` (mass: the dry mass), ``inertia_axial``, ``inertia_transverse``
 (inertia: the dry rotor's), ``coupling`` (impulse: impulse_per_pulse), ``dropout_rate``
@@ -43,11 +43,11 @@ from pathlib import Path
 from typing import Any
 
 from lightcraft_opt import model_files as mf
+from lightcraft_opt.campaign.dispersions import DISPERSED, Dispersions, Normal, Uniform
+from lightcraft_opt.campaign.run import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.closed_loop_files import ClosedLoopProblem, _closed_loop
-from lightcraft_opt.dispersions import DISPERSED, Dispersions, Normal, Uniform
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.monte_carlo_run import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.problem_files import _problem_errors
 from lightcraft_opt.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
 

@@ -34,8 +34,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from lightcraft_opt.dispersions import draw_many
-from lightcraft_opt.monte_carlo import run_campaign
+from lightcraft_opt.campaign.dispersions import draw_many
+from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.monte_carlo_files import load_campaign
 from lightcraft_opt.plots.monte_carlo import (
     plot_apogee_histogram,

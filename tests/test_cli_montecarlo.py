@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from lightcraft_opt.campaign.run_table import read_table
 from lightcraft_opt.cli import main
-from lightcraft_opt.run_table import read_table
 
 ROOT = Path(__file__).resolve().parents[1]
 MPC = ROOT / "problems" / "montecarlo_gust_mpc.toml"

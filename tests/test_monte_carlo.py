@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lightcraft_opt import monte_carlo_run
-from lightcraft_opt.dispersions import loop_seed
+from lightcraft_opt.campaign import run as monte_carlo_run
+from lightcraft_opt.campaign.dispersions import loop_seed
+from lightcraft_opt.campaign.run import run_one
+from lightcraft_opt.campaign.run_table import read_table
+from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.monte_carlo import run_campaign
 from lightcraft_opt.monte_carlo_files import load_campaign
-from lightcraft_opt.monte_carlo_run import run_one
-from lightcraft_opt.run_table import read_table
 
 ROOT = Path(__file__).resolve().parents[1]
 OPEN = ROOT / "problems" / "montecarlo_open_loop.toml"

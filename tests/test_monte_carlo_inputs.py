@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lightcraft_opt.dispersions import (
+from lightcraft_opt.campaign.dispersions import (
     DISPERSED,
     Dispersions,
     Normal,
@@ -22,9 +22,9 @@ from lightcraft_opt.dispersions import (
     draw_many,
     loop_seed,
 )
+from lightcraft_opt.campaign.run import CampaignController
 from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.monte_carlo_files import load_campaign
-from lightcraft_opt.monte_carlo_run import CampaignController
 
 ROOT = Path(__file__).resolve().parents[1]
 N = 4000

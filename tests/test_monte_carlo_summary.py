@@ -13,15 +13,15 @@ import math
 import numpy as np
 import pytest
 
-from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.monte_carlo_summary import (
+from lightcraft_opt.campaign.run_table import RunTable, read_table
+from lightcraft_opt.campaign.summary import (
     CHI2_2DOF_95,
     Z_95,
     campaign_summary,
     ellipse,
     wilson_interval,
 )
-from lightcraft_opt.run_table import RunTable, read_table
+from lightcraft_opt.errors import ParameterError
 
 
 def test_wilson_interval():

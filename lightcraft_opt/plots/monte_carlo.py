@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lightcraft_opt.monte_carlo_summary import CHI2_2DOF_95
+from lightcraft_opt.campaign.summary import CHI2_2DOF_95
 
 __all__ = [
     "STATUS_COLORS",

@@ -1,8 +1,8 @@
 """Monte Carlo campaigns: many dispersed flights, on local processes or a Dask cluster.
 
 ``run_campaign(campaign, runs, seed, out_dir)`` makes runs 0 .. runs - 1 of a
-:class:`~lightcraft_opt.monte_carlo_run.Campaign` (each by
-:func:`~lightcraft_opt.monte_carlo_run.run_one`: a run depends only on the campaign, the
+:class:`~lightcraft_opt.campaign.run.Campaign` (each by
+:func:`~lightcraft_opt.campaign.run.run_one`: a run depends only on the campaign, the
 seed and its index) and writes, in ``out_dir``:
 
 * ``campaign.json``: the campaign's fingerprint (sha256 of the spec and the seed), title,
@@ -14,7 +14,7 @@ seed and its index) and writes, in ``out_dir``:
   order or worker count.
 * ``timings.csv``: wall time and solve-time statistics per run (machine-dependent, so
   kept out of runs.csv).
-* ``summary.json``: :func:`~lightcraft_opt.monte_carlo_summary.campaign_summary`, once
+* ``summary.json``: :func:`~lightcraft_opt.campaign.summary.campaign_summary`, once
   the campaign is complete.
 
 Engines (monte_carlo_engines.py): ``workers=1`` this process; else local "spawn"
@@ -33,12 +33,12 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt import monte_carlo_engines as engines
+from lightcraft_opt.campaign import engines as engines
+from lightcraft_opt.campaign.progress import Progress
+from lightcraft_opt.campaign.run import TIMING_COLUMNS, Campaign, run_one
+from lightcraft_opt.campaign.run_table import RunTable, read_table
+from lightcraft_opt.campaign.summary import campaign_summary
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.monte_carlo_run import TIMING_COLUMNS, Campaign, run_one
-from lightcraft_opt.monte_carlo_summary import campaign_summary
-from lightcraft_opt.progress import Progress
-from lightcraft_opt.run_table import RunTable, read_table
 
 __all__ = ["CampaignResult", "campaign_fingerprint", "run_campaign", "write_json"]
 

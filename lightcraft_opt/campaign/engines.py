@@ -1,7 +1,7 @@
 """Where the runs of a campaign are made: this process, local processes, or a Dask cluster.
 
 Every engine takes the per-run function ``fn(campaign, seed, index) -> outcome`` (a
-picklable top-level function: :func:`~lightcraft_opt.monte_carlo_run.run_one`), the
+picklable top-level function: :func:`~lightcraft_opt.campaign.run.run_one`), the
 campaign, the seed and the indices to make, and yields the outcomes as they finish, in
 whatever order. What a run gives does not depend on the engine (monte_carlo_run.py).
 

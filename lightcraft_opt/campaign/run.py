@@ -2,7 +2,7 @@
 
 :func:`run_one` is the picklable, top-level function every engine calls (in this process,
 in worker processes, on Dask workers). It draws the run's values
-(:func:`~lightcraft_opt.dispersions.draw`), applies them to the plant's parameters, the
+(:func:`~lightcraft_opt.campaign.dispersions.draw`), applies them to the plant's parameters, the
 initial state and the drop-out rate, flies :func:`~lightcraft_opt.control.closed_loop.closed_loop`
 under the campaign's controller ("none" is the open loop: the nominal input every pulse)
 and returns the row of the run table (inputs and outputs, SI, unit in the column name) and
@@ -31,10 +31,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from lightcraft_opt.campaign.dispersions import Dispersions, draw, loop_seed
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.control.options import ClosedLoopOptions, MpcOptions
 from lightcraft_opt.control.result import ClosedLoopResult
-from lightcraft_opt.dispersions import Dispersions, draw, loop_seed
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     STATE,
@@ -131,10 +131,10 @@ class Campaign:
     mpc : the MPC's options (the LQR takes their weights); ``time_budget`` is replaced
         by :data:`CAMPAIGN_TIME_BUDGET` in runs.
     loop : the closed loop's noise, relative dispersion, drop-outs and injected faults;
-        its ``seed`` is replaced by each run's (:func:`~lightcraft_opt.dispersions.loop_seed`).
+        its ``seed`` is replaced by each run's (:func:`.dispersions.loop_seed`).
     plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not
         (its wind), before the draws.
-    dispersions : what each run draws (:class:`~lightcraft_opt.dispersions.Dispersions`).
+    dispersions : what each run draws (:class:`~lightcraft_opt.campaign.dispersions.Dispersions`).
     compiled : fly the plant Φ compiled to C (compiled.py; cached on disk).
     title : a name for reports.
     """
