@@ -33,7 +33,7 @@ import numpy as np
 from lightcraft_opt.campaign.dispersions import draw, loop_seed
 from lightcraft_opt.campaign.engines import local_processes
 from lightcraft_opt.campaign.run import _flyer, run_one
-from lightcraft_opt.monte_carlo_files import load_campaign
+from lightcraft_opt.files.campaign import load_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_RATE, TARGET_EFFICIENCY = 1000.0, 0.8

@@ -37,13 +37,13 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.closed_loop_files import load_closed_loop
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
 from lightcraft_opt.control.options import MpcOptions, MpcSolver
 from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
+from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 

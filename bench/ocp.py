@@ -40,12 +40,12 @@ from pathlib import Path
 
 import numpy as np
 
+from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.ocp.options import HessianApproximation, OcpSolver
 from lightcraft_opt.ocp.problem import TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -9,7 +9,6 @@ from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStat
 from lightcraft_opt.campaign.run import Campaign
 from lightcraft_opt.campaign.runner import CampaignResult, run_campaign
 from lightcraft_opt.campaign.summary import campaign_summary
-from lightcraft_opt.closed_loop_files import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.errors import (
@@ -19,14 +18,15 @@ from lightcraft_opt.errors import (
     ParameterError,
     ProblemFileError,
 )
+from lightcraft_opt.files.campaign import load_campaign
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
+from lightcraft_opt.files.model import load_model
+from lightcraft_opt.files.problem import ProblemFile, load_problem
+from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
-from lightcraft_opt.model_files import load_model
-from lightcraft_opt.monte_carlo_files import load_campaign
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
-from lightcraft_opt.problem_files import ProblemFile, load_problem
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.track_files import read_track
 
 __all__ = [
     "PARAMETERS",

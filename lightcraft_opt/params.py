@@ -6,7 +6,7 @@ Frames are those of ``docs/frames.md``: vectors named ``*_B`` have components in
 the despun body frame B, measured from the rotor reference point P (a point on
 the spin axis, the rotor's dry mass centre).
 
-Unit conversion never happens here: see :mod:`lightcraft_opt.model_files`.
+Unit conversion never happens here: see :mod:`lightcraft_opt.files.model`.
 """
 
 from __future__ import annotations

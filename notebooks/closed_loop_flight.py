@@ -33,7 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
-from lightcraft_opt.closed_loop_files import load_closed_loop
+from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.control.controllers import LqrController, OpenLoopController
 from lightcraft_opt.control.prediction_model import coning_model

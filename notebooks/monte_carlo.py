@@ -36,7 +36,7 @@ import numpy as np
 
 from lightcraft_opt.campaign.dispersions import draw_many
 from lightcraft_opt.campaign.runner import run_campaign
-from lightcraft_opt.monte_carlo_files import load_campaign
+from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.plots.monte_carlo import (
     plot_apogee_histogram,
     plot_end_points,

@@ -1,8 +1,9 @@
-"""The house rules as tests: import-linter floors, ruff and mypy, all configured in pyproject.toml.
+"""The house rules as tests: import-linter contracts, ruff and mypy (pyproject.toml).
 
-The floors (STYLE.md) are import-linter contracts in ``[tool.importlinter]``; a wrong arrow
-fails here instead of in review. ``test_contracts_catch_a_wrong_arrow`` checks the contracts
-are not vacuous by planting wrong imports in a copy of the package.
+The capability order (docs/architecture.md#contracts) is import-linter contracts in
+``[tool.importlinter]``; a wrong arrow fails here instead of in review.
+``test_contracts_catch_a_wrong_arrow`` checks the contracts are not vacuous by planting
+wrong imports in a copy of the package.
 """
 
 from __future__ import annotations
@@ -62,12 +63,17 @@ def test_import_contracts_kept() -> None:
 @pytest.mark.parametrize(
     ("where", "line", "broken"),
     [
-        ("symbolic/_wrong_arrow.py", "import matplotlib\n", "Floor 1 (symbolic)"),
-        ("params.py", "import casadi\n", "Floor 0 (errors, params"),
-        ("simulate.py", "import lightcraft_opt.plots\n", "Floors point down"),
-        ("mpc.py", "from lightcraft_opt import cli\n", "Floors point down"),
-        ("results.py", "import control\n", "Only lightcraft_opt.linearize imports"),
-        ("_unplaced.py", "import math\n", "Floors point down"),
+        ("symbolic/_wrong_arrow.py", "import matplotlib\n", "symbolic/ imports no matplotlib"),
+        ("params.py", "import casadi\n", "The vocabulary (errors, params"),
+        ("simulation/simulate.py", "import lightcraft_opt.plots\n", "Capabilities point down"),
+        ("control/mpc.py", "from lightcraft_opt import cli\n", "Capabilities point down"),
+        ("calibration/fit.py", "import lightcraft_opt.campaign.run\n", "Capabilities point down"),
+        ("ocp/solve.py", "import lightcraft_opt.control.mpc\n", "Capabilities point down"),
+        ("simulation/result.py", "import control\n", "Only lightcraft_opt.linearize imports"),
+        ("_unplaced.py", "import math\n", "Capabilities point down"),
+        ("ocp/problem.py", "import lightcraft_opt.ocp.transcription\n", "ocp/: the what"),
+        ("control/result.py", "import lightcraft_opt.control.mpc\n", "control/: options and"),
+        ("ocp/result.py", "import casadi\n", "numpy-only: no casadi"),
     ],
 )
 def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, broken: str) -> None:

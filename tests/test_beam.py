@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from jacobian_check import assert_jacobians_match_finite_differences
 
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, parameter_values
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.params import BeamProfile, BeamSizeModel, Laser, Model
 from lightcraft_opt.symbolic.beam import beam_side, build_beam, fluence
 

@@ -21,15 +21,15 @@ from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.calibration.parameters import fit_components
 from lightcraft_opt.calibration.problem import Track, build_calibration_problem, initial_values
 from lightcraft_opt.calibration.result import CalibrationStatus, FlagKind
-from lightcraft_opt.calibration_files import write_fitted_model
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
+from lightcraft_opt.files.calibration_outputs import write_fitted_model
+from lightcraft_opt.files.model import load_model
+from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import initial_state, parameter_values
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.track_files import read_track
 
 MODEL_FILE = Path(__file__).resolve().parents[1] / "models" / "flight5.toml"
 NOISE = 0.007  # m, per axis

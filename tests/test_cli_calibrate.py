@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from lightcraft_opt.cli import main
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
 

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.closed_loop_files import load_closed_loop
-from lightcraft_opt.closed_loop_outputs import STEP_COLUMNS
 from lightcraft_opt.control.options import ControllerFault, MpcSolver
 from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.files.closed_loop import load_closed_loop
+from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
+from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS
 from lightcraft_opt.layout import STATE
-from lightcraft_opt.run_files import TRAJECTORY_COLUMNS
 
 PROBLEMS = Path(__file__).resolve().parents[1] / "problems"
 NUTATION = PROBLEMS / "nutation_suppression.toml"

@@ -21,13 +21,13 @@ import numpy as np
 import pytest
 
 from lightcraft_opt.cli import main
+from lightcraft_opt.files.ocp_outputs import solution_columns
+from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import STATE, initial_state, map_input_layout
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.solve import rollout
 from lightcraft_opt.ocp.transcription import state_scale
-from lightcraft_opt.ocp_files import solution_columns
 from lightcraft_opt.plots.ocp import ocp_figures
-from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
 MODELS = Path(__file__).resolve().parents[1] / "models"

@@ -31,8 +31,8 @@ from lightcraft_opt.compiled import (
     compile_pulse_map,
     library_path,
 )
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from jacobian_check import assert_jacobians_match_finite_differences
 
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import (
     PARAMETERS,
     PULSE_INPUT,
@@ -27,7 +28,6 @@ from lightcraft_opt.layout import (
     initial_state,
     parameter_values,
 )
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.params import BeamSizeModel, ImpulseModel, Model
 from lightcraft_opt.symbolic.beam import beam_side, fluence
 from lightcraft_opt.symbolic.engine import ENGINE_OUTPUT_NAMES, build_engine, health

@@ -26,6 +26,7 @@ from matplotlib.contour import ContourSet
 from matplotlib.figure import Figure
 
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import STATE, VectorLayout, initial_state, map_input_layout
 from lightcraft_opt.linearize import (
     Coordinates,
@@ -44,7 +45,6 @@ from lightcraft_opt.linearize import (
     stability_map,
     trim_hover,
 )
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine, Model, Rcs, SpinDecay, Thruster
 from lightcraft_opt.plots import plot_multipliers, plot_stability_map

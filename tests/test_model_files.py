@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from lightcraft_opt.errors import ModelFileError
-from lightcraft_opt.model_files import QUANTITIES, SCHEMA, load_laser, load_model, load_site
+from lightcraft_opt.files.model import QUANTITIES, SCHEMA, load_laser, load_model, load_site
 from lightcraft_opt.params import (
     Aerodynamics,
     BeamSizeModel,

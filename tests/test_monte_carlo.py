@@ -25,7 +25,7 @@ from lightcraft_opt.campaign.run import run_one
 from lightcraft_opt.campaign.run_table import read_table
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.monte_carlo_files import load_campaign
+from lightcraft_opt.files.campaign import load_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
 OPEN = ROOT / "problems" / "montecarlo_open_loop.toml"

@@ -11,7 +11,7 @@ import pytest
 from lightcraft_opt.campaign import engines as monte_carlo_engines
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.monte_carlo_files import load_campaign
+from lightcraft_opt.files.campaign import load_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
 OPEN = ROOT / "problems" / "montecarlo_open_loop.toml"

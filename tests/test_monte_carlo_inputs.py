@@ -24,7 +24,7 @@ from lightcraft_opt.campaign.dispersions import (
 )
 from lightcraft_opt.campaign.run import CampaignController
 from lightcraft_opt.errors import OptionError, ProblemFileError
-from lightcraft_opt.monte_carlo_files import load_campaign
+from lightcraft_opt.files.campaign import load_campaign
 
 ROOT = Path(__file__).resolve().parents[1]
 N = 4000

@@ -47,6 +47,7 @@ from lightcraft_opt.control.options import (
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.errors import OptionError
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import CONING, STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import (
     PulseMapJacobian,
@@ -57,7 +58,6 @@ from lightcraft_opt.linearize import (
     lqr_policy,
     pulse_map_jacobian,
 )
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.invariants import build_invariants

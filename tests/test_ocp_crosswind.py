@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, nominal_inputs
 from lightcraft_opt.ocp.problem import TerminalAltitude
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.problem_files import load_problem
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 

@@ -16,8 +16,9 @@ import pytest
 
 from lightcraft_opt import load_problem
 from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.files.model import load_model
+from lightcraft_opt.files.problem import objective_names
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
     CaptureFraction,
@@ -31,7 +32,6 @@ from lightcraft_opt.ocp.problem import (
     TrackReference,
 )
 from lightcraft_opt.options import CoastScheme, RcsProfile
-from lightcraft_opt.problem_files import objective_names
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 RPM = 2 * math.pi / 60

@@ -37,6 +37,7 @@ from conftest import torque_free
 from jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
 
 from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
@@ -45,7 +46,6 @@ from lightcraft_opt.layout import (
     parameter_values,
     rcs_levels,
 )
-from lightcraft_opt.model_files import load_model
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions
 from lightcraft_opt.ocp.problem import (
     ControlBound,

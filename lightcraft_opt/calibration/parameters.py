@@ -1,7 +1,7 @@
 """The fit-parameter catalogue of a calibration: what each ``--fit`` name selects, its SI
 unit, default bounds and scale (docs/calibration.md). How each one enters the flight is
 :func:`lightcraft_opt.calibration.problem.apply_fit`; where it is written in a model file,
-:data:`lightcraft_opt.calibration_files.MODEL_KEYS`.
+:data:`lightcraft_opt.files.calibration_outputs.MODEL_KEYS`.
 """
 
 from __future__ import annotations

@@ -42,14 +42,14 @@ import math
 from pathlib import Path
 from typing import Any
 
-from lightcraft_opt import model_files as mf
 from lightcraft_opt.campaign.dispersions import DISPERSED, Dispersions, Normal, Uniform
 from lightcraft_opt.campaign.run import DISPERSED_PARAMETER, Campaign, CampaignController
-from lightcraft_opt.closed_loop_files import ClosedLoopProblem, _closed_loop
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
+from lightcraft_opt.files import schema
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem, _closed_loop
+from lightcraft_opt.files.problem import _problem_errors
+from lightcraft_opt.files.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.problem_files import _problem_errors
-from lightcraft_opt.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
 
 __all__ = ["load_campaign"]
 
@@ -85,7 +85,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
     """
     file = Path(path)
     with _problem_errors():
-        src, data = mf._read_toml(file)
+        src, data = schema.read_toml(file)
         raw_campaign = data.pop("campaign", {})
         raw_dispersions = data.pop("dispersions", {})
         plant = data.get("plant", {})

@@ -27,7 +27,7 @@ import numpy as np
 
 from lightcraft_opt.calibration.problem import Track
 from lightcraft_opt.errors import ProblemFileError
-from lightcraft_opt.model_files import QUANTITIES
+from lightcraft_opt.files.model import QUANTITIES
 
 __all__ = ["TRACK_COLUMNS", "read_track"]
 

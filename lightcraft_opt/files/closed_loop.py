@@ -1,6 +1,6 @@
 """Closed-loop problem files: TOML in ``problems/`` read into a closed-loop flight to run.
 
-The sibling of :mod:`lightcraft_opt.problem_files` (the optimal control problems): the same
+The sibling of :mod:`lightcraft_opt.files.problem` (the optimal control problems): the same
 conventions, and its machinery (the model file with ``[model_overrides]``, the
 ``[initial]`` table, model_files' units in the keys, errors naming the key as written), for
 what a closed loop needs instead of an objective: the controller's options, and what
@@ -75,7 +75,6 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt import model_files as mf
 from lightcraft_opt import params
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
@@ -87,11 +86,12 @@ from lightcraft_opt.control.options import (
     PlantDispersion,
 )
 from lightcraft_opt.errors import ModelFileError, OptionError, ProblemFileError
-from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.files import model as mf
+from lightcraft_opt.files import schema
 
 # problem_files' own readers of the model and [initial] tables: one convention for both
-from lightcraft_opt.problem_files import _initial_state, _model, _problem_errors
-from lightcraft_opt.problem_tables import (
+from lightcraft_opt.files.problem import _initial_state, _model, _problem_errors
+from lightcraft_opt.files.problem_tables import (
     INTEGER,
     NUMBER,
     NUMBERS,
@@ -102,6 +102,7 @@ from lightcraft_opt.problem_tables import (
     quantity,
     read_table,
 )
+from lightcraft_opt.layout import PARAMETERS, STATE
 
 __all__ = ["ClosedLoopProblem", "load_closed_loop"]
 
@@ -199,7 +200,7 @@ def load_closed_loop(path: str | Path, *, duration: float | None = None) -> Clos
     """
     file = Path(path)
     with _problem_errors():
-        src, data = mf._read_toml(file)
+        src, data = schema.read_toml(file)
         return _closed_loop(src, file, data, duration)
 
 
@@ -319,7 +320,7 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
     if wind is None:
         return {}
     try:
-        values, keys = mf._read(src, wind, "plant.wind", "wind", params.Wind)
+        values, keys = schema.read_table(src, wind, "plant.wind", mf.SCHEMA["wind"], params.Wind)
         structural = [k for k in values if k not in _WIND_PARAMETERS]
         if structural:
             raise ProblemFileError(
@@ -328,7 +329,7 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
                 "wind tables are structure of the pulse map, not parameters: give them in "
                 "[model_overrides.environment.wind] (the controller then knows them too)",
             )
-        built = mf._build(src, {"wind": ("plant.wind", keys)}, params.Wind, values)
+        built = schema.build(src, {"wind": ("plant.wind", keys)}, params.Wind, values)
     except ModelFileError as err:
         raise ProblemFileError(src, err.field, err.reason) from err
     return {_WIND_PARAMETERS[f]: getattr(built, f) for f in _WIND_PARAMETERS}

@@ -1,6 +1,6 @@
 """Writing an optimal control solution to disk: solution.csv, summary.json (floor 3).
 
-Column names carry their units and match trajectory.csv's (:mod:`lightcraft_opt.run_files`):
+Column names carry their units and match trajectory.csv's (:mod:`.simulation_outputs`):
 positions in L (x east, y north, z up, docs/frames.md), impulses in B. A failed solve is
 written too: its status is in the summary, its last iterate in the CSV.
 """
@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.files.problem import ProblemFile, objective_names
+from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS, finite_or_none, model_hash
 from lightcraft_opt.layout import ENGINE, PARAMETERS, VectorLayout
 from lightcraft_opt.ocp.problem import CaptureFraction, OcpProblem
 from lightcraft_opt.ocp.result import OcpResult
-from lightcraft_opt.problem_files import ProblemFile, objective_names
-from lightcraft_opt.run_files import TRAJECTORY_COLUMNS, finite_or_none, model_hash
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.invariants import build_invariants
 

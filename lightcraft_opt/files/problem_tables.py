@@ -23,8 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt import model_files as mf
 from lightcraft_opt.errors import ParameterError, ProblemFileError
+from lightcraft_opt.files import model as mf
+from lightcraft_opt.files.schema import NOT_SI, Spec, match_key, parse_number, parse_value
 from lightcraft_opt.layout import STATE
 from lightcraft_opt.ocp.problem import (
     CaptureFraction,
@@ -69,7 +70,6 @@ __all__ = [
     "si_note",
 ]
 
-Spec = mf._Spec  # model_files' description of a key: quantity or kind, shape, length
 TEXT, NUMBER = Spec("text"), Spec("dimensionless")
 INTEGER = Spec("dimensionless", "integer")
 SLOT = Spec("in the unit of its slot")  # one number or one per component, inf allowed
@@ -322,7 +322,7 @@ def read_table(
         field, factor = _slot_key(src, name, schema, slot)
         unit = None
         if field is None:
-            field, unit = mf._match(src, key, name, schema, tables)
+            field, unit = match_key(src, key, name, schema, tables)
             factor = mf.QUANTITIES[schema[field].kind][unit] if unit else "1"
         if field in keys:
             raise ProblemFileError(
@@ -334,12 +334,14 @@ def read_table(
             values[field] = _numbers(src, name, raw, factor)
         elif spec is BLOCKS:
             values[field] = (
-                tuple(mf._value(src, f"{name}[{i}]", v, INTEGER, None) for i, v in enumerate(raw))
+                tuple(
+                    parse_value(src, f"{name}[{i}]", v, INTEGER, None) for i, v in enumerate(raw)
+                )
                 if isinstance(raw, list)
-                else mf._value(src, name, raw, INTEGER, None)
+                else parse_value(src, name, raw, INTEGER, None)
             )
         else:
-            values[field] = mf._value(src, name, raw, spec, unit)
+            values[field] = parse_value(src, name, raw, spec, unit)
     for field in required:
         if field not in keys:
             raise ProblemFileError(
@@ -384,7 +386,7 @@ def _numbers(src: str, name: str, raw: Any, factor: float | str) -> Any:
         return tuple(_numbers(src, f"{name}[{i}]", v, factor) for i, v in enumerate(raw))
     if isinstance(raw, float) and math.isinf(raw):
         return raw
-    return mf._number(src, name, raw, factor)
+    return parse_number(src, name, raw, factor)
 
 
 def _spelling(field: str, schema: Mapping[str, Spec]) -> str:
@@ -395,7 +397,7 @@ def _spelling(field: str, schema: Mapping[str, Spec]) -> str:
 def si_note(key: str, reason: str) -> str:
     """``reason``, noting that its numbers are SI when the key wrote another unit."""
     unit = key.removesuffix("_per_s").rpartition("_")[2]
-    converted = unit in mf._NOT_SI and re.search(r"\d", reason)
+    converted = unit in NOT_SI and re.search(r"\d", reason)
     return reason + (" (converted to SI)" if converted else "")
 
 

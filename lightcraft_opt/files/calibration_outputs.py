@@ -24,10 +24,10 @@ import numpy as np
 
 from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.errors import ModelFileError
+from lightcraft_opt.files.model import QUANTITIES, SCHEMA
+from lightcraft_opt.files.simulation_outputs import finite_or_none, model_hash
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.model_files import QUANTITIES, SCHEMA
 from lightcraft_opt.params import Model
-from lightcraft_opt.run_files import finite_or_none, model_hash
 
 __all__ = ["MODEL_KEYS", "write_calibration_report", "write_fitted_model"]
 

@@ -1,7 +1,7 @@
 """Writing a closed-loop flight to disk: steps.csv and summary.json (floor 3, the edge).
 
-The flight itself goes to trajectory.csv and pulses.csv by :mod:`lightcraft_opt.run_files`
-(the same columns as ``lightcraft simulate``'s); here the controller's side: one row per
+The flight itself goes to trajectory.csv and pulses.csv by :mod:`.simulation_outputs` (the
+same columns as ``lightcraft simulate``'s); here the controller's side: one row per
 pulse with what it did and how long it took, and a summary of the acceptance measures.
 Column names carry their units.
 """
@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.closed_loop_files import ClosedLoopProblem
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
-from lightcraft_opt.run_files import model_hash
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem
+from lightcraft_opt.files.simulation_outputs import model_hash
 
 __all__ = ["STEP_COLUMNS", "write_closed_loop_summary", "write_steps_csv"]
 

@@ -1,7 +1,7 @@
 """Problem files: TOML in ``problems/`` read into an optimal control problem and its options.
 
 The edge of :mod:`lightcraft_opt.ocp.problem` (what to solve) and
-:class:`~lightcraft_opt.ocp.options.OcpOptions` (how), as :mod:`lightcraft_opt.model_files` is
+:class:`~lightcraft_opt.ocp.options.OcpOptions` (how), as :mod:`lightcraft_opt.files.model` is
 the edge of the model: the same units and spellings (its :data:`QUANTITIES`), converted to
 SI here and nowhere else. A quantity carries its unit in the key (``tilt_deg``,
 ``clearance_cm``, ``total_kj``); numbers, text and choices are bare. One exception: a
@@ -93,7 +93,7 @@ maximum), ``terminal_state`` (state, lower, upper), ``energy_budget`` (total),
 ``rcs_envelope`` (no keys: phase-locked thrust within [0, max] at every phase).
 ``[[control]]``: input, lower, upper, slew_rate (``inf`` for none). A quantity's keys
 take any unit of model_files' QUANTITIES (``clearance_m``, ``clearance_cm`` ...); an
-unknown key gets a did-you-mean hint. :mod:`lightcraft_opt.problem_tables` reads the
+unknown key gets a did-you-mean hint. :mod:`lightcraft_opt.files.problem_tables` reads the
 tables.
 
 ``[model_overrides]`` is merged key by key (a key given in another unit replaces the
@@ -117,20 +117,11 @@ from typing import Any, get_type_hints
 
 import numpy as np
 
-from lightcraft_opt import model_files as mf
 from lightcraft_opt import params
 from lightcraft_opt.errors import ModelFileError, OptionError, ParameterError, ProblemFileError
-from lightcraft_opt.layout import initial_state
-from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
-from lightcraft_opt.ocp.problem import (
-    ControlEffort,
-    ControlRate,
-    LateralOffset,
-    OcpProblem,
-    TrackReference,
-)
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.problem_tables import (
+from lightcraft_opt.files import model as mf
+from lightcraft_opt.files import schema
+from lightcraft_opt.files.problem_tables import (
     BLOCKS,
     CONSTRAINTS,
     CONTROL,
@@ -149,6 +140,16 @@ from lightcraft_opt.problem_tables import (
     read_table,
     si_note,
 )
+from lightcraft_opt.layout import initial_state
+from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.problem import (
+    ControlEffort,
+    ControlRate,
+    LateralOffset,
+    OcpProblem,
+    TrackReference,
+)
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 
 __all__ = ["ProblemFile", "load_problem", "objective_names"]
 
@@ -289,7 +290,7 @@ def load_problem(
     """
     file = Path(path)
     with _problem_errors():
-        src, data = mf._read_toml(file)
+        src, data = schema.read_toml(file)
     for key, value in (("horizon_pulses", horizon), ("name", solver), ("max_iter", max_iter)):
         if value is not None:
             table = data if key == "horizon_pulses" else data.setdefault("solver", {})
@@ -382,7 +383,7 @@ def _model(src: str, file: Path, name: str, overrides: Any) -> params.Model:
         raise ProblemFileError(src, "model_overrides", f"must be a table, got {overrides!r}")
     target = Path(os.path.normpath(file.parent / name))
     try:
-        model_src, data = mf._read_toml(target)
+        model_src, data = schema.read_toml(target)
         return mf.model_from_tables(model_src, target, _merge(data, overrides or {}))
     except ModelFileError as err:
         written = _override_key(err.field, overrides or {}) if err.path == str(target) else None
