@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import table1_flight5
+from support.models import table1_flight5
 
 from lightcraft_opt.cli import main
 from lightcraft_opt.errors import OptionError, ParameterError

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import table1_flight5
+from support.models import table1_flight5
 
 from lightcraft_opt import compiled
 from lightcraft_opt.compiled import (

@@ -1,0 +1,170 @@
+"""Monte Carlo campaigns: a run depends only on (campaign, seed, index).
+
+The reference is the campaign made serially in this process: local processes with two
+workers must give the byte-identical run table (a Dask LocalCluster too:
+test_monte_carlo_dask.py); so must a campaign killed (SIGKILL) part way and resumed, with no
+run lost and none twice. Short open-loop Flight 5 flights (0.3 s, 8 pulses) keep this fast;
+the MPC's order independence is checked run by run in one process."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support.paths import REPO_ROOT
+
+from lightcraft_opt.campaign import run as monte_carlo_run
+from lightcraft_opt.campaign.dispersions import loop_seed
+from lightcraft_opt.campaign.run import run_one
+from lightcraft_opt.campaign.run_table import read_table
+from lightcraft_opt.campaign.runner import run_campaign
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.files.campaign import load_campaign
+
+ROOT = REPO_ROOT
+OPEN = ROOT / "problems" / "montecarlo_open_loop.toml"
+MPC = ROOT / "problems" / "montecarlo_gust_mpc.toml"
+DURATION = 0.3  # s: 8 pulses
+RUNS, SEED = 6, 11
+
+
+@pytest.fixture(scope="module")
+def campaign():
+    return load_campaign(OPEN, duration=DURATION)
+
+
+@pytest.fixture(scope="module")
+def serial(campaign, tmp_path_factory):
+    out = tmp_path_factory.mktemp("serial")
+    result = run_campaign(campaign, RUNS, SEED, out, workers=1, progress=False)
+    return result
+
+
+def _bytes(out: Path) -> bytes:
+    return (out / "runs.csv").read_bytes()
+
+
+def test_serial_campaign_is_complete_and_physical(serial, campaign):
+    t = serial.table
+    assert serial.complete and serial.made == RUNS and serial.skipped == 0
+    assert list(t["run"]) == list(range(RUNS))
+    assert set(t["status"]) <= {"duration_reached", "landed", "left_beam"}
+    # the drawn inputs are in the table, and the flight used them: a heavier craft
+    # climbs less under the same pulses (apogee falls with mass, all else drawn too)
+    assert np.all(np.abs(t["mass_kg"] / campaign.model.craft.mass - 1) <= 3 * 0.02 + 1e-12)
+    assert np.corrcoef(t["mass_kg"], t["apogee_m"])[0, 1] < 0
+    assert np.all(t["pulses"] == 8)
+    assert np.all(t["max_tilt_rad"] >= np.abs(t["tilt_rad"]) - 1e-9)
+    for name in ("campaign.json", "timings.csv", "summary.json"):
+        assert (serial.out_dir / name).exists()
+
+
+def test_local_processes_give_the_identical_table(serial, campaign, tmp_path):
+    result = run_campaign(campaign, RUNS, SEED, tmp_path, workers=2, progress=False)
+    assert result.engine == "processes (2 workers)"
+    assert _bytes(tmp_path) == _bytes(serial.out_dir)
+
+
+def test_same_seed_same_table_other_seed_other_table(serial, campaign, tmp_path):
+    run_campaign(campaign, RUNS, SEED, tmp_path / "a", workers=1, progress=False)
+    other = run_campaign(campaign, RUNS, SEED + 1, tmp_path / "b", workers=1, progress=False)
+    assert _bytes(tmp_path / "a") == _bytes(serial.out_dir)
+    assert not np.any(other.table["mass_kg"] == serial.table["mass_kg"])
+    assert not np.any(other.table["apogee_m"] == serial.table["apogee_m"])
+
+
+def test_a_longer_campaign_extends_the_shorter_one(serial, campaign, tmp_path):
+    """Run i is the same row in a campaign of 3 runs and one of 6."""
+    short = run_campaign(campaign, 3, SEED, tmp_path, workers=1, progress=False)
+    lines = _bytes(serial.out_dir).splitlines()
+    assert _bytes(tmp_path).splitlines() == lines[:4]
+    assert short.complete
+
+
+def test_a_folder_of_another_campaign_is_refused(serial, campaign):
+    with pytest.raises(ParameterError, match="another campaign"):
+        run_campaign(campaign, RUNS, SEED + 5, serial.out_dir, workers=1, progress=False)
+
+
+def test_kill_and_resume_loses_nothing_and_duplicates_nothing(serial, campaign, tmp_path):
+    runs = 60
+    reference = run_campaign(campaign, runs, SEED, tmp_path / "ref", workers=1, progress=False)
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "lightcraft_opt.cli", "montecarlo", str(OPEN), "--runs",
+           str(runs), "--seed", str(SEED), "--out", str(out), "--duration", str(DURATION),
+           "--workers", "1", "--quiet"]  # fmt: skip
+    proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL)
+    table = out / "runs.csv"
+    deadline = time.monotonic() + 120
+    try:
+        while time.monotonic() < deadline:
+            if table.exists() and table.read_bytes().count(b"\n") >= 4:  # header + 3 runs
+                break
+            assert proc.poll() is None, "the campaign ended before it could be killed"
+            time.sleep(0.02)
+        os.killpg(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    done = table.read_bytes().count(b"\n") - 1
+    assert 3 <= done < runs
+    with open(table, "ab") as f:  # a row the kill cut short
+        f.write(b"59,0.0312")
+    resumed = run_campaign(campaign, runs, SEED, out, workers=1, progress=False)
+    assert resumed.skipped >= 3 and resumed.made + resumed.skipped == runs
+    index = resumed.table["run"]
+    assert len(index) == len(set(index)) == runs
+    assert _bytes(out) == _bytes(tmp_path / "ref")
+    timing = ("timing",)  # wall-clock: not the run table's
+    assert {k: v for k, v in resumed.summary.items() if k not in timing} == {
+        k: v for k, v in reference.summary.items() if k not in timing
+    }
+
+
+def test_a_run_that_raises_is_an_error_row(campaign, tmp_path, monkeypatch):
+    bad = loop_seed(SEED, 2)
+    real = monte_carlo_run.closed_loop
+
+    def failing(*args, **kwargs):
+        if kwargs["options"].seed == bad:
+            raise RuntimeError("solver exploded, with a comma")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(monte_carlo_run, "closed_loop", failing)
+    result = run_campaign(campaign, 4, SEED, tmp_path, workers=1, progress=False)
+    t = result.table
+    assert list(t["status"]).count("error") == 1 and t["status"][2] == "error"
+    assert t["message"][2] == "RuntimeError: solver exploded, with a comma"
+    assert math.isnan(t["apogee_m"][2]) and np.all(np.isfinite(np.delete(t["apogee_m"], 2)))
+    assert result.summary["status_counts"]["error"] == 1
+    assert result.summary["apogee_m"]["n"] == 3
+
+
+def test_mpc_runs_do_not_depend_on_the_runs_before():
+    """One controller flies every run of a process: its warm start, plan and solver memory
+    must not carry over. Runs made in reverse order give the same rows; the MPC's wall-clock
+    budget is out of the loop (no solve is late), so they are bit-identical."""
+    mpc = load_campaign(MPC, duration=0.3)
+    assert mpc.controller.value == "mpc"
+    forward = [run_one(mpc, 3, i).row for i in range(3)]
+    backward = [run_one(mpc, 3, i).row for i in (2, 1, 0)][::-1]
+    for a, b in zip(forward, backward, strict=True):
+        assert a["status"] != "error", a["message"]
+        assert a["iterations_total"] > 0
+        assert repr(a) == repr(b)
+
+
+def test_table_round_trips_the_floats(serial):
+    text = (serial.out_dir / "runs.csv").read_text()
+    t = read_table(serial.out_dir / "runs.csv")
+    first = text.splitlines()[1].split(",")
+    header = text.splitlines()[0].split(",")
+    j = header.index("apogee_m")
+    assert repr(float(t["apogee_m"][0])) == first[j]

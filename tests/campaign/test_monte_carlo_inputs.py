@@ -1,0 +1,138 @@
+"""What a campaign draws: the distributions' moments, the streams, and the campaign files.
+
+Moments are checked against the distributions' analytic values with tolerances from the
+sampling error of N draws (4 standard errors); the truncated normal's standard deviation
+at ±3σ is σ √(1 − 2·3·φ(3) / (2Φ(3) − 1)).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from support.paths import REPO_ROOT
+
+from lightcraft_opt.campaign.dispersions import (
+    DISPERSED,
+    Dispersions,
+    Normal,
+    Uniform,
+    draw,
+    draw_many,
+    loop_seed,
+)
+from lightcraft_opt.campaign.run import CampaignController
+from lightcraft_opt.errors import OptionError, ProblemFileError
+from lightcraft_opt.files.campaign import load_campaign
+
+ROOT = REPO_ROOT
+N = 4000
+
+
+def _truncated_std(k: float) -> float:
+    phi = math.exp(-0.5 * k * k) / math.sqrt(2 * math.pi)
+    mass = math.erf(k / math.sqrt(2))
+    return math.sqrt(1 - 2 * k * phi / mass)
+
+
+def test_normal_and_uniform_moments():
+    d = Dispersions(
+        (
+            ("mass", Normal(0.0325, 0.002)),
+            ("tilt", Normal(0.0, 0.01, truncate=3.0)),
+            ("wind_speed", Uniform(1.0, 4.0)),
+        )
+    )
+    v = draw_many(d, 123, N)
+    m = v["mass"]
+    assert abs(m.mean() - 0.0325) < 4 * 0.002 / math.sqrt(N)
+    assert abs(m.std(ddof=1) / 0.002 - 1) < 4 / math.sqrt(2 * N)
+    t = v["tilt"]
+    assert np.max(np.abs(t)) <= 3 * 0.01
+    assert abs(t.std(ddof=1) / (0.01 * _truncated_std(3.0)) - 1) < 4 / math.sqrt(2 * N)
+    w = v["wind_speed"]
+    assert np.all((w >= 1.0) & (w < 4.0))
+    assert abs(w.mean() - 2.5) < 4 * (3 / math.sqrt(12)) / math.sqrt(N)
+    assert abs(w.var(ddof=1) / (9 / 12) - 1) < 4 * math.sqrt(0.8 / N)  # Var(s²)/σ⁴ = 0.8/N
+
+
+def test_draws_depend_on_seed_and_index_only():
+    a = Dispersions((("mass", Normal(1.0, 0.1)), ("coupling", Uniform(0.0, 1.0))))
+    b = Dispersions((("coupling", Uniform(0.0, 1.0)), ("mass", Normal(1.0, 0.1))))
+    alone = Dispersions((("coupling", Uniform(0.0, 1.0)),))
+    assert a == b  # the order given does not matter: kept in DISPERSED order
+    assert draw(a, 5, 7) == draw(b, 5, 7)
+    # each quantity has its own stream: adding the mass leaves the coupling's draws alone
+    assert draw(a, 5, 7)["coupling"] == draw(alone, 5, 7)["coupling"]
+    assert draw(a, 5, 7) != draw(a, 5, 8) != draw(a, 6, 7)
+    seeds = {loop_seed(5, i) for i in range(100)}
+    assert len(seeds) == 100 and all(0 <= s < 2**63 for s in seeds)
+
+
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda: Normal(0.0, -1.0), "sigma"),
+        (lambda: Normal(0.0, 1.0, truncate=0.0), "truncate"),
+        (lambda: Uniform(2.0, 1.0), "low"),
+        (lambda: Dispersions((("spin", Normal(0.0, 1.0)),)), "unknown quantity"),
+        (lambda: Dispersions((("mass", Normal(0, 1)), ("mass", Normal(0, 2)))), "twice"),
+    ],
+)
+def test_bad_distributions_raise_option_errors(make, match):
+    with pytest.raises(OptionError, match=match):
+        make()
+
+
+def test_campaign_files_read_units_and_nominals():
+    c = load_campaign(ROOT / "problems" / "montecarlo_open_loop.toml")
+    items = dict(c.dispersions.items)
+    assert c.controller is CampaignController.NONE and c.duration == 3.0
+    assert items["mass"] == Normal(0.0325, 0.02 * 0.0325, 3.0)
+    assert items["offset_east"] == Normal(0.0, 0.003, 3.0)  # sigma_mm = 3
+    assert items["tilt"].sigma == pytest.approx(math.radians(1.0), rel=1e-15)
+    assert items["tilt_azimuth"] == Uniform(0.0, 2 * math.pi)  # added: uniform azimuth
+    assert items["wind_direction_from"].high == pytest.approx(2 * math.pi, rel=1e-15)
+    assert c.columns[: len(DISPERSED) + 2] == ("run", *(col for col, _ in DISPERSED.values()),
+                                                "loop_seed")  # fmt: skip
+    mpc = load_campaign(ROOT / "problems" / "montecarlo_gust_mpc.toml")
+    assert mpc.controller is CampaignController.MPC
+    assert mpc.plant_parameters["gust_L"] == (2.0, 0.0, 0.0)
+    assert mpc.loop.faults == (20, 21)
+
+
+BASE = f"""title = "bad"
+model = "{(ROOT / "models" / "flight5.toml").as_posix()}"
+duration_s = 0.3
+"""
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ('[dispersions.mass]\ndistribution = "gaussian"\nsigma_g = 1\n',
+         "dispersions.mass.distribution"),
+        ('[dispersions.tilt]\ndistribution = "normal"\nsigma_deg = -1\n',
+         "dispersions.tilt.sigma_deg"),
+        ('[dispersions.wind_speed]\ndistribution = "uniform"\nlow_mps = 3\nhigh_mps = 1\n',
+         "dispersions.wind_speed.low_mps"),
+        ('[dispersions.spin]\ndistribution = "normal"\nsigma = 1\n', "dispersions.spin"),
+        ('[dispersions.tilt]\ndistribution = "normal"\nsigma_kg = 1\n',
+         "dispersions.tilt.sigma_kg"),
+        ('[dispersions.mass]\ndistribution = "uniform"\nlow_g = 1\nhigh_g = 2\nsigma_g = 1\n',
+         "dispersions.mass.sigma_g"),
+        ('[dispersions.offset_east]\ndistribution = "normal"\nrelative_sigma = 0.1\n',
+         "dispersions.offset_east.relative_sigma"),
+        ('[dispersions.mass]\ndistribution = "normal"\n', "dispersions.mass.sigma"),
+        ('[plant]\nseed = 3\n', "plant.seed"),
+        ('[campaign]\ncontroller = "pid"\n', "campaign.controller"),
+    ],
+)  # fmt: skip
+def test_bad_campaign_files_name_the_key(tmp_path, text, key):
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE + text)
+    with pytest.raises(ProblemFileError) as err:
+        load_campaign(path)
+    assert err.value.field == key, str(err.value)
+    assert str(path) in str(err.value)

@@ -1,0 +1,136 @@
+"""``lightcraft closed-loop``: the problem files of problems/, the files it writes, its errors.
+
+References: the problem files themselves (what they ask is what the run does: duration in
+pulses, injected faults counted as fallbacks, the plant's gust in its parameters), the
+column lists of closed_loop_outputs and run_files, and the keys as written in a file for
+the error messages.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support.paths import REPO_ROOT
+
+from lightcraft_opt.cli import main
+from lightcraft_opt.control.options import ControllerFault, MpcSolver
+from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.files.closed_loop import load_closed_loop
+from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
+from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS
+from lightcraft_opt.layout import STATE
+
+PROBLEMS = REPO_ROOT / "problems"
+NUTATION = PROBLEMS / "nutation_suppression.toml"
+GUST = PROBLEMS / "closed_loop_gust.toml"
+
+
+@pytest.fixture
+def model_cache(request: pytest.FixtureRequest, tmp_path: Path, monkeypatch) -> Path:
+    """The CLI caches the MPC's linear model in $LIGHTCRAFT_CACHE: point it at pytest's
+    cache folder, which the other test modules fill too."""
+    cache = getattr(request.config, "cache", None)
+    folder = cache.mkdir("lightcraft_opt") if cache is not None else tmp_path
+    monkeypatch.setenv("LIGHTCRAFT_CACHE", str(folder))
+    return folder
+
+
+def test_problem_files_read_what_they_say():
+    """5 degrees of coning on the pad at the model's spin (tan θ = A |w_⊥| / (J spin));
+    the gust only in the plant's parameters; the controller tolerances as Bryson
+    weights; the injected faults and the dispersion as written."""
+    nut = load_closed_loop(NUTATION)
+    craft = nut.model.craft
+    w = nut.x0[STATE.index("w_B")]
+    coning = math.atan(craft.inertia_transverse * math.hypot(w[1], w[2]) / (
+        craft.inertia_axial * nut.x0[STATE.index("spin")][0]))  # fmt: skip
+    assert math.degrees(coning) == pytest.approx(5.0, rel=1e-12)
+    assert math.degrees(math.atan2(w[2], w[1])) == pytest.approx(17.2, rel=1e-12)
+    assert nut.duration == 1.0 and nut.mpc.horizon == 10 and nut.mpc.solver is MpcSolver.HPIPM
+    assert nut.mpc.time_budget == pytest.approx(5e-3)
+    assert nut.mpc.weights.coning == pytest.approx(1 / math.radians(0.5) ** 2)
+    assert nut.mpc.weights.offset == pytest.approx(1 / 0.01**2)
+    assert dict(nut.loop.dispersion.relative)["rotor_axial_inertia_dry"] == 0.01
+    assert nut.loop.noise.attitude == pytest.approx(math.radians(0.1))
+    assert nut.plant_parameters == {}
+    gust = load_closed_loop(GUST, duration=0.5)
+    assert gust.duration == 0.5
+    assert gust.loop.faults == (20, 21) and gust.loop.fault is ControllerFault.LATE
+    assert gust.plant_parameters["gust_L"] == (2.0, 0.0, 0.0)
+    assert gust.plant_parameters["gust_start"] == 0.4
+    assert gust.model.environment.wind.gust_L == (0.0, 0.0, 0.0)  # the controller's calm
+
+
+def test_none_writes_every_file(tmp_path, capsys):
+    """The uncontrolled flight: trajectory, pulses, one step row per pulse, the summary
+    and both figures; exit 0 (the flight reached its duration); the coning stays."""
+    out = tmp_path / "none"
+    assert main(["closed-loop", str(NUTATION), "--controller", "none", "--out", str(out)]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert names == {
+        "trajectory.csv",
+        "pulses.csv",
+        "steps.csv",
+        "summary.json",
+        "closed_loop.png",
+        "solve_times.png",
+    }
+    rows = (out / "steps.csv").read_text().splitlines()
+    assert rows[0].split(",") == list(STEP_COLUMNS) and len(rows) == 1 + 26
+    header = (out / "trajectory.csv").read_text().splitlines()[0]
+    assert header.split(",") == list(TRAJECTORY_COLUMNS)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller"] == "none" and summary["pulses"] == 26
+    assert summary["steps_by_status"] == {"open_loop": 26}
+    assert summary["coning_below_0.5deg_from_pulse"] is None
+    assert summary["coning_final_deg"] > 4.5
+    assert summary["pulses_dropped"] >= 1  # 5 % of 26 pulses, seed 1: pulse 1
+    assert "coning" in capsys.readouterr().out
+
+
+def test_mpc_through_the_gust_counts_the_injected_late_answers(tmp_path, model_cache):
+    """The gust problem's first second under the MPC: the two late answers it injects
+    (pulses 20 and 21) are the only fallbacks, in steps.csv and summary.json; the solve
+    times are written for every pulse."""
+    out = tmp_path / "mpc"
+    code = main(
+        ["closed-loop", str(GUST), "--controller", "mpc", "--duration", "1.0", "--out", str(out)]
+    )
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller"] == "mpc" and summary["pulses"] == 26
+    assert summary["faults_injected"] == 2
+    lines = [r.split(",") for r in (out / "steps.csv").read_text().splitlines()[1:]]
+    status = [r[STEP_COLUMNS.index("status")] for r in lines]
+    late = [k for k, s in enumerate(status) if s == "fallback_late"]
+    assert {20, 21} <= set(late)
+    assert summary["fallbacks"] == len(late) >= 2  # more only if this machine ran late
+    solve = np.array([float(r[STEP_COLUMNS.index("solve_time_ms")]) for r in lines])
+    # steps.csv keeps 6 significant figures (rounding <= 5e-6 relative), summary.json all
+    assert np.all(solve > 0)
+    assert summary["solve_time_ms"]["max"] == pytest.approx(solve.max(), rel=5e-6)
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ('[plant]\nfault = "explode"\n', "plant.fault"),
+        ("[plant.dispersion]\nrotor_inertia = 0.01\n", "plant.dispersion.rotor_inertia"),
+        ("[controller.tolerances]\nconing_rad_per_s = 1.0\n", "controller.tolerances.coning"),
+        ("[controller]\nhorizon_pulses = 0\n", "controller.horizon_pulses"),
+        ("[plant.wind]\ntable_height_m = [0.0, 10.0]\n", "plant.wind.table_height_m"),
+        ("[initial]\nconing = 5.0\n", "initial.coning"),
+    ],
+)
+def test_bad_files_name_the_key_and_exit_2(tmp_path, capsys, text, key):
+    src = tmp_path / "bad.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    src.write_text(f'model = "{model}"\nduration_s = 1.0\n' + text)
+    with pytest.raises(ProblemFileError, match=key.replace(".", r"\.")):
+        load_closed_loop(src)
+    assert main(["closed-loop", str(src), "--controller", "none", "--out", str(tmp_path)]) == 2
+    assert key in capsys.readouterr().err

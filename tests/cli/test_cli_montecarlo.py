@@ -1,0 +1,57 @@
+"""`lightcraft montecarlo`: the MPC campaign end to end, in this process.
+
+0.9 s flights (24 pulses) cover the two late solves the file injects at pulses 20 and 21:
+with the campaign's wall-clock budget out of the loop, those are the only fallbacks, two
+per run, and each run's statistics in summary.json agree with runs.csv.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from support.paths import REPO_ROOT
+
+from lightcraft_opt.campaign.run_table import read_table
+from lightcraft_opt.cli import main
+
+ROOT = REPO_ROOT
+MPC = ROOT / "problems" / "montecarlo_gust_mpc.toml"
+
+
+def test_cli_writes_the_table_summary_and_figures(tmp_path, capsys):
+    out = tmp_path / "mc"
+    argv = ["montecarlo", str(MPC), "--runs", "3", "--seed", "4", "--out", str(out),
+            "--duration", "0.9", "--workers", "1", "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    assert "3 runs made" in printed
+    t = read_table(out / "runs.csv")
+    assert list(t["run"]) == [0, 1, 2]
+    assert set(t["status"]) == {"duration_reached"}
+    assert np.all(t["pulses"] == 24)
+    assert np.all(t["fallbacks"] == 2)  # the injected late solves, and no other
+    assert np.all(t["iterations_total"] > 0) and np.all(t["rcs_used_kg"] > 0)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"] == 3 and summary["seed"] == 4
+    assert summary["controller"]["fallbacks_total"] == 6
+    assert summary["apogee_m"]["mean"] == np.mean(t["apogee_m"])
+    assert summary["left_beam"]["count"] == 0
+    assert summary["timing"]["solve_time_median_ms"]["n"] == 3
+    manifest = json.loads((out / "campaign.json").read_text())
+    assert manifest["controller"] == "mpc" and manifest["columns"][0] == "run"
+    for name in ("end_points.png", "apogee.png", "run_extremes.png"):
+        assert (out / name).stat().st_size > 10_000
+    # again: everything is found done, nothing is made
+    assert main(argv) == 0
+    assert "0 runs made, 3 found done" in capsys.readouterr().out
+    assert read_table(out / "runs.csv")["apogee_m"].tolist() == t["apogee_m"].tolist()
+
+
+def test_cli_bad_campaign_file_exits_2(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(MPC.read_text().replace('distribution = "uniform"', 'distribution = "flat"'))
+    bad.write_text(bad.read_text().replace("../models/", f"{(ROOT / 'models').as_posix()}/"))
+    assert main(["montecarlo", str(bad), "--runs", "2", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "dispersions.dropout_rate.distribution" in err and "unknown distribution" in err

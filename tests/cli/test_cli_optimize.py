@@ -1,0 +1,246 @@
+"""``lightcraft optimize``: a problem file in, solution.csv, summary.json and figures out.
+
+References: the solution's own inputs rolled forward through the same Φ reproduce the
+states written (the NLP closes its gaps to its tolerance, 1e-8 of each state's natural
+size); the summary agrees with the CSV it sits beside; the capture fraction is the
+engine's offset over the 55 mm capture radius of models/flight5.toml.
+
+The problem: Flight 5 1 cm east of the beam axis at 2 m, climbing at 4 m/s in a 3 m/s wind
+from the east, 4 pulses of beam steering at 420 J; Φ the cheapest full model (second-order
+splitting, one substep, a 4 x 16 optic quadrature), as tests/test_ocp.py.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support.paths import REPO_ROOT
+
+from lightcraft_opt.cli import main
+from lightcraft_opt.files.ocp_outputs import solution_columns
+from lightcraft_opt.files.problem import load_problem
+from lightcraft_opt.layout import STATE, initial_state, map_input_layout
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.solve import rollout
+from lightcraft_opt.ocp.transcription import state_scale
+from lightcraft_opt.plots.ocp import ocp_figures
+from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+
+MODELS = REPO_ROOT / "models"
+CAPTURE_RADIUS = 0.055  # models/flight5.toml capture_radius_mm = 55
+FIGURES = ("controls.png", "trajectory.png", "capture.png")
+
+PROBLEM = """\
+title = "steer the beam under Flight 5 in a crosswind"
+model = "../models/flight5.toml"
+horizon_pulses = 260                   # the command line asks for 4
+
+[model_overrides.environment.wind]
+speed_ref_mps = 3.0
+direction_from_deg = 90.0
+[model_overrides.craft.engine]
+quadrature_radial = 4
+quadrature_azimuthal = 16
+
+[initial]
+position_L_m = [0.01, 0.0, 2.0]
+velocity_L_mps = [0.0, 0.0, 4.0]
+
+[[objective]]
+term = "lateral_offset"
+weight = 1e4
+[[objective]]
+term = "control_effort"
+input = "pointing_L"
+weight = 1e3
+
+[[constraint]]
+kind = "capture_fraction"
+fraction = 0.2
+[[constraint]]
+kind = "no_ground_contact"
+
+[[control]]
+input = "pointing_L"
+lower_cm = -5
+upper_cm = 5
+slew_rate = 0.2
+[[control]]
+input = "energy"
+lower = 420.0
+upper = 420.0
+
+[pulse_map]
+scheme = "split"
+substeps = 1
+dense = 1
+"""
+
+
+@pytest.fixture
+def problem_file(tmp_path: Path) -> Path:
+    shutil.copytree(MODELS, tmp_path / "models")
+    (tmp_path / "problems").mkdir()
+    path = tmp_path / "problems" / "steer.toml"
+    path.write_text(PROBLEM)
+    return path
+
+
+def read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
+    with path.open() as f:
+        rows = list(csv.reader(f))
+    return rows[0], rows[1:]
+
+
+def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["optimize", str(problem_file), "--out", str(out), "--horizon", "4"]) == 0
+    printed = capsys.readouterr().out
+    assert "building 'steer the beam under Flight 5 in a crosswind'" in printed
+    assert "4 pulses" in printed and "solving" in printed and "solved: cost" in printed
+    for name in ("solution.csv", "summary.json", *FIGURES):
+        assert (out / name).stat().st_size > 0, name
+
+    pf = load_problem(problem_file, horizon=4)
+    problem = pf.problem
+    header, rows = read_csv(out / "solution.csv")
+    assert header == solution_columns(problem.inputs)
+    assert len(rows) == 5 and [int(r[0]) for r in rows] == [0, 1, 2, 3, 4]
+    col = {name: i for i, name in enumerate(header)}
+    nu = problem.inputs.size
+    inputs = header[col["coning_deg"] + 1 : col["coning_deg"] + 1 + nu]
+    assert inputs == ["pointing_x_m", "pointing_y_m", "focus_m", "energy_J"]
+    assert all(cell == "" for cell in rows[-1][col["pointing_x_m"] :])  # no pulse at N
+    values = np.array([[float(v) for v in r[: col["energy_J"] + 1]] for r in rows[:-1]])
+    last = np.array([float(v) for v in rows[-1][: col["coning_deg"] + 1]])
+    t = np.append(values[:, col["t_s"]], last[col["t_s"]])
+    assert t == pytest.approx(np.arange(5) / 26.0, rel=1e-11)
+
+    # the states written are Φ's rollout of the inputs written, to the NLP's tolerance
+    x_columns = slice(col["x_m"], col["pulses"] + 1)
+    X = np.vstack([values[:, x_columns], last[x_columns]])
+    U = values[:, col["pointing_x_m"] : col["energy_J"] + 1]
+    assert X[0] == pytest.approx(problem.x0, rel=1e-11, abs=1e-12)
+    phi = build_pulse_map(problem.model, pf.options.pulse_map)
+    X_sim, _ = rollout(problem, phi, U)
+    assert X_sim.shape == (5, STATE.size)
+    assert np.max(np.abs(X_sim - X) / state_scale(problem)) < 1e-7
+    assert U[:, 3] == pytest.approx(420.0, abs=0)  # held
+    assert np.max(np.abs(U[:, :2])) <= 0.05 + 1e-9
+    steps = np.abs(np.diff(U[:, :2], axis=0)) * 26.0
+    assert np.max(steps) <= 0.2 * (1 + 1e-6)  # slew limit, m/s
+
+    # capture fraction: |offset| / R_c from the engine columns, within the constraint
+    pulses = np.array([[float(v) for v in r[col["energy_captured_J"] :]] for r in rows[:-1]])
+    eng = {
+        name: pulses[:, col[name] - col["energy_captured_J"]]
+        for name in header[col["energy_captured_J"] :]
+    }
+    fraction = np.hypot(eng["offset_x_m"], eng["offset_y_m"]) / CAPTURE_RADIUS
+    assert eng["capture_fraction"] == pytest.approx(fraction, rel=1e-10)
+    assert np.max(fraction) <= 0.2 * (1 + 1e-6)
+    assert np.all((eng["energy_captured_J"] > 0) & (eng["energy_captured_J"] <= 420.0))
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "solved" and summary["success"] is True
+    assert summary["solver"] == "ipopt" and summary["horizon_pulses"] == 4
+    assert summary["laser_energy_J"] == pytest.approx(4 * 420.0, rel=1e-12)
+    assert summary["final_altitude_m"] == pytest.approx(X[-1, 2], rel=1e-11)
+    assert summary["max_capture_fraction"] == pytest.approx(np.max(fraction), rel=1e-10)
+    assert summary["capture_fraction_limit"] == 0.2
+    terms = summary["cost_terms"]
+    assert list(terms) == ["lateral_offset[pad]", "control_effort[pointing_L]"]
+    assert sum(terms.values()) == pytest.approx(summary["cost"], rel=1e-12)
+    # the control effort term is the sum of squared pointings it weighs
+    assert terms["control_effort[pointing_L]"] == pytest.approx(
+        1e3 * np.sum(U[:, :2] ** 2), rel=1e-9
+    )
+    assert summary["constraint_violation"] < 1e-8
+    assert summary["iterations"] > 0 and summary["build_time_s"] > 0
+
+
+def test_an_unconverged_solve_exits_1_and_still_writes_its_files(problem_file, tmp_path, capsys):
+    """One SQP iteration cannot converge: exit status 1, the result written as it is."""
+    out = tmp_path / "out"
+    argv = ["optimize", str(problem_file), "--out", str(out), "--horizon", "3"]
+    assert main([*argv, "--solver", "sqp_qrqp", "--max-iter", "1"]) == 1
+    assert "max_iter" in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "max_iter" and summary["success"] is False
+    assert summary["solver"] == "sqp_qrqp" and summary["iterations"] == 1
+    _, rows = read_csv(out / "solution.csv")
+    assert len(rows) == 4
+    for name in FIGURES:
+        assert (out / name).exists()
+
+
+def test_a_bad_problem_file_exits_2_with_one_line(problem_file, tmp_path, capsys):
+    problem_file.write_text(PROBLEM.replace("fraction = 0.2", "fraction = 2.0"))
+    out = tmp_path / "out"
+    assert main(["optimize", str(problem_file), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert f"{problem_file}: constraint[0].fraction: must lie in (0, 1]" in err
+    assert not out.exists()
+
+
+def test_ocp_figures_draw_the_results_numbers(problem_file):
+    """A made-up 3-pulse result: each drawn line holds the result's numbers in the unit its
+    axis label names (pointing and offsets in cm, energy in J, altitude in m)."""
+    problem = load_problem(problem_file, horizon=3).problem
+    x = np.tile(initial_state(problem.model), (4, 1))
+    x[:, STATE.index("r_L")] = [
+        [0.0, 0.0, 2.0],
+        [0.01, 0.0, 2.2],
+        [0.02, -0.01, 2.5],
+        [0.0, 0.0, 2.9],
+    ]
+    u = np.array([[0.01, 0.0, 500.0, 420.0], [0.02, -0.01, 500.0, 300.0], [0.0, 0.0, 500.0, 0.0]])
+    engine = np.zeros((3, 11))
+    engine[:, 7:9] = [[0.003, 0.004], [0.0, 0.01], [0.006, 0.008]]  # offset_L [m]
+    result = OcpResult(
+        status=OcpStatus.SOLVED,
+        message="made up",
+        solver="ipopt",
+        cost=1.0,
+        iterations=1,
+        solve_time=0.0,
+        t=np.arange(4) / 26.0,
+        x=x,
+        u=u,
+        engine=engine,
+        inputs=map_input_layout(0, False),
+    )
+    figures = ocp_figures(result, problem, title="made up")
+    assert list(figures) == list(FIGURES)
+
+    pointing, energy = figures["controls.png"].axes  # focus held, no RCS: two panels
+    assert pointing.get_ylabel() == "beam pointing, pointing_L [cm]"
+    east, north = pointing.get_lines()
+    assert east.get_ydata() == pytest.approx([1.0, 2.0, 0.0, 0.0], abs=1e-12)  # steps
+    assert north.get_ydata() == pytest.approx([0.0, -1.0, 0.0, 0.0], abs=1e-12)
+    assert energy.get_lines()[0].get_ydata() == pytest.approx([420.0, 300.0, 0.0, 0.0])
+
+    altitude, drift = figures["trajectory.png"].axes
+    assert altitude.get_lines()[0].get_ydata() == pytest.approx([2.0, 2.2, 2.5, 2.9])
+    assert drift.get_ylabel().endswith("[cm]")
+    assert drift.get_lines()[1].get_ydata() == pytest.approx([0.0, 0.0, -1.0, 0.0])
+
+    (capture,) = figures["capture.png"].axes
+    offset, radius, limit = capture.get_lines()
+    assert offset.get_ydata() == pytest.approx([0.5, 1.0, 1.0], rel=1e-12)  # |offset| cm
+    assert radius.get_ydata()[0] == pytest.approx(100 * CAPTURE_RADIUS)
+    assert limit.get_ydata()[0] == pytest.approx(0.2 * 100 * CAPTURE_RADIUS)
+
+
+def test_verbose_prints_the_solvers_iterations(problem_file, tmp_path, capfd):
+    """--verbose: IPOPT's iteration table (written by the C library to the process's stdout)."""
+    argv = ["optimize", str(problem_file), "--out", str(tmp_path / "v"), "--horizon", "3"]
+    main([*argv, "--solver", "ipopt", "--max-iter", "2", "--verbose"])
+    out = capfd.readouterr().out
+    assert "inf_pr" in out and "inf_du" in out

@@ -1,0 +1,1 @@
+"""Shared test helpers (importable: ``tests/`` is on pytest's ``pythonpath``)."""

@@ -1,0 +1,53 @@
+"""Test models: the Table 1 craft built directly from the dataclasses (SI)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+from lightcraft_opt.params import (
+    Aerodynamics,
+    Carrier,
+    Craft,
+    Environment,
+    Flight,
+    Laser,
+    Model,
+    Site,
+    SpinDecay,
+)
+
+RPM = 2 * math.pi / 60
+
+
+def table1_flight5(**craft_changes: object) -> Model:
+    """Flight 5 (#200-5/6, air) from Table 1 in SI, calm air, Earth rotating."""
+    craft = Craft(
+        name="#200-5/6",
+        diameter=0.1222,
+        mass=0.0325,
+        inertia_axial=602.7e-7,
+        inertia_transverse=465.3e-7,
+        spin=10_000 * RPM,
+    )
+    craft = replace(craft, **craft_changes)  # type: ignore[arg-type]
+    return Model(
+        name="flight5-test",
+        craft=craft,
+        site=Site("WSMR", math.radians(32.4), math.radians(-106.4), 1194.0),
+        laser=Laser("PLVTS", 420.0, 26.0, 18e-6, 10.6e-6),
+        flight=Flight(
+            pulse_energy=420.0, pulse_rate=26.0, beam_side=0.071974, impulse_per_pulse=0.0637
+        ),
+    )
+
+
+def torque_free(model: Model, carrier: Carrier | None = None) -> Model:
+    """The same craft with every torque switched off and the site frame inertial."""
+    craft = replace(
+        model.craft,
+        aero=Aerodynamics(cd_scale=0.0, cl_scale=0.0, cm_scale=0.0),
+        spin_decay=SpinDecay(),
+        carrier=carrier,
+    )
+    return replace(model, craft=craft, environment=Environment(earth_rotation=False))
