@@ -1,16 +1,25 @@
 """lightcraft_opt: flight dynamics, optimisation and control of laser-propelled lightcraft.
 
-Frames and units: docs/frames.md. Everything inside is SI.
+``import lightcraft_opt as lc`` reaches the public API of every capability: models and
+files, the pulse map Φ, simulation, optimal control, control (MPC, LQR, closed loop),
+linearisation, calibration and Monte Carlo campaigns, and every result type. The control,
+campaign and linearisation names load on first use (python-control takes ~2 s to import).
+Frames and units: docs/frames.md; the physics: docs/physics.md; the house:
+docs/architecture.md. Everything inside is SI.
 """
 
-from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
-from lightcraft_opt.calibration.problem import Track
-from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
-from lightcraft_opt.campaign.run import Campaign
-from lightcraft_opt.campaign.runner import CampaignResult, run_campaign
-from lightcraft_opt.campaign.summary import campaign_summary
-from lightcraft_opt.control.closed_loop import closed_loop
-from lightcraft_opt.control.result import ClosedLoopResult
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from lightcraft_opt.calibration import (
+    CalibrationOptions,
+    CalibrationResult,
+    CalibrationStatus,
+    Track,
+    calibrate,
+)
 from lightcraft_opt.errors import (
     LightcraftError,
     ModelFileError,
@@ -18,17 +27,85 @@ from lightcraft_opt.errors import (
     ParameterError,
     ProblemFileError,
 )
-from lightcraft_opt.files.campaign import load_campaign
-from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
-from lightcraft_opt.files.model import load_model
-from lightcraft_opt.files.problem import ProblemFile, load_problem
-from lightcraft_opt.files.track import read_track
-from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
+from lightcraft_opt.files import (
+    ClosedLoopProblem,
+    ProblemFile,
+    load_closed_loop,
+    load_model,
+    load_problem,
+    read_track,
+)
+from lightcraft_opt.layout import (
+    CONING,
+    ENGINE,
+    PARAMETERS,
+    STATE,
+    initial_state,
+    nominal_inputs,
+    parameter_values,
+)
+from lightcraft_opt.ocp import (
+    CompiledOcp,
+    OcpOptions,
+    OcpProblem,
+    OcpResult,
+    OcpSolver,
+    OcpStatus,
+    rollout,
+)
+from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOptions
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
-from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
-from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.simulation import SimulationResult, SimulationStatus, simulate
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+
+if TYPE_CHECKING:
+    from lightcraft_opt import linearize
+    from lightcraft_opt.campaign import Campaign, CampaignResult, campaign_summary, run_campaign
+    from lightcraft_opt.control import (
+        ClosedLoopOptions,
+        ClosedLoopResult,
+        LqrController,
+        MpcController,
+        MpcOptions,
+        OpenLoopController,
+        closed_loop,
+        coning_model,
+    )
+    from lightcraft_opt.files.campaign import load_campaign
+
+#: Names loaded on first use, and the module that holds each.
+_LAZY = {
+    "Campaign": "lightcraft_opt.campaign",
+    "CampaignResult": "lightcraft_opt.campaign",
+    "campaign_summary": "lightcraft_opt.campaign",
+    "run_campaign": "lightcraft_opt.campaign",
+    "load_campaign": "lightcraft_opt.files.campaign",
+    "ClosedLoopOptions": "lightcraft_opt.control",
+    "ClosedLoopResult": "lightcraft_opt.control",
+    "LqrController": "lightcraft_opt.control",
+    "MpcController": "lightcraft_opt.control",
+    "MpcOptions": "lightcraft_opt.control",
+    "OpenLoopController": "lightcraft_opt.control",
+    "closed_loop": "lightcraft_opt.control",
+    "coning_model": "lightcraft_opt.control",
+}
+
+
+def __getattr__(name: str) -> Any:
+    """The control and campaign names and the ``linearize`` package, imported when first
+    asked for."""
+    if name == "linearize":
+        return importlib.import_module("lightcraft_opt.linearize")
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'lightcraft_opt' has no attribute {name!r}")
+
 
 __all__ = [
+    "CONING",
+    "ENGINE",
     "PARAMETERS",
     "STATE",
     "CalibrationOptions",
@@ -36,34 +113,54 @@ __all__ = [
     "CalibrationStatus",
     "Campaign",
     "CampaignResult",
+    "ClosedLoopOptions",
     "ClosedLoopProblem",
     "ClosedLoopResult",
+    "CompiledOcp",
     "Craft",
     "Environment",
     "Flight",
     "Laser",
     "LightcraftError",
+    "LqrController",
     "Model",
     "ModelFileError",
+    "MpcController",
+    "MpcOptions",
+    "OcpOptions",
+    "OcpProblem",
+    "OcpResult",
+    "OcpSolver",
+    "OcpStatus",
+    "OpenLoopController",
     "OptionError",
     "ParameterError",
     "ProblemFile",
     "ProblemFileError",
+    "PulseMap",
+    "PulseMapOptions",
+    "RcsProfile",
+    "SimulationOptions",
     "SimulationResult",
     "SimulationStatus",
     "Site",
     "Track",
     "Wind",
+    "build_pulse_map",
     "calibrate",
     "campaign_summary",
     "closed_loop",
+    "coning_model",
     "initial_state",
+    "linearize",
     "load_campaign",
     "load_closed_loop",
     "load_model",
     "load_problem",
+    "nominal_inputs",
     "parameter_values",
     "read_track",
+    "rollout",
     "run_campaign",
     "simulate",
 ]

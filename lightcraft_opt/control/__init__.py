@@ -14,17 +14,11 @@ and the closed loop that flies them on the full pulse map Φ.
 The what (options, result) never imports the how (an import-linter contract).
 """
 
-from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
-from lightcraft_opt.control.controllers import (
-    Controller,
-    LqrController,
-    Measurement,
-    OpenLoopController,
-    StageWeights,
-    stage_weights,
-)
-from lightcraft_opt.control.mpc import MpcController
-from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
@@ -34,19 +28,67 @@ from lightcraft_opt.control.options import (
     MpcSolver,
     PlantDispersion,
 )
-from lightcraft_opt.control.prediction_model import (
-    CONING_INPUTS,
-    CONING_STATES,
-    ConingModel,
-    coning_model,
-    turn,
-)
 from lightcraft_opt.control.result import (
     ClosedLoopResult,
     ControllerLog,
     ControllerStatus,
     StepStats,
 )
+
+if TYPE_CHECKING:
+    from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
+    from lightcraft_opt.control.controllers import (
+        Controller,
+        LqrController,
+        Measurement,
+        OpenLoopController,
+        StageWeights,
+        stage_weights,
+    )
+    from lightcraft_opt.control.mpc import MpcController
+    from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
+    from lightcraft_opt.control.prediction_model import (
+        CONING_INPUTS,
+        CONING_STATES,
+        ConingModel,
+        coning_model,
+        turn,
+    )
+
+#: The controllers, the MPC and the loop load on first use: their prediction model
+#: linearises Φ through linearize/, which imports python-control (~2 s); a file reader
+#: that needs only the options stays quick.
+_LAZY = {
+    **dict.fromkeys(("closed_loop", "disperse", "measured"), "closed_loop"),
+    **dict.fromkeys(
+        (
+            "Controller",
+            "LqrController",
+            "Measurement",
+            "OpenLoopController",
+            "StageWeights",
+            "stage_weights",
+        ),
+        "controllers",
+    ),
+    "MpcController": "mpc",
+    "NutationQp": "mpc_qp",
+    "QpStatus": "mpc_qp",
+    **dict.fromkeys(
+        ("CONING_INPUTS", "CONING_STATES", "ConingModel", "coning_model", "turn"),
+        "prediction_model",
+    ),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """A controller, MPC or closed-loop name, imported from its module when first asked for."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'lightcraft_opt.control' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"lightcraft_opt.control.{_LAZY[name]}"), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "CONING_INPUTS",
