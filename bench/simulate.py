@@ -7,16 +7,17 @@ difference of the final states:
   reported apart), best of ``--repeats`` runs.
 * **DOP853**: the same equations written out here as a hybrid loop. At each pulse time
   t_k = k T the laser jump (:func:`~lightcraft_opt.symbolic.pulse_jump.pulse_jump`, paper
-  Eqs. 12-13, wrapped in a casadi.Function and evaluated numerically) is applied; then
-  ``scipy.integrate.solve_ivp(method="DOP853")`` integrates the coast right-hand side
-  (:func:`~lightcraft_opt.symbolic.coast_rhs.build_coast_rhs`, evaluated numerically in a
-  Python callback) across the pulse interval, and the attitude quaternion is scaled back to
-  unit length after each interval as Φ does. Same equations, same inputs and parameters,
-  integrated by an independent adaptive integrator instead of Φ's fixed-step Yoshida
-  splitting: at a tight tolerance (``--rtol``) it is the reference, and ``--check`` runs it
-  once more at rtol / 100 to show that the reference itself has converged. A ladder of
-  looser tolerances then finds the "matched accuracy" DOP853 run, the loosest whose
-  final-position error is no larger than Φ's, and times that too.
+  Eqs. 12-13 of the seed paper, docs/references.md#paper-eq-12, wrapped in a casadi.Function and
+  evaluated numerically) is applied; then ``scipy.integrate.solve_ivp(method="DOP853")``
+  integrates the coast right-hand side
+  (:func:`~lightcraft_opt.symbolic.coast_rhs.build_coast_rhs`, evaluated numerically in a Python
+  callback) across the pulse interval, and the attitude quaternion is scaled back to unit length
+  after each interval as Φ does. Same equations, same inputs and parameters, integrated by an
+  independent adaptive integrator instead of Φ's fixed-step Yoshida splitting: at a tight
+  tolerance (``--rtol``) it is the reference, and ``--check`` runs it once more at rtol / 100 to
+  show that the reference itself has converged. A ladder of looser tolerances then finds the
+  "matched accuracy" DOP853 run, the loosest whose final-position error is no larger than Φ's,
+  and times that too.
 
 The reference flies exactly the pulses :func:`simulate` flew. If the flight ends before the
 duration (the craft leaves the beam or lands), the output says so and the comparison covers

@@ -1,4 +1,4 @@
-"""Options of the numeric runners as frozen dataclasses (STYLE rule 7)."""
+"""Options of the numeric runners as frozen dataclasses (docs/architecture.md#rule-7)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,11 @@ __all__ = [
 
 
 class CoastScheme(Enum):
-    """How the pulse map integrates the coast between pulses (symbolic/coast.py)."""
+    """How the pulse map integrates the coast between pulses (symbolic/coast.py).
+
+    Strang splitting: docs/references.md#strang-1968; Yoshida composition:
+    docs/references.md#yoshida-1990.
+    """
 
     RK4 = "rk4"  # classical Runge-Kutta, fixed steps
     SPLIT = "split"  # Strang splitting, exact spinning-body rotation (2nd order)

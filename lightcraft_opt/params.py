@@ -156,7 +156,8 @@ class SpinDecayModel(Enum):
     ROTATING_DISK = "rotating_disk"
 
 
-# Paper Eq. 5 with the C_M typo corrected (physics.md section 4); ascending powers of alpha [rad].
+# Paper Eq. 5 (the seed paper, docs/references.md#paper-eq-5) with the C_M typo corrected
+# (docs/physics.md#aero-coefficients); ascending powers of alpha [rad].
 PAPER_CD = (0.731, 0.0398, -0.8463, 0.3928)
 PAPER_CL = (0.0, 0.5531, 0.5531, -0.2724, -0.3317, 0.1993)
 PAPER_CM = (0.0, 0.080, -0.0583, -0.3585, 0.8794, -0.6619, 0.1598)
@@ -224,10 +225,11 @@ class Aerodynamics:
 class SpinDecay:
     """Friction torque on the rotor about b1.
 
-    ``EXPONENTIAL``: T = -J w_R / time_constant (paper, Eq. 6).
-    ``ROTATING_DISK``: von Karman disk friction, laminar or turbulent, whichever is
-    larger, times ``disk_faces`` (physics.md section 4). The formulas are the
-    two-sided (both faces wetted) results of Schlichting, so 1 means a whole disk.
+    ``EXPONENTIAL``: T = -J w_R / time_constant (paper Eq. 6, docs/references.md#paper-eq-6).
+    ``ROTATING_DISK``: von Karman disk friction (docs/references.md#von-karman-1921), laminar
+    or turbulent, whichever is larger, times ``disk_faces`` (docs/physics.md#spin-decay).
+    The formulas are the two-sided (both faces wetted) results of Schlichting
+    (docs/references.md#schlichting), so 1 means a whole disk.
     """
 
     model: SpinDecayModel = SpinDecayModel.NONE
@@ -366,7 +368,7 @@ class Engine:
     """The lightcraft engine: optic, blast ring, impulse model, health and ablation.
 
     Geometry is in B from P (docs/frames.md); values are guesses to calibrate
-    (physics.md section 6) unless a model file says otherwise.
+    (docs/physics.md#engine-parameters) unless a model file says otherwise.
 
     Attributes
     ----------
@@ -445,7 +447,8 @@ class Craft:
     ----------
     name : label.
     diameter : m; S = pi diameter^2 / 4 is the aerodynamic reference area.
-    mass : rotor mass at launch, liner included [kg] (Table 1 "launch mass").
+    mass : rotor mass at launch, liner included [kg] (paper Table 1 "launch mass",
+        docs/references.md#paper-table-1).
     inertia_axial : J, rotor central moment about b1 at launch, liner included [kg m^2].
     inertia_transverse : I, rotor central moment about b2, b3 at launch [kg m^2].
     spin : rotor spin rate relative to B at launch [rad/s].
@@ -752,7 +755,7 @@ class Flight:
 
     @property
     def coupling_coefficient(self) -> float:
-        """C_m = impulse / pulse energy [N s / J] (physics.md section 5)."""
+        """C_m = impulse / pulse energy [N s / J] (docs/physics.md#table-1)."""
         return self.impulse_per_pulse / self.pulse_energy
 
 

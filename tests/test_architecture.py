@@ -1,4 +1,5 @@
-"""The house rules as tests: import-linter contracts, ruff and mypy (pyproject.toml).
+"""The house rules (docs/architecture.md) as tests: import-linter contracts, ruff and mypy
+(pyproject.toml).
 
 The capability order (docs/architecture.md#contracts) is import-linter contracts in
 ``[tool.importlinter]``; a wrong arrow fails here instead of in review.

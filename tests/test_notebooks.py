@@ -1,4 +1,4 @@
-"""Every notebook runs headless, in its quick size (STYLE rule 13).
+"""Every notebook runs headless, in its quick size (docs/architecture.md#rule-13).
 
 Each ``notebooks/<name>.ipynb`` has a jupytext twin ``notebooks/<name>.py`` (percent
 format), the form reviewed in diffs; the test checks that both hold the same cells, then

@@ -1,14 +1,16 @@
 """Calibration: fit engine, beam, aerodynamic and launch parameters to a tracked flight.
 
-Least squares over the pulse map Φ (STYLE rule 1): minimise ½ |r(θ)|² with r the
+Least squares over the pulse map Φ (docs/architecture.md#rule-1): minimise ½ |r(θ)|² with r the
 predicted minus the tracked positions (:mod:`lightcraft_opt.calibration.problem`), by
 Gauss-Newton with Levenberg-Marquardt damping (Nielsen's update of the damping; Madsen,
-Nielsen & Tingleff, *Methods for non-linear least squares problems*, 2004, Sec. 3.2)
+Nielsen & Tingleff, *Methods for non-linear least squares problems*, 2004, Sec. 3.2;
+docs/references.md#madsen-nielsen-tingleff)
 and box bounds (an active set: a component on a bound whose gradient pushes outward is
 held there; a step is clipped into the box). The fit works in scaled variables θ / scale
 (each component's typical size), where the damping is λ I.
 
-Statistics at the optimum (Seber & Wild, *Nonlinear Regression*, 1989, Sec. 2.1):
+Statistics at the optimum (Seber & Wild, *Nonlinear Regression*, 1989, Sec. 2.1;
+docs/references.md#seber-wild):
 σ² = RSS / (3 m - n), covariance σ² (JᵀJ)⁺ from the SVD of the scaled Jacobian
 (pseudo-inverse: never a singular-matrix exception), standard deviations, correlations.
 Identifiability flags (:class:`~lightcraft_opt.calibration.result.FlagKind`), each with

@@ -5,7 +5,7 @@ casadi.Function of the fit vector θ (the components of
 The flight is the model's open-loop flight (:func:`~lightcraft_opt.layout.nominal_inputs`
 at every pulse, as :func:`~lightcraft_opt.simulation.simulate.simulate` flies it) from the initial
 state x0, stepped with the pulse map Φ's dense output, ``pulse_map_dense(x, u, p, t)``,
-pulse by pulse in one expression graph (STYLE rule 1: the same Φ as everything else).
+pulse by pulse in one expression graph (docs/architecture.md#rule-1: the same Φ as everything else).
 θ enters through the parameter vector p and the initial state x0 only
 (:func:`apply_fit`); the position at a track time t is the cubic Hermite interpolant of
 the dense output's positions and velocities at the two nodes around t, so

@@ -1,5 +1,6 @@
-"""Typed, numpy-only result of a calibration (STYLE rule 9): status, fitted values with
-their covariance, and the identifiability flags that say what the data cannot tell."""
+"""Typed, numpy-only result of a calibration (docs/architecture.md#rule-9): status, fitted
+values with their covariance, and the identifiability flags that say what the data cannot
+tell."""
 
 from __future__ import annotations
 
@@ -49,8 +50,8 @@ class CalibrationResult:
     Attributes
     ----------
     status, message : how the fit ended, in words.
-    names, units : (n,) fitted components (:data:`~lightcraft_opt.calibration.problem.FIT_GROUPS`)
-        and their SI units.
+    names, units : (n,) fitted components
+        (:data:`~lightcraft_opt.calibration.parameters.FIT_GROUPS`) and their SI units.
     values, initial : (n,) fitted and starting values [SI, per ``units``].
     lower, upper : (n,) bounds used [SI].
     std : (n,) standard deviations [SI]; inf for a parameter on a null direction.

@@ -1,12 +1,12 @@
 """Statistics of a least-squares fit at its optimum and the identifiability flags.
 
-Seber & Wild, *Nonlinear Regression*, 1989, Sec. 2.1: with the scaled Jacobian
-Js = J diag(scale) = U S Vᵀ, the covariance of θ is σ² diag(scale) V S⁺² Vᵀ diag(scale)
-(pseudo-inverse: directions with S below ``null_tolerance`` times the largest are null
-and get no variance; never a singular-matrix exception). A component that loads (|V_ij| >
-0.1) on a null direction j has an infinite standard deviation: NOT_IDENTIFIABLE. The
-others may be POORLY_DETERMINED (std > ``rel_std_max`` max(|value|, scale)), CORRELATED
-(|correlation| > ``correlation_max`` with another) or AT_BOUND.
+Seber & Wild, *Nonlinear Regression*, 1989, Sec. 2.1 (docs/references.md#seber-wild): with the
+scaled Jacobian Js = J diag(scale) = U S Vᵀ, the covariance of θ is σ² diag(scale) V S⁺² Vᵀ
+diag(scale) (pseudo-inverse: directions with S below ``null_tolerance`` times the largest are
+null and get no variance; never a singular-matrix exception). A component that loads (|V_ij| >
+0.1) on a null direction j has an infinite standard deviation: NOT_IDENTIFIABLE. The others may
+be POORLY_DETERMINED (std > ``rel_std_max`` max(|value|, scale)), CORRELATED (|correlation| >
+``correlation_max`` with another) or AT_BOUND.
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ order runs are made in, the worker count or the engine; and adding a dispersion 
 the draws of the others unchanged (common random numbers between campaigns).
 
 Distributions describe the value itself, absolute and SI: the file reader turns a
-relative sigma and a missing mean into absolute numbers (monte_carlo_files.py).
+relative sigma and a missing mean into absolute numbers (files/campaign.py).
 """
 
 from __future__ import annotations

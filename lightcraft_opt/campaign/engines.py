@@ -3,7 +3,7 @@
 Every engine takes the per-run function ``fn(campaign, seed, index) -> outcome`` (a
 picklable top-level function: :func:`~lightcraft_opt.campaign.run.run_one`), the
 campaign, the seed and the indices to make, and yields the outcomes as they finish, in
-whatever order. What a run gives does not depend on the engine (monte_carlo_run.py).
+whatever order. What a run gives does not depend on the engine (campaign/run.py).
 
 * :func:`serial`: in this process, in index order (tests, debugging).
 * :func:`local_processes`: a ``ProcessPoolExecutor`` of "spawn" workers (no fork of a

@@ -17,7 +17,7 @@ seed and its index) and writes, in ``out_dir``:
 * ``summary.json``: :func:`~lightcraft_opt.campaign.summary.campaign_summary`, once
   the campaign is complete.
 
-Engines (monte_carlo_engines.py): ``workers=1`` this process; else local "spawn"
+Engines (campaign/engines.py): ``workers=1`` this process; else local "spawn"
 processes (default: one per CPU); ``scheduler="tcp://host:port"`` a Dask cluster.
 """
 

@@ -24,7 +24,8 @@ CHI2_2DOF_95 = -2.0 * math.log(0.05)
 
 
 def wilson_interval(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
-    """Wilson score interval of a binomial proportion (Wilson 1927); (nan, nan) for n = 0."""
+    """Wilson score interval of a binomial proportion (Wilson 1927,
+    docs/references.md#wilson-1927); (nan, nan) for n = 0."""
     if n <= 0:
         return (math.nan, math.nan)
     p = successes / n

@@ -1,6 +1,6 @@
 """Closed-loop flight: a controller against the plant, pulse by pulse, with what goes wrong.
 
-The loop is written out (STYLE rule 1)::
+The loop is written out (docs/architecture.md#rule-1)::
 
     for k in pulses:
         y = x + noise                       # what the controller is told

@@ -1,10 +1,10 @@
 """Model predictive control of the coning (nutation), tilt and beam offset, pulse by pulse.
 
-Built once, then ``u = controller.step(x)`` every pulse (STYLE rule 1):
+Built once, then ``u = controller.step(x)`` every pulse (docs/architecture.md#rule-1):
 
 1. measure the coning coordinates z of the state (symbolic/coning_coordinates.py: lateral
    position and velocity in the yaw-aligned frame, tilt of H, coning vector);
-2. schedule the prediction model over the horizon (linearize/coning_model.py: Φ's
+2. schedule the prediction model over the horizon (control/prediction_model.py: Φ's
    Jacobians in z, interpolated at the measured spin and altitude, the coning rows turned
    by the measured ω T plus the phase tracker's correction, the spin decayed and the
    altitude advanced pulse by pulse, the yaw turn of the coning craft evaluated along the
@@ -18,7 +18,7 @@ Built once, then ``u = controller.step(x)`` every pulse (STYLE rule 1):
    inertias is off by the plant's dispersion, 0.5 rad of phase a pulse for 1 % of J / A).
 
 Prediction model and its error. The model is Φ's exact linearisation (second order
-error, tests/test_mpc.py) about upright points of the nominal climb, in coordinates where
+error, tests/control/test_mpc.py) about upright points of the nominal climb, in coordinates where
 it varies slowly, scheduled on spin and altitude. What it leaves out is measured there: at
 5 degrees of coning under the MPC's first input, one pulse ahead, 0.13 degrees of coning
 (of 1.3 it changes), 0.28 of H tilt, 77 mm/s of lateral velocity (the engine's impulse

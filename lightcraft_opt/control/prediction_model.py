@@ -24,7 +24,7 @@ slowly. The grid stores the coning rows turned back by -ω T (``A``, ``B``); a m
 spin and altitude is the bilinear interpolation of the stored rows, turned forward by the
 ω T of that state (:meth:`ConingModel.horizon`, which also steps the spin decay and the
 climb over a horizon: a linear time-varying model). Outside the grid the nearest edge is
-used. The interpolation error is measured in tests/test_mpc.py; what the model leaves out
+used. The interpolation error is measured in tests/control/test_mpc.py; what the model leaves out
 (the vertical channel, the yaw drift inside a horizon, propellant use, the mean RCS
 thrust's lift) is measured there as the prediction error against Φ.
 """

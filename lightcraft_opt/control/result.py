@@ -1,4 +1,5 @@
-"""Typed, numpy-only records of a closed-loop flight and of its controller (STYLE rule 9).
+"""Typed, numpy-only records of a closed-loop flight and of its controller
+(docs/architecture.md#rule-9).
 
 A controller reports each pulse as a :class:`StepStats` with a :class:`ControllerStatus`;
 a failed or late solve is a status (the controller fell back to its shifted plan), never

@@ -1,6 +1,6 @@
 """Campaign files: a closed-loop file with the distributions of a Monte Carlo campaign.
 
-A campaign file is a closed-loop file (closed_loop_files.py: the model, ``[initial]``,
+A campaign file is a closed-loop file (files/closed_loop.py: the model, ``[initial]``,
 ``[controller]``, ``[plant]`` with its noise, relative dispersion, drop-outs, faults and
 wind) with two more tables::
 

@@ -1,6 +1,6 @@
 """Model files: TOML in ``models/`` read into validated SI parameters.
 
-The only place where units are converted (STYLE.md rule 4). A non-SI value carries its
+The only place where units are converted (docs/architecture.md#rule-4). A non-SI value carries its
 unit in the key (``mass_g``, ``spin_rpm``, ``beam_side_cm``), an SI value the SI suffix
 (``mass_kg``); dimensionless numbers, text, switches and choices are bare (``hole_ratio``,
 ``name``, ``propellant``). :data:`SCHEMA` gives each dataclass field's quantity,

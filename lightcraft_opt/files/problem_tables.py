@@ -1,4 +1,4 @@
-"""The tables of a problem file read into SI values (problem_files.py has the schema).
+"""The tables of a problem file read into SI values (files/problem.py has the schema).
 
 :func:`read_table` reads any table with model_files' keys and units (its QUANTITIES, its
 unknown-key hints), plus keys whose unit is the slot's their table names (``lower``,

@@ -4,11 +4,11 @@ The eigenvalues of A (:mod:`.state_space`) are the pulse-to-pulse multipliers (F
 multipliers of the hybrid flow): |λ| > 1 grows by |λ| a pulse.
 
 Modes (:class:`ModeKind`) are classified by participation factors (Pérez-Arriaga,
-Verghese & Schweppe 1982, IEEE Trans. PAS 101(9)): p_ki = |l_ki r_ki|, dimensionless,
-grouped by the states of each kind; a mode belongs to the group with the largest share.
-The beam-riding modes load the lateral offset, lateral velocity and tilt; the coning
-(nutation) modes the transverse rates w_B[b2, b3] (216 Hz for Flight 5, aliased at the
-26 Hz pulse rate).
+Verghese & Schweppe 1982, IEEE Trans. PAS 101(9); docs/references.md#perez-arriaga-1982):
+p_ki = |l_ki r_ki|, dimensionless, grouped by the states of each kind; a mode belongs to the
+group with the largest share. The beam-riding modes load the lateral offset, lateral velocity
+and tilt; the coning (nutation) modes the transverse rates w_B[b2, b3] (216 Hz for Flight 5,
+aliased at the 26 Hz pulse rate).
 """
 
 from __future__ import annotations

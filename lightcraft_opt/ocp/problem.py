@@ -1,4 +1,4 @@
-"""What an optimal control problem of a lightcraft flight asks for (STYLE rule 2).
+"""What an optimal control problem of a lightcraft flight asks for (docs/architecture.md#rule-2).
 
 A problem states the model, the horizon in pulses, the per-pulse controls with their bounds
 and slew-rate limits, the path and terminal constraints and a weighted sum of objective

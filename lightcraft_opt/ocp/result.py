@@ -1,4 +1,4 @@
-"""The result of an optimal control solve: numpy only, with a status (STYLE rule 9).
+"""The result of an optimal control solve: numpy only, with a status (docs/architecture.md#rule-9).
 
 A failed or infeasible solve is a result too: its status says so in words and it carries
 the solver's last iterate, never a raw exception.

@@ -3,8 +3,9 @@
 ``solve(problem, options)`` answers one problem. :class:`CompiledOcp` builds the
 transcription and the solver once (the build, mostly the exact Hessian of Φ, takes far
 longer than a solve) and solves again for new initial states, parameters (wind ...),
-start times, previous inputs and references: the parametric solve of MPC (STYLE rule 2).
-Its :attr:`CompiledOcp.function` is the same solve as one casadi.Function.
+start times, previous inputs and references: the parametric solve of MPC
+(docs/architecture.md#rule-2). Its :attr:`CompiledOcp.function` is the same solve as one
+casadi.Function.
 
 The initial guess, unless given, rolls Φ forward from x0 under a nominal policy: the
 flight's pulse energy, focus at the far end, the beam axis under the craft's mass centre,
@@ -498,7 +499,7 @@ def solve(
 
     Parameters
     ----------
-    problem : what to solve (ocp_problem.py).
+    problem : what to solve (ocp/problem.py).
     options : how (default :class:`~lightcraft_opt.ocp.options.OcpOptions`: IPOPT, exact
         Hessian, Φ with :data:`~lightcraft_opt.ocp.options.OCP_PULSE_MAP`).
     initial_guess, warm_start : see :meth:`CompiledOcp.solve`.

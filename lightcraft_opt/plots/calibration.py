@@ -1,8 +1,8 @@
 """Plots of a calibration: residuals per axis, the track against the fitted flight, the
 parameter correlations. Positions in L (east, north, up; docs/frames.md). Each function
 takes a :class:`~lightcraft_opt.calibration.result.CalibrationResult` and an optional
-``ax`` and returns the artists (STYLE rule 10); :func:`calibration_figures` builds the
-figures the CLI saves.
+``ax`` and returns the artists (docs/architecture.md#rule-10); :func:`calibration_figures`
+builds the figures the CLI saves.
 """
 
 from __future__ import annotations

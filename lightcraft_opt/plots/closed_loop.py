@@ -3,7 +3,7 @@ controller's solve times.
 
 Each axes-level function takes a :class:`~lightcraft_opt.control.result.ClosedLoopResult`
 and an optional axes, draws, labels the line with the controller's name (so that several
-controllers drawn on one axes compare), and returns the artists (STYLE rule 10); none
+controllers drawn on one axes compare), and returns the artists (docs/architecture.md#rule-10); none
 calls ``show()``. :func:`closed_loop_figures` builds the files the CLI writes. Angles are
 shown in degrees, lengths in cm, propellant in g; the data stay SI.
 """

@@ -1,5 +1,7 @@
 """Whole figures of one flight, one per file the CLI writes (paper Figs. 7-10).
 
+The paper is the seed paper; its figures are listed at docs/references.md#paper-figures.
+
 Each builder takes a result and returns a :class:`matplotlib.figure.Figure` that is not
 registered with pyplot (nothing to close, nothing shown); the caller saves it, e.g. at
 :data:`PLOT_DPI`. Positions are in the L frame of docs/frames.md (x east, y north, z up,

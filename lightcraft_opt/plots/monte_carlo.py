@@ -1,9 +1,10 @@
 """Monte Carlo campaigns: where the runs end, how high they go, how they fly.
 
 Each axes-level function takes a campaign's run table ({column: array} of runs.csv,
-run_table.read_table) and an optional axes, draws, and returns the artists (STYLE rule 10);
-none calls ``show()``. :func:`monte_carlo_figures` builds the files the CLI writes.
-Positions in the L frame (x east, y north), shown in cm; angles in degrees; data SI.
+run_table.read_table) and an optional axes, draws, and returns the artists
+(docs/architecture.md#rule-10); none calls ``show()``. :func:`monte_carlo_figures` builds the
+files the CLI writes. Positions in the L frame (x east, y north), shown in cm; angles in
+degrees; data SI.
 """
 
 from __future__ import annotations

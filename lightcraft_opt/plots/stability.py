@@ -1,11 +1,11 @@
 """Pulse-to-pulse stability: the beam-riding stability map and multipliers on the unit circle.
 
 Each function takes a result of :mod:`lightcraft_opt.linearize` (``StabilityMap``,
-``Multipliers``) and an optional axes, draws, and returns the artists (STYLE rule 10);
-none calls ``show()``. The data are SI; only the display converts: spin in RPM, offsets
-in ``length_unit``. Plots stay numpy-only (no casadi, import-linter contract), so the
-results are described here by the fields drawn (Protocols) rather than imported from
-linearize, which builds casadi Functions.
+``Multipliers``) and an optional axes, draws, and returns the artists
+(docs/architecture.md#rule-10); none calls ``show()``. The data are SI; only the display
+converts: spin in RPM, offsets in ``length_unit``. Plots stay numpy-only (no casadi,
+import-linter contract), so the results are described here by the fields drawn (Protocols)
+rather than imported from linearize, which builds casadi Functions.
 """
 
 from __future__ import annotations

@@ -1,10 +1,12 @@
 """The beam-plane track of a flight (paper Fig. 10): where the craft is relative to the beam.
 
+The paper is the seed paper (docs/references.md#paper-fig-10).
+
 Horizontal positions are east/north components in the L frame of docs/frames.md (x east,
 y north, z up, origin at the pad). The beam axis is vertical, offset from the pad by the
 pulse input ``pointing_L``; ``offset_L`` in the pulse record is the optic centre's offset
 from it at each pulse. Each function takes a result and an optional axes and returns the
-artists (STYLE rule 10); lengths are drawn in ``length_unit`` (m, cm or mm).
+artists (docs/architecture.md#rule-10); lengths are drawn in ``length_unit`` (m, cm or mm).
 """
 
 from __future__ import annotations

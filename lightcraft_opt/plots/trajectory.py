@@ -1,8 +1,9 @@
 """Time histories of a flight: altitude, vertical speed, offset from the pad, tilt, coning.
 
 Each function takes a result and an optional axes, draws, and returns the artists
-(STYLE rule 10); none calls ``show()``. Positions and velocities are the L frame of
-docs/frames.md (x east, y north, z up, origin at the pad).
+(docs/architecture.md#rule-10); none calls ``show()``. Positions and velocities are the L
+frame of docs/frames.md (x east, y north, z up, origin at the pad). "Paper Fig. N" is a
+figure of the seed paper (docs/references.md#paper-figures).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Typed, numpy-only results with a status a caller can read (STYLE rule 9)."""
+"""Typed, numpy-only results with a status a caller can read (docs/architecture.md#rule-9)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,13 @@
 """Aerodynamic force and moment on the craft (paper Eqs. 2-5, corrected; Magnus added).
 
+"The paper" is the seed paper; its equations are indexed at docs/references.md#paper-equations.
+
 Frames (docs/frames.md): B is the despun body frame, b1 = (1, 0, 0) the symmetry and
 spin axis. Every vector here has B components. ``v_air_B`` is the velocity of the
 craft relative to the air (wind included), so the air flows over the craft along
 ``-v_air_B``.
 
-Loads (physics.md section 4), with q = rho |v|^2 / 2, S = pi D^2 / 4, c the reference
+Loads (docs/physics.md#aero), with q = rho |v|^2 / 2, S = pi D^2 / 4, c the reference
 length, alpha the angle between b1 and v_air_B (0..pi), v_hat = v_air_B / |v_air_B|:
 
 - drag  ``D = q S C_D(alpha)`` along ``-v_hat`` (Eq. 2);
@@ -18,7 +20,8 @@ length, alpha the angle between b1 and v_air_B (0..pi), v_hat = v_air_B / |v_air
   the craft must spin (gyroscopic stability factor S_g ~ 860 for Flight 5);
 - Magnus force ``F_M = C_mf rho S (w D / 4) (b1 x v_air_B)``, i.e.
   ``q S C_mf (w D / (2 |v|))`` along ``b1 x v_hat``: the coefficient is per unit spin
-  ratio w D / (2 V) with w the rotor rate relative to N (the paper's "future work");
+  ratio w D / (2 V) with w the rotor rate relative to N (the paper's "future work",
+  docs/references.md#paper-section-5);
 - Magnus moment ``M_M = C_mm rho S D (w D / 4) (b1 x (b1 x v_air_B))``. Since
   ``b1 x (b1 x v) = -v_perp`` (minus the crossflow), this is the moment of the Magnus
   force acting ``(C_mm / C_mf) D`` ahead of the mass centre along +b1.

@@ -1,5 +1,7 @@
 """U.S. Standard Atmosphere, 1976 (NOAA-S/T 76-1562) as casadi expressions.
 
+Source: docs/references.md#us1976.
+
 Seven layers from 0 to 86 km geometric altitude (71 km... 84.852 km geopotential),
 each smooth in its interior: linear temperature in geopotential height H, pressure
 by the hydrostatic equation (power law in gradient layers, exponential in isothermal

@@ -1,4 +1,4 @@
-"""The laser beam: its size along the beam and its transverse fluence (physics.md section 6).
+"""The laser beam: its size along the beam and its transverse fluence (docs/physics.md#beam).
 
 Geometry (docs/frames.md): the beam rises from the ground straight up, along +z of the
 launch-site frame L. Its axis passes through the lateral point ``pointing_L`` (east,
@@ -8,7 +8,8 @@ axis and at range z along the beam (the L up coordinate).
 
 Size along the beam (outer side a of the beam, or diameter for a disc) [m]:
 
-- ``LINEAR``:  a(z) = a0 + theta z, with a0 = ``beam_side`` (Table 1, at launch) and
+- ``LINEAR``:  a(z) = a0 + theta z, with a0 = ``beam_side`` (paper Table 1,
+  docs/references.md#paper-table-1, at launch) and
   theta = ``beam_divergence`` (full angle).
 - ``WAIST``:   a(z) = a0 sqrt(1 + ((z - f)/z_R)^2) / sqrt(1 + (f/z_R)^2), with f the
   ``focus`` input and z_R = ``beam_rayleigh_range``. A converging beam that leaves the
@@ -28,7 +29,7 @@ soft-edge width w = ``beam_edge_width`` [m], logistic s(t) = (1 + tanh(t/2)) / 2
       S(x; s) = s((s/2 + x)/w) - s((x - s/2)/w)
               = (tanh((s/2 + x)/(2w)) + tanh((s/2 - x)/(2w))) / 2.
 
-  physics.md writes the soft box as s((s/2 - |x|)/w) with |x| smoothed as
+  docs/physics.md#hollow-square writes the soft box as s((s/2 - |x|)/w) with |x| smoothed as
   sqrt(x^2 + eps^2). The difference of two logistics used here is exactly that box
   (with the true |x|) times (1 - e^{-s/w}) s((s/2 + |x|)/w), a factor between
   1 - e^{-s/(2w)} and 1: the same soft edge, but smooth without any eps, exactly zero
@@ -38,7 +39,7 @@ soft-edge width w = ``beam_edge_width`` [m], logistic s(t) = (1 + tanh(t/2)) / 2
   The hole is dark only up to its own soft edges: at the hole's centre the fluence
   is sech^2(b/(4w)) - sech^2(a/(4w)) ~ 4 e^{-b/(2w)} of the ring's (3 % for Flight 5's
   b = 2.9 cm, w = 3 mm), and the hole holds the edge leak ~ 4 b w ln 2 / (a^2 - b^2) of E
-  (5.5 % for Flight 5), which vanishes with w (tests/test_beam.py).
+  (5.5 % for Flight 5), which vanishes with w (tests/symbolic/test_beam.py).
 - ``TOP_HAT``: a soft disc of diameter a, radius R = a/2, rho^2 = xi^2 + eta^2::
 
       F = E s((R^2 - rho^2)/(2 R w)) / (2 pi R w softplus(R/(2w))),

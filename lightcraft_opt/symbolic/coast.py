@@ -3,12 +3,13 @@ spinning body exactly.
 
 Both are pure casadi expressions (differentiable, usable inside Φ). The coning mode
 of a 10,000 RPM craft is at |H|/I ~ 1356 rad/s (216 Hz), eight times the pulse rate:
-RK4 needs steps of ~0.2 ms to resolve it (physics.md section 2).
+RK4 needs steps of ~0.2 ms to resolve it (docs/physics.md#coning-rates).
 
-Splitting (Strang, second order): the right-hand side f = f_fast + f_slow, where
-f_fast is the torque-free motion of the axisymmetric spinning body in a
-non-rotating site frame. That part has a closed form (Goldstein 5.6): with H_B the
-angular momentum, I_t the transverse and J the rotor axial moment,
+Splitting (Strang, second order; docs/references.md#strang-1968): the right-hand side
+f = f_fast + f_slow, where f_fast is the torque-free motion of the axisymmetric spinning body
+in a non-rotating site frame. That part has a closed form (Goldstein 5.6,
+docs/references.md#goldstein): with H_B the angular momentum, I_t the transverse and J the
+rotor axial moment,
 
     w_B(h)  = Rot(b1, +Omega_n h) w_B,          Omega_n = (J w_R - I_t w1) / I_t
     R_LB(h) = Rot(h_L, |H| h / I_t) R_LB Rot(b1, -Omega_n h)
@@ -21,9 +22,9 @@ distribution about S* (no carrier, RCS tank on the axis): the builder checks it.
 Time-varying inputs (RCS thrust over the interval, layout.map_input_layout): every
 scheme evaluates the right-hand side only at its stage times, so a smooth input
 (PHASE_LOCKED) is sampled where the scheme samples its slow forces and the order is
-kept (time is the slow flow's extra state; Yoshida's backward slow step stays inside
-its substep). Inputs that jump (SUBINTERVALS) come as one right-hand side per substep,
-constant on it: the substeps must align with the jumps.
+kept (time is the slow flow's extra state; Yoshida's (docs/references.md#yoshida-1990) backward
+slow step stays inside its substep). Inputs that jump (SUBINTERVALS) come as one right-hand side
+per substep, constant on it: the substeps must align with the jumps.
 """
 
 from __future__ import annotations
@@ -92,7 +93,7 @@ def coning_rate_B(x: ca.SX, p: ca.SX) -> ca.SX:
 
     Derivation (axisymmetric craft: every particle of I_B on b1, so I_B is diagonal with
     I_B22 = I_B33): H_B = (C w1 + J ψ̇, A w2, A w3) with C = I_B11 + J and
-    A = I_B22 + I (gyrostat.py; physics.md section 2). Torque-free, in B,
+    A = I_B22 + I (gyrostat.py; docs/physics.md#gyrostat). Torque-free, in B,
     dH_B/dt = -w_B × H_B gives dH1/dt = 0 and
 
         dH2/dt = -(H1 - A w1)/A H3,    dH3/dt = +(H1 - A w1)/A H2,
@@ -101,9 +102,9 @@ def coning_rate_B(x: ca.SX, p: ca.SX) -> ca.SX:
     gauge of docs/frames.md). In the gauge's usual state w1 = 0 this is ω = H1 / A
     = J ψ̇ / A; in general ω = (J (w1 + ψ̇) + (I_B11 - A) w1) / A. It is the rate of
     :func:`exact_spin_flow`'s rotation of w_B (same formula), and for Flight 5
-    at 10,000 RPM (J = 602.7, A = I = 465.3 g cm^2) 1356.43 rad/s (216 Hz), physics.md's
-    J spin / (I cos θ) at small cone angle θ. It differs from the rate at which b1 cones
-    about H in N, |H| / A, by the factor cos θ only.
+    at 10,000 RPM (J = 602.7, A = I = 465.3 g cm^2) 1356.43 rad/s (216 Hz), the
+    J spin / (I cos θ) of docs/physics.md#coning-rates at small cone angle θ. It differs from
+    the rate at which b1 cones about H in N, |H| / A, by the factor cos θ only.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The lightcraft engine: captured energy and the impulses of one pulse (physics.md section 6).
+"""The lightcraft engine: captured energy and the impulses of one pulse (docs/physics.md#engine).
 
 Frames (docs/frames.md): B is the despun body frame, b1 = (1, 0, 0)_B the craft axis,
 body positions from P; ``R_LB = dcm(q_LB)``; the mass centre S* is at ``r_L`` in L and at
@@ -17,13 +17,13 @@ tilted optic projected on the beam plane. ``E_cap = sum_k E_k``. A beam lying wh
 the projected annulus is captured whole at any tilt; a beam much wider than the optic
 gives E_cap proportional to cos(tilt).
 
-Quadrature accuracy (tests/test_engine.py checks it against a fine polar grid): the
+Quadrature accuracy (tests/symbolic/test_engine.py checks it against a fine polar grid): the
 quadrature converges fast while the beam's soft edges (width w) are resolved by the
 radial spacing (capture - shadow) / n_r and by the sector arc r 2 pi / N. For the Table 1
-beams (Flights 5 and 16, w = 3 mm, offsets 0 to 8 cm) the error of E_cap is below 1e-3 E
-with the 8 x 32 default, below 5e-5 E with 12 x 48 and below 2e-6 E with 16 x 64.
-Sharper edges need more points: for w = 1.5 mm, 8 x 32 is only within ~1e-2 E and
-16 x 64 within ~1e-3 E. The normalisation below makes the first pulse exact anyway.
+(docs/references.md#paper-table-1) beams (Flights 5 and 16, w = 3 mm, offsets 0 to 8 cm) the
+error of E_cap is below 1e-3 E with the 8 x 32 default, below 5e-5 E with 12 x 48 and below 2e-6
+E with 16 x 64. Sharper edges need more points: for w = 1.5 mm, 8 x 32 is only within ~1e-2 E
+and 16 x 64 within ~1e-3 E. The normalisation below makes the first pulse exact anyway.
 
 Normalisation. Table 1's impulse per pulse I0 (``impulse_per_pulse``, measured at
 launch with ``reference_pulse_energy`` E0) is what a centred, upright craft at the pad
@@ -36,18 +36,20 @@ neither does E_ref when h = 0.)
 
 Axial coupling per captured joule kappa:
 
-- air: ``kappa = C g(n)``, with the engine health (overheating near pulse n_f, physics.md)
+- air: ``kappa = C g(n)``, with the engine health (overheating near pulse n_f,
+  docs/physics.md#health)
   ``g(n) = 1 - (1 - g_inf) [s((n - n_f)/w_n) - s(-n_f/w_n)] / (1 - s(-n_f/w_n))``,
-  n the ``pulses`` state, s the logistic: physics.md's step, shifted and scaled so that
-  g(0) = 1 exactly (the first pulse gives I0) and g(inf) = g_inf (``health_floor``).
+  n the ``pulses`` state, s the logistic: the step of docs/physics.md#health, shifted and scaled
+  so that g(0) = 1 exactly (the first pulse gives I0) and g(inf) = g_inf (``health_floor``).
 - Delrin: ``kappa = C`` (health 1) while ``liner_mass > 0``, else ``spent_coupling`` g(n)
   (air mode on the bare shroud); the switch is the only if_else. Each pulse ablates
   ``liner_loss = min(ablation E_cap, liner_mass)``: never more than is left.
 
-SECTOR model. Sector k pushes ``dI_k = kappa E_k (b1 + tan(beta) e_r(phi_k))`` (physics.md's
-``C' E_k (cos(beta) b1 + sin(beta) e_r)`` with C' = kappa / cos(beta), so that the axial
-impulse of a centred beam is C E_cap, as normalised above) at the ring point
-``R_f e_r(phi_k) + h b1`` from P, i.e. ``rho_k = R_f e_r(phi_k) + h b1 - cm_B`` from S*:
+SECTOR model. Sector k pushes ``dI_k = kappa E_k (b1 + tan(beta) e_r(phi_k))`` (the
+``C' E_k (cos(beta) b1 + sin(beta) e_r)`` of docs/physics.md#sector-model, with
+C' = kappa / cos(beta), so that the axial impulse of a centred beam is C E_cap, as normalised
+above) at the ring point ``R_f e_r(phi_k) + h b1`` from P, i.e.
+``rho_k = R_f e_r(phi_k) + h b1 - cm_B`` from S*:
 
     G_F = kappa (E_cap b1 + tan(beta) D),   D = sum_k E_k e_r(phi_k)  (energy dipole, B),
     G_M = sum_k rho_k x dI_k = kappa R_f (D x b1) + (h b1 - cm_B) x G_F.
@@ -58,11 +60,12 @@ so D points toward the axis (-d_hat). Hence beta > 0 makes the lateral impulse
 RESTORING (toward the axis: the default 0.15 rad restores), and since D x b1 is along
 b1 x d_hat, G_M turns b1 toward d_hat: it TIPS THE AXIS AWAY from the beam axis (for
 R_f cos(beta) > (h - cm) sin(beta), always so for a ring near the mass centre), as
-physics.md's geometric argument says; only spin keeps the craft riding the beam.
+the geometric argument of docs/physics.md#impulse-signs says; only spin keeps the craft riding
+the beam.
 
-KERNEL model (physics.md's alternative). d is the horizontal offset of the optic centre
-from the beam axis (``offset_L``) resolved in the optic plane, d_B = (0, d.b2, d.b3),
-u = |d_B| / d0 (d0 = ``kernel_offset``), I_ax0 = kappa E_cap(0) with E_cap(0) the
+KERNEL model (the alternative of docs/physics.md#kernel-model). d is the horizontal offset of
+the optic centre from the beam axis (``offset_L``) resolved in the optic plane, d_B = (0, d.b2,
+d.b3), u = |d_B| / d0 (d0 = ``kernel_offset``), I_ax0 = kappa E_cap(0) with E_cap(0) the
 quadrature for the optic centre moved onto the axis (same height, attitude, pulse):
 
     I_ax = kappa E_cap(d),
@@ -72,8 +75,8 @@ quadrature for the optic centre moved onto the axis (same height, attitude, puls
 with G_F = I_ax b1 + I_lat applied at the optic centre. Since u d_hat = d_B / d0 and u^2
 needs no root, the kernel is smooth at d = 0 with no regularisation. Positive gains
 k_L = ``lateral_gain``, k_M = ``tipping_gain`` mean restoring and tipping away (the
-physics.md signs s_L, s_M live in the gains); both peak at |d| = d0 with magnitudes
-k_L I_ax0 and k_M I_ax0 R_f.
+signs s_L, s_M of docs/physics.md#kernel-model live in the gains); both peak at |d| = d0 with
+magnitudes k_L I_ax0 and k_M I_ax0 R_f.
 """
 
 from __future__ import annotations

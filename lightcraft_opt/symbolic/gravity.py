@@ -7,8 +7,9 @@ Earth. The acceleration of the mass centre relative to L is
     a_L = f_L + g_L(R) - 2 W_L x v_L - W_L x (W_L x R_L)
 
 with f_L the specific non-gravitational force, R_L = R_site_L + r_L the position
-from the Earth's centre, W_L the Earth's rate in L (paper section 3, "inverse-square
-gravity ... centripetal and Coriolis acceleration").
+from the Earth's centre, W_L the Earth's rate in L (seed paper section 3,
+docs/references.md#paper-section-3: "inverse-square gravity ... centripetal and Coriolis
+acceleration").
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ __all__ = [
 WGS84_A = 6378137.0  # equatorial radius [m]
 WGS84_F = 1.0 / 298.257223563  # flattening [-]
 EARTH_GM = 3.986004418e14  # [m^3/s^2]
-EARTH_RATE = 7.292115e-5  # [rad/s], physics.md section 1
+EARTH_RATE = 7.292115e-5  # [rad/s], docs/physics.md#state
 EARTH_J2 = 1.08262668e-3  # [-]
 
 
@@ -70,7 +71,8 @@ def earth_rate_L(lat: Expr) -> Expr:
 def gravity_E(R_E: Expr, j2: bool) -> Expr:
     """Gravitational acceleration at R_E (from the Earth's centre, E frame) [m/s^2].
 
-    Inverse-square (paper); with ``j2`` the zonal J2 term is added (Vallado Eq. 8-30).
+    Inverse-square (paper); with ``j2`` the zonal J2 term is added (Vallado Eq. 8-30,
+    docs/references.md#vallado).
     """
     r2 = ca.sumsqr(R_E)
     r = ca.sqrt(r2)

@@ -1,8 +1,9 @@
 """Rotational dynamics of the gyrostat: despun carrier B plus symmetric rotor R.
 
-Corrected form of the paper's Eq. 1 (physics.md section 2). With I_B the carrier's
-inertia plus the rotor's mass treated as a particle, about the system mass centre,
-and J, I the rotor's own central moments, the angular momentum of the system is
+Corrected form of the seed paper's Eq. 1 (docs/references.md#paper-eq-1;
+docs/physics.md#gyrostat). With I_B the carrier's inertia plus the rotor's mass treated as a
+particle, about the system mass centre, and J, I the rotor's own central moments, the angular
+momentum of the system is
 
     H_B = (I_B + diag(J, I, I)) w_B + J psi_dot b1
 
@@ -12,8 +13,8 @@ plus the rotor's axial equation ``J (w1_dot + psi_ddot) = T_R``.
 Massless carrier (every craft flown): the carrier's own b1 equation degenerates to
 ``0 = M1 - T_R`` (all axial moment acts on the rotor) and w1 is a free choice of
 the despun frame; we fix the gauge with ``w1_dot = 0`` (B does not turn about b1
-in N unless started so), which reproduces the paper's Eq. 7 with the spin-decay
-term kept: ``J (w1_dot + psi_ddot) = M1``.
+in N unless started so), which reproduces the paper's Eq. 7 (docs/references.md#paper-eq-7) with
+the spin-decay term kept: ``J (w1_dot + psi_ddot) = M1``.
 """
 
 from __future__ import annotations

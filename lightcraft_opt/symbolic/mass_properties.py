@@ -5,7 +5,8 @@ rotor (dry, centred on P, axisymmetric), Delrin liner (thin ring on the axis,
 part of the rotor), carrier (optional, rigid, despun), RCS propellant (a point mass
 at the tank). The gyrostat equations need, about the current system mass centre S*:
 the rotor's own central moments J, I, and I_B = carrier inertia + every other mass
-treated as a particle (the paper's I^B_ij, physics.md section 2).
+treated as a particle (the seed paper's I^B_ij, docs/references.md#paper-eq-1;
+docs/physics.md#gyrostat).
 """
 
 from __future__ import annotations

@@ -1,4 +1,7 @@
-"""The jump of the state at a laser pulse (paper Eqs. 12-13, physics.md section 2).
+"""The jump of the state at a laser pulse (paper Eqs. 12-13, docs/physics.md#jump).
+
+The paper is the seed paper: docs/references.md#paper-eq-12 and
+docs/references.md#paper-eq-13.
 
 The pulse lasts 18 us, so bounded forces do nothing during it; the impulses change
 the momenta at once:

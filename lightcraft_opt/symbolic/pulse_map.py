@@ -6,7 +6,7 @@ torque is held over the coast; the RCS thrust follows the options' profile (held
 piecewise constant on sub-intervals, or phase-locked to the coning mode; layout
 ``map_input_layout``), evaluated at the coast scheme's stage times. One Function
 serves simulation, optimal control, MPC, linearisation, calibration and Monte Carlo
-(STYLE rule 1).
+(docs/architecture.md#rule-1).
 
 The attitude quaternion is scaled to unit length on the way in and on the way out, so
 Φ depends on the direction of ``q_LB`` only: Φ(c q) = Φ(q) for any c > 0. On the unit

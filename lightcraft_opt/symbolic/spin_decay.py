@@ -1,5 +1,7 @@
 """Aerodynamic friction torque on the spinning rotor about b1 (paper Eq. 6; disk model).
 
+The paper is the seed paper (docs/references.md#paper-eq-6).
+
 Frames (docs/frames.md): the torque acts on the rotor R about the spin axis b1; a
 positive value speeds up a rotor spinning positively about b1. ``w_rotor`` is the rotor
 angular rate about b1 relative to N (the air turns with the Earth at 7.3e-5 rad/s: negligible), i.e.
@@ -10,7 +12,7 @@ Models (:class:`~lightcraft_opt.params.SpinDecayModel`):
 - ``NONE``: T = 0.
 - ``EXPONENTIAL`` (paper Eq. 6, T = J w_dot with an exponential decay): T = -J w / tau,
   tau = ``spin_time_constant`` from p, so w(t) = w0 exp(-t / tau).
-- ``ROTATING_DISK`` (physics.md section 4): a disk of radius R = D / 2 spinning in
+- ``ROTATING_DISK`` (docs/physics.md#spin-decay): a disk of radius R = D / 2 spinning in
   still air, nu = mu / rho, Re = |w| R^2 / nu,
 
       laminar    T_lam  = 0.616 pi rho R^4 sqrt(nu |w|^3)          (von Karman)
@@ -19,7 +21,8 @@ Models (:class:`~lightcraft_opt.params.SpinDecayModel`):
   and T = -disk_faces max(T_lam, T_turb) sign(w). Both formulas are the moment
   coefficients C_M = 3.87 Re^(-1/2) and 0.146 Re^(-1/5) of Schlichting's
   T = C_M rho w^2 R^5 / 2, which count *both* faces of a free disk: ``disk_faces = 1``
-  is one disk wetted on both sides, 0.5 a single face.
+  is one disk wetted on both sides, 0.5 a single face. Sources:
+  docs/references.md#von-karman-1921 and docs/references.md#schlichting.
 
 Smoothness of the disk model. |w| is regularised as a = sqrt(w^2 + eps^2) with
 :data:`SPIN_EPS` = 1e-9 rad/s and sign(w) as w / a, so T is odd, smooth, and

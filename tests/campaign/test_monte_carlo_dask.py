@@ -1,6 +1,6 @@
 """Monte Carlo on a Dask cluster: a LocalCluster on the loopback (two worker processes,
 one thread each) gives the byte-identical run table of the campaign made serially in this
-process (tests/test_monte_carlo.py has the other engines)."""
+process (tests/campaign/test_monte_carlo.py has the other engines)."""
 
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
 """Campaign statistics and the run table.
 
-Wilson's interval is checked against its closed form at the ends (0 of n: upper bound
-z²/(n + z²)) and a published value (Newcombe 1998, Table I: 81 of 263 -> 0.2553-0.3662);
-the 95 % ellipse against the fraction of normal samples it holds; the run table against
-being cut mid-line.
+Wilson's interval (docs/references.md#wilson-1927) is checked against its closed form at the
+ends (0 of n: upper bound z²/(n + z²)) and a published value (Newcombe 1998, Table I: 81 of 263
+-> 0.2553-0.3662; docs/references.md#newcombe-1998); the 95 % ellipse against the fraction of
+normal samples it holds; the run table against being cut mid-line.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ engine's offset over the 55 mm capture radius of models/flight5.toml.
 
 The problem: Flight 5 1 cm east of the beam axis at 2 m, climbing at 4 m/s in a 3 m/s wind
 from the east, 4 pulses of beam steering at 420 J; Φ the cheapest full model (second-order
-splitting, one substep, a 4 x 16 optic quadrature), as tests/test_ocp.py.
+splitting, one substep, a 4 x 16 optic quadrature), as tests/ocp/test_ocp.py.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Closed loop: u = controller.step(x); x = Φ(x, u, p_plant), with what goes wrong in flight.
 
-The acceptance of issue 5, shown here on the full Flight 5 RCS craft (models/flight5-rcs.toml)
-and Φ's default coast (SPLIT4, 32 substeps, phase-locked RCS) as the plant:
+The acceptance criteria of the MPC (listed below), shown here on the full Flight 5 RCS craft
+(models/flight5-rcs.toml) and Φ's default coast (SPLIT4, 32 substeps, phase-locked RCS) as the
+plant:
 
 - from 5 degrees of coning at 10,000 RPM, on the pad, the MPC brings the coning angle
   below 0.5 degrees within 25 pulses (1 s) and keeps it there, where the uncontrolled
@@ -94,7 +95,7 @@ def mpc(prediction: ConingModel) -> MpcController:
 # --------------------------------------------------------------------------- acceptance
 def test_mpc_removes_5_degrees_of_coning_in_25_pulses_and_beats_lqr(prediction, plant, mpc):
     """Nominal plant, 26 pulses from the pad. MPC: below 0.5 degrees from pulse 5 on
-    (measured; asserted within the 25 of the issue) and 0.1 degrees of tilt at the end.
+    (measured; asserted within the required 25 pulses) and 0.1 degrees of tilt at the end.
     Uncontrolled: the coning never falls below 3.5 degrees (measured 3.59, and 9.6 at
     the end: the beam's tipping kicks pump it). LQR, same model, weights and plant:
     below 0.5 degrees only from pulse 17 (its saturated thrust and beam overshoot) with

@@ -4,7 +4,7 @@ References:
 
 - the coning angle of symbolic/invariants.py (angle b1 to H) and the symmetry of the
   craft about the vertical: the coning coordinates read the same angle and turn with the
-  craft's yaw; their Jacobians match finite differences (STYLE rule 3);
+  craft's yaw; their Jacobians match finite differences (docs/architecture.md#rule-3);
 - the holonomy of a despun frame whose axis cones at half-angle θ: it turns about the
   axis by 2π (1 - cos θ) a coning turn, ω T (1 - cos θ) a pulse on average;
 - Φ's own linearisation at a grid point the scheduled model did not see (interpolation
@@ -19,7 +19,7 @@ References:
 
 Models: Flight 5 with the proposed RCS (models/flight5-rcs.toml, full optic quadrature)
 and Φ with its default coast (SPLIT4, 32 substeps: the 216 Hz forcing resolved) and the
-phase-locked RCS profile, the plant of tests/test_closed_loop.py.
+phase-locked RCS profile, the plant of tests/control/test_closed_loop.py.
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ def test_coning_coordinates_read_the_coning_angle_and_turn_with_the_yaw():
     assert math.atan(np.hypot(*c)) == pytest.approx(float(inv(x, p)[3]), abs=1e-14)
     assert math.degrees(math.atan(np.hypot(*c))) == pytest.approx(5.0, rel=1e-12)
     assert abs(yaw[0]) < 1e-15
-    assert omega[0] == pytest.approx(1356.43, abs=0.005)  # physics.md section 2
+    assert omega[0] == pytest.approx(1356.43, abs=0.005)  # docs/physics.md#coning-rates
     psi = 0.9
     turned = x.copy()
     q = STATE.index("q_LB")
@@ -156,7 +156,7 @@ def test_yaw_turns_by_the_holonomy_of_the_cone_each_pulse():
     average to 0.5 % (measured 1.0035 and 1.003 times it at 5 and 1 degrees); pulse by
     pulse the twist chart's periodic part moves it by up to ±4 % (measured -2.9..+3.7 %).
     This is the one term of the prediction model quadratic in the coning
-    (linearize/coning_model.py)."""
+    (control/prediction_model.py)."""
     model = torque_free(MODEL)
     phi = build_pulse_map(model, PLANT_MAP)
     f = build_coning_coordinates()
@@ -181,7 +181,7 @@ def test_linearisation_takes_the_input_layout_of_the_pulse_map(jac):
     """With the PHASE_LOCKED Φ the operating point, the linear model and the LQR policy
     carry Φ's own input layout (pointing, focus, energy, rcs_thrust, rcs_cos, rcs_sin):
     the cosine and sine amplitudes reach the transverse rate, the held levels barely
-    (25 times less coning removed a pulse, tests/test_rcs_profiles.py)."""
+    (25 times less coning removed a pulse, tests/symbolic/test_rcs_profiles.py)."""
     point = climb_point(MODEL, 2.0, 10.0, pulse_map=jac)
     assert point.inputs == jac.pulse_map.inputs and point.u.size == 16
     sys = linearize(MODEL, point, inputs=("rcs_thrust", "rcs_cos", "rcs_sin"), pulse_map=jac)
@@ -272,7 +272,7 @@ def test_prediction_error_is_second_order_and_measured_at_5_degrees(mpc):
     MpcOptions.capture_fraction), position 2.4 mm, velocity 77 mm/s (that, and the 0.4 N
     mean thrust along the coning axis, which the upright linear model does not see);
     each asserted below 1.3 times the measured value. The feedback absorbs them: the
-    closed loop (tests/test_closed_loop.py) meets the acceptance with them.
+    closed loop (tests/control/test_closed_loop.py) meets the acceptance with them.
     """
     phi = build_pulse_map(MODEL, PLANT_MAP)
     p = parameter_values(MODEL)

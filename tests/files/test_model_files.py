@@ -1,7 +1,8 @@
 """Model files: Table 1 (paper) comes out in SI exactly, and every bad file is one ModelFileError.
 
-References: paper Table 1 and physics.md section 5 (derived coupling coefficients and velocity
-jumps, quoted there to 4 significant digits).
+References: the seed paper's Table 1 (docs/references.md#paper-table-1) and
+docs/physics.md#table-1 (derived coupling coefficients and velocity jumps, quoted there to 4
+significant digits).
 """
 
 from __future__ import annotations
@@ -165,7 +166,8 @@ max_thrust_n = 0.05
 
 # --------------------------------------------------------------------------- engine and beam
 def test_engine_tables_in_si() -> None:
-    """[craft.engine] of the three flights (physics.md section 6 guesses) in SI, exactly."""
+    """[craft.engine] of the three flights (docs/physics.md#engine-parameters guesses) in SI,
+    exactly."""
     e5, e7, e16 = (load_model(MODELS / f"flight{n}.toml").craft.engine for n in (5, 7, 16))
     assert (e5.capture_radius, e5.shadow_radius, e5.ring_radius, e5.ring_height) == (
         0.055,
@@ -184,7 +186,7 @@ def test_engine_tables_in_si() -> None:
     for e in (e7, e16):
         assert e.ablation == 2e-8  # 20 ug/J
         assert e.spent_coupling == 1.5167e-4  # 151.67 N/MW
-    # the spent Delrin craft flies on Flight 5's air-mode coupling (physics.md section 5)
+    # the spent Delrin craft flies on Flight 5's air-mode coupling (docs/physics.md#table-1)
     f5 = load_model(MODELS / "flight5.toml").flight
     assert e16.spent_coupling == pytest.approx(f5.coupling_coefficient, rel=1e-4)
 

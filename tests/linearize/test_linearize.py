@@ -1,14 +1,13 @@
 """Linearised pulse map: multipliers, trims, controllability, LQR and the stability map.
 
 References: central finite differences of Φ through the error-state chart (A, B); the
-torque-free symmetric top (Goldstein 5.6: coning at J Ω / I in the despun frame, here
-sampled at the pulse period) and the inverse-square gravity gradient (eigenvalues 2g/R,
--g/R, -g/R: vertical divergence e^{±T sqrt(2g/R)}, horizontal oscillation at sqrt(g/R));
-the hover's closed form (an impulse C E a pulse balances m ḡ T); simulate (Φ iterated)
-for what the multipliers predict. Φ is built with 8 substeps where the claim allows it:
-the split coast rotates a torque-free body exactly at any step, and the other claims
-either hold at both 8 and 32 substeps (measured values quoted) or compare two uses of the
-same Φ.
+torque-free symmetric top (Goldstein 5.6, docs/references.md#goldstein: coning at J Ω / I in the
+despun frame, here sampled at the pulse period) and the inverse-square gravity gradient
+(eigenvalues 2g/R, -g/R, -g/R: vertical divergence e^{±T sqrt(2g/R)}, horizontal oscillation at
+sqrt(g/R)); the hover's closed form (an impulse C E a pulse balances m ḡ T); simulate (Φ
+iterated) for what the multipliers predict. Φ is built with 8 substeps where the claim allows
+it: the split coast rotates a torque-free body exactly at any step, and the other claims either
+hold at both 8 and 32 substeps (measured values quoted) or compare two uses of the same Φ.
 """
 
 from __future__ import annotations
@@ -89,7 +88,8 @@ def f5() -> PulseMapJacobian:
 
 @pytest.fixture(scope="module")
 def free() -> tuple[Model, PulseMapJacobian]:
-    """Table 1 Flight 5, torque-free, Earth not rotating, engine health 1."""
+    """Flight 5 of the seed paper's Table 1 (docs/references.md#paper-table-1), torque-free,
+    Earth not rotating, engine health 1."""
     model = torque_free(table1_flight5(engine=Engine(health_floor=1.0)))
     return model, pulse_map_jacobian(build_pulse_map(model, FAST))
 
@@ -104,7 +104,7 @@ def _entry_names(layout: VectorLayout) -> list[str]:
 # --------------------------------------------------------------------------- chart and Jacobians
 def test_error_state_chart_is_exactly_invertible_and_differentiable():
     """x_op ⊕ (x ⊖ x_op) = x and (x_op ⊕ δ) ⊖ x_op = δ; both Functions' Jacobians match
-    central differences (STYLE rule 3)."""
+    central differences (docs/architecture.md#rule-3)."""
     retract, local = build_error_state()
     x_op = initial_state(FLIGHT5, r_L=(0.1, -0.2, 3.0), v_L=(0.3, 0.0, 5.0), tilt=0.2)
     dx = np.linspace(-0.05, 0.05, ERROR_STATE.size)

@@ -1,4 +1,5 @@
-"""Optimal control over pulses (ocp_problem.py, transcription.py, ocp.py) against references.
+"""Optimal control over pulses (ocp/problem.py, ocp/transcription.py, ocp/solve.py) against
+references.
 
 References:
 
@@ -10,7 +11,7 @@ References:
   point, the reference), sqpmethod with qrqp (active set) and with hpipm, and fatrop;
 - the forward simulator: ``simulate`` driven by the optimal inputs through the same Φ
   reproduces the predicted trajectory;
-- the floor-1 measures' Jacobians against finite differences (STYLE rule 3).
+- the floor-1 measures' Jacobians against finite differences (docs/architecture.md#rule-3).
 
 Φ in these tests: second-order splitting with one substep and a 4 x 16 optic quadrature,
 the cheapest map that is still the full hybrid model (the quadrature and substeps set
@@ -412,7 +413,7 @@ def test_bad_problems_and_options_name_the_field():
 # --------------------------------------------------------------------------- floor 1
 def test_ocp_measures_values_and_jacobians():
     """Tilt, altitude, drift and energy fired of a tilted state; capture use of an
-    engine report; Jacobians against central differences (STYLE rule 3)."""
+    engine report; Jacobians against central differences (docs/architecture.md#rule-3)."""
     model = table1_flight5()
     p = parameter_values(model)
     x = initial_state(model, r_L=(0.3, -0.2, 5.0), tilt=0.2, tilt_azimuth=1.0)

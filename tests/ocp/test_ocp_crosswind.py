@@ -1,5 +1,6 @@
 """Optimal beam pointing against fixed pointing on the crosswind problem (problems/
-crosswind_launch.toml, the first 30 pulses of crosswind_climb.toml; issue 4 item 6).
+crosswind_launch.toml, the first 30 pulses of crosswind_climb.toml): steering the beam must
+keep the craft riding it through a crosswind in which a fixed beam loses it.
 
 Reference: the forward simulator. The optimal pointing of the first 30 pulses (1.15 s, the
 time the unsteered craft needs to leave the beam) is flown again by ``simulate`` through the

@@ -1,5 +1,6 @@
-"""Flights against the records (physics.md section 7, paper section 4): the model files fly
-like the craft did, and the beam-riding behaviour the paper describes comes out of Φ.
+"""Flights against the records (docs/physics.md#records; seed paper section 4,
+docs/references.md#paper-section-4): the model files fly like the craft did, and the
+beam-riding behaviour the paper describes comes out of Φ.
 
 References: the 2 Oct 2000 record (71 m, hovering near apogee, 12.7 s in the air); the
 paper's beam riding (pushed back toward the axis, orbiting it), the need for spin (the
@@ -39,11 +40,11 @@ def flight5():
 
 # --------------------------------------------------------------------------- the record
 def test_record_flight_reaches_71_m_hovers_and_lands_after_12_7_s():
-    """models/record-2000-10-02.toml: apogee 71 +- 7 m, air time 12.7 +- 2 s (the issue's
-    acceptance band around the record), landing in the beam, and "much of the flight hovering
-    near apogee": the craft lingers above 90 % of its apogee at least 1.25 times as long as a
-    thrustless, drag-free arc through the same 10 % band, 2 sqrt(2 (0.1 apogee) / g), would
-    (the model file says how the hover arises: thrust near weight as the beam widens)."""
+    """models/record-2000-10-02.toml: apogee 71 +- 7 m, air time 12.7 +- 2 s (the
+    required acceptance band around the record), landing in the beam, and "much of the flight
+    hovering near apogee": the craft lingers above 90 % of its apogee at least 1.25 times as
+    long as a thrustless, drag-free arc through the same 10 % band, 2 sqrt(2 (0.1 apogee) / g),
+    would (the model file says how the hover arises: thrust near weight as the beam widens)."""
     model = load_model(MODELS / "record-2000-10-02.toml")
     result = simulate(model, 20.0)
     assert result.status is SimulationStatus.LANDED

@@ -1,4 +1,5 @@
-"""Test models: the Table 1 craft built directly from the dataclasses (SI)."""
+"""Test models: the craft of the seed paper's Table 1 (docs/references.md#paper-table-1) built
+directly from the dataclasses (SI)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""Aerodynamic loads: paper Eqs. 2-5 (corrected), geometry, smoothness, Magnus, units."""
+"""Aerodynamic loads: paper Eqs. 2-5 (corrected), geometry, smoothness, Magnus, units.
+
+The paper is the seed paper (docs/references.md#paper-eq-2); the corrections are listed in
+docs/physics.md#departures.
+"""
 
 from __future__ import annotations
 
@@ -14,7 +18,7 @@ from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.params import Aerodynamics, AeroModel, Model
 from lightcraft_opt.symbolic.aero import aero_coefficients, aero_loads, build_aero_loads
 
-RHO = 1.0906  # kg/m^3 at 1194 m (physics.md section 3)
+RHO = 1.0906  # kg/m^3 at 1194 m (docs/physics.md#atmosphere)
 SPIN = 10_000 * 2 * math.pi / 60  # rad/s
 
 
@@ -101,8 +105,8 @@ def test_paper_eq5_cm_typo_correction_matters() -> None:
 
     By hand at a = pi/2: 0.1598 a^6 = 2.40047, -0.6619 a^5 = -6.32983, 0.8794 a^4 = 5.35389,
     -0.3585 a^3 = -1.38948, -0.0583 a^2 = -0.14385, 0.080 a = 0.12566; sum 0.01684.
-    (The brief quoted "about 0.063": the corrected curve peaks at 0.0463 near 68 deg and
-    never reaches 0.063 on 0..pi/2.)
+    (A peak of "about 0.063" is not what the corrected curve gives: it peaks at 0.0463 near
+    68 deg and never reaches 0.063 on 0..pi/2.)
     """
     a = math.pi / 2
     cm = coefficients(a, Aerodynamics())[2]
@@ -407,7 +411,7 @@ def test_jacobian_matches_finite_differences(kind: str, flight5: Model) -> None:
 
 
 def test_gyroscopic_stability_factor_flight5(flight5: Model) -> None:
-    """physics.md section 4 (derived): S_g = H^2 / (4 I M_alpha) ~ 860 at 20 m/s."""
+    """docs/physics.md#gyroscopic-stability (derived): S_g = H^2 / (4 I M_alpha) ~ 860 at 20 m/s."""
     f = build_aero_loads(Aerodynamics())
     alpha = 1e-4
     v = 20.0 * np.array([math.cos(alpha), math.sin(alpha), 0.0])

@@ -1,4 +1,5 @@
-"""U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562), geometric-altitude table values."""
+"""U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562, docs/references.md#us1976), geometric-altitude
+table values; the pad density is the one of docs/physics.md#atmosphere."""
 
 from __future__ import annotations
 

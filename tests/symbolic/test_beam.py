@@ -1,7 +1,9 @@
-"""Beam fluence and size: energy conservation, physics.md's soft box, the hole, size models.
+"""Beam fluence and size: energy conservation, the soft box of docs/physics.md#hollow-square,
+the hole, size models.
 
-References: physics.md section 6 (hollow-square fluence with logistic soft edges, linear and
-waist size models, Table 1 launch beam sides); the closed-form integral of a difference of
+References: docs/physics.md#beam (hollow-square fluence with logistic soft edges, linear and
+waist size models, the launch beam sides of the seed paper's Table 1,
+docs/references.md#paper-table-1); the closed-form integral of a difference of
 logistics (int [s(A + u) - s(u - A)] du = 2A) for the exact normalisation; fine numpy grids
 (midpoint rule, spectrally accurate for these smooth, decaying profiles) as the independent
 integrator.
@@ -68,10 +70,10 @@ def test_each_profile_integrates_to_the_pulse_energy(
 
 
 def test_hollow_square_is_physics_md_soft_box_within_documented_bound() -> None:
-    """Independent form: physics.md's F = E/(a^2 - b^2) [W(a) - W(b)], W(s) = s((s/2 - |x|)/w)
-    s((s/2 - |y|)/w), with the true |x|. beam.py's box is that box times a factor within
-    e^{-s/(2w)} of 1, so the two fluences differ by at most E/(a^2 - b^2) 2 (e^{-a/2w} +
-    e^{-b/2w}) everywhere."""
+    """Independent form: the F = E/(a^2 - b^2) [W(a) - W(b)] of docs/physics.md#hollow-square,
+    W(s) = s((s/2 - |x|)/w) s((s/2 - |y|)/w), with the true |x|. beam.py's box is that box times
+    a factor within e^{-s/(2w)} of 1, so the two fluences differ by at most E/(a^2 - b^2) 2
+    (e^{-a/2w} + e^{-b/2w}) everywhere."""
     a, h, w = 0.071974, 0.4, 0.003
     b = h * a
     X, Y, F = _grid_fluence(MODEL.laser, _params(), half=0.08, step=5e-4)

@@ -1,5 +1,6 @@
-"""The assembled coast Functions: derivatives against finite differences (STYLE rule 3),
-and a translational check against the closed form of a drag-free ballistic arc."""
+"""The assembled coast Functions: derivatives against finite differences
+(docs/architecture.md#rule-3), and a translational check against the closed form of a drag-free
+ballistic arc."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
 """Fixed-step coast schemes against CVODES at tight tolerance.
 
-References: the closed-form torque-free symmetric top (Goldstein 5.6) for the exact
-fast flow; the convergence orders of RK4 (4), Strang splitting (2) and Yoshida's
-composition (4) (Hairer, Lubich, Wanner, Geometric Numerical Integration, II.4-5).
+References: the closed-form torque-free symmetric top (Goldstein 5.6,
+docs/references.md#goldstein) for the exact fast flow; the convergence orders of RK4 (4),
+Strang splitting (2) and Yoshida's composition (4) (Hairer, Lubich, Wanner, Geometric
+Numerical Integration, II.4-5, docs/references.md#hairer-lubich-wanner).
 """
 
 from __future__ import annotations

@@ -1,12 +1,12 @@
-"""Engine: captured energy and pulse impulses (physics.md sections 5 and 6).
+"""Engine: captured energy and pulse impulses (docs/physics.md#table-1, docs/physics.md#engine).
 
-References: paper Table 1 (first-pulse impulse 0.0637 N s and 0.195 N s, velocity jumps
-1.960 and 6.720 m/s, physics.md section 5); physics.md section 6 (restoring lateral impulse,
-tipping away from the beam axis, collapse once the beam leaves the optic near 9-10 cm, health
-step near pulse 100, ablation mu E_cap, kernel peak at d0); projected-area geometry (a beam
-wider than the optic gives E_cap ~ cos(tilt), a beam inside the projected optic is caught
-whole); a fine polar grid (midpoint in r, equal sectors) as the independent integrator of the
-fluence over the optic.
+References: the seed paper's Table 1 (docs/references.md#paper-table-1; first-pulse impulse
+0.0637 N s and 0.195 N s, velocity jumps 1.960 and 6.720 m/s, docs/physics.md#table-1);
+docs/physics.md#engine (restoring lateral impulse, tipping away from the beam axis, collapse
+once the beam leaves the optic near 9-10 cm, health step near pulse 100, ablation mu E_cap,
+kernel peak at d0); projected-area geometry (a beam wider than the optic gives
+E_cap ~ cos(tilt), a beam inside the projected optic is caught whole); a fine polar grid
+(midpoint in r, equal sectors) as the independent integrator of the fluence over the optic.
 """
 
 from __future__ import annotations

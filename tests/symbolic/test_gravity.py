@@ -1,8 +1,9 @@
 """Gravity and the rotating site frame.
 
 References: Newton's inverse-square law; the WGS-84 normal gravity (Somigliana's
-closed form, NIMA TR8350.2 Eq. 4-1) which, on the ellipsoid, is gravity plus
-centrifugal acceleration and is normal to the ellipsoid; the Coriolis term -2 W x v.
+closed form, NIMA TR8350.2 Eq. 4-1, docs/references.md#nima-tr8350) which, on the
+ellipsoid, is gravity plus centrifugal acceleration and is normal to the ellipsoid; the
+Coriolis term -2 W x v.
 """
 
 from __future__ import annotations

@@ -1,11 +1,12 @@
-"""The gyrostat equations against an independent Kane's-method derivation.
+"""The gyrostat equations against an independent Kane's-method derivation
+(docs/references.md#kane-levinson).
 
 sympy.physics.mechanics (test-only dependency) derives the equations of a carrier B
 (full inertia matrix I_B about the system mass centre) and a symmetric rotor R
 (J, I) spinning about b1 at u4 relative to B, with an external torque on B, a motor
 torque between B and R and an external axial torque on R. The corrected mass
-matrix of physics.md section 2 follows; the paper's printed Eq. 1 (I11 for I11 + J)
-does not.
+matrix of docs/physics.md#gyrostat follows; the seed paper's printed Eq. 1 (I11 for I11 + J,
+docs/references.md#paper-eq-1) does not.
 """
 
 from __future__ import annotations

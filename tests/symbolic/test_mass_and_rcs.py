@@ -1,7 +1,8 @@
 """Mass properties under propellant use, and the RCS forces, moments and flow.
 
 References: parallel-axis theorem; rocket mass flow mdot = T / (Isp g0); the moment of
-a force about the mass centre; Table 1 launch values reproduced at launch.
+a force about the mass centre; Table 1 launch values (the seed paper,
+docs/references.md#paper-table-1) reproduced at launch.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """The pulse map Φ: the jump (paper Eqs. 12-13) and the coast after it.
 
-References: Table 1 (first-pulse impulse / launch mass: 1.960 m/s for Flight 5,
-6.720 m/s for Flight 16, physics.md section 5); the variable-step CVODES coast of the
+References: the seed paper's Eqs. 12-13 (docs/references.md#paper-eq-12) and Table 1
+(docs/references.md#paper-table-1; first-pulse impulse / launch mass: 1.960 m/s for Flight 5,
+6.720 m/s for Flight 16, docs/physics.md#table-1); the variable-step CVODES coast of the
 same equations as the independent integrator between pulses.
 """
 

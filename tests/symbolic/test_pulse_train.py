@@ -3,17 +3,19 @@
 References:
 
 - a vertical pulse train without drag: each centred pulse adds I0 / m to the climb rate
-  (paper Eq. 12b, Table 1 impulse), and between pulses the inverse-square pull, to first
-  order in z / R, is the linear ODE z'' = -g0 (1 - 2 z / R) with an exact cosh/sinh
-  solution;
+  (paper Eq. 12b, Table 1 impulse: the seed paper,
+  docs/references.md#paper-eq-12 and docs/references.md#paper-table-1), and between pulses the
+  inverse-square pull, to first order in z / R, is the linear ODE z'' = -g0 (1 - 2 z / R) with
+  an exact cosh/sinh solution;
 - momentum bookkeeping (Newton's and Euler's laws in the rotating site frame): over a
   window of pulses, the change of m v_L and of H_L equals the impulses Φ reports plus the
   integrals of the external forces and moments, integrated along the hybrid system by
   CVODES (laser off between pulses, the jumps of pulse_jump.py at the pulses);
-- Φ's Jacobians against central finite differences (STYLE rule 3).
+- Φ's Jacobians against central finite differences (docs/architecture.md#rule-3).
 
-The models are built here from the dataclasses (conftest.table1_flight5) with the engine
-spelled out, so tuned model-file values and engine defaults do not move these tests.
+The models are built here from the dataclasses (tests/support/models.py, ``table1_flight5``)
+with the engine spelled out, so tuned model-file values and engine defaults do not move these
+tests.
 """
 
 from __future__ import annotations
@@ -277,7 +279,7 @@ def test_momentum_and_angular_momentum_bookkeeping_over_ten_pulses():
     rotated to L (m at t_k^-: Eq. 12b; air mode loses no mass). Over the window,
     m v(t_10) - m v(t_0) = Σ R_LB(t_k) G_F,k + ∫ F_L dt and likewise for H_L, with the
     Earth's rotation on (Coriolis alone moves m v by ~1e-5 N s here, 1e4 tolerances).
-    Φ's own fixed-step coast against CVODES is tests/test_pulse_map.py's subject.
+    Φ's own fixed-step coast against CVODES is tests/symbolic/test_pulse_map.py's subject.
     """
     model = full_flight5()
     phi = build_pulse_map(model, PulseMapOptions(substeps=1, dense=1))  # reports only

@@ -11,10 +11,10 @@ References:
 - closed forms: the propellant used, T Δt / (Isp g0), and the rocket equation
   Δv = Isp g0 ln(m0 / m1) for one thruster over one sub-interval; the angular impulse
   r × F Δt; the coning rate ω = (H1 - A w1) / A (symbolic/coast.py ``coning_rate_B``),
-  1356.43 rad/s for Flight 5 at 10,000 RPM (physics.md section 2), against the rate at
+  1356.43 rad/s for Flight 5 at 10,000 RPM (docs/physics.md#coning-rates), against the rate at
   which CVODES turns w_⊥ in B; the change of the coning angle under a torque that turns
   with H_⊥, |M| T / H1 in tan θ, and the bound 2 |M| / (ω H1) for any held B-torque;
-- Φ's Jacobians against finite differences (STYLE rule 3);
+- Φ's Jacobians against finite differences (docs/architecture.md#rule-3);
 - an optimal control problem with the RCS envelope, its thrust sampled over the phase.
 
 Φ here: Flight 5 with the proposed RCS (models/flight5-rcs.toml) and a 4 x 16 optic
@@ -281,7 +281,7 @@ def test_one_subinterval_firing_gives_that_thrusters_impulse_over_that_subinterv
 # --------------------------------------------------------------------------- (d)
 @pytest.mark.parametrize("w1", [0.0, 5.0])
 def test_coning_rate_is_1356_rad_s_and_the_rate_cvodes_turns_w_in_B(quiet, w1):
-    """ω = (H1 - A w1) / A: 1356.43 rad/s for Flight 5 at 10,000 RPM (physics.md section 2,
+    """ω = (H1 - A w1) / A: 1356.43 rad/s for Flight 5 at 10,000 RPM (docs/physics.md#coning-rates,
     J spin / I), and the slope of the angle of w_⊥ in B along a torque-free CVODES coast
     of 2 degrees of coning; with w1 = 5 rad/s the general form
     (J (w1 + spin) + (I_B11 - A) w1) / A (I_B = 0 for this craft)."""
@@ -397,7 +397,7 @@ def test_phase_locked_torque_reduces_coning_far_more_than_any_held_level(quiet):
 def test_pulse_map_jacobians_match_finite_differences_for_each_profile(rcs_model, profile, m):
     """Φ.step's Jacobians w.r.t. x, u, p, t: full model, 2 degrees of coning, 1 cm off the
     beam axis, climbing, RCS firing (ω's dependence on the state included); steps as in
-    tests/test_pulse_train.py (each entry's natural size)."""
+    tests/symbolic/test_pulse_train.py (each entry's natural size)."""
     model = rcs_model
     phi = build_pulse_map(model, _options(CoastScheme.SPLIT4, 2, profile, m))
     p = parameter_values(model)

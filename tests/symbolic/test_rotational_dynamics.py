@@ -1,9 +1,10 @@
 """Rotational dynamics of the assembled coast model against closed forms and invariants.
 
-References: torque-free symmetric top (Goldstein, Classical Mechanics, 3rd ed., 5.6:
+References: torque-free symmetric top (Goldstein, Classical Mechanics, 3rd ed., 5.6,
+docs/references.md#goldstein:
 body-frame nutation rate (J - I)/I Omega, coning rate |H|/I = J Omega/(I cos theta));
 conservation of H and kinetic energy without torques; gyroscopic stability factor
-S_g = H^2 / (4 I M_alpha) (physics.md section 4).
+S_g = H^2 / (4 I M_alpha) (docs/physics.md#gyroscopic-stability).
 """
 
 from __future__ import annotations
@@ -46,13 +47,14 @@ def test_flight5_nutation_and_coning_rates_match_torque_free_symmetric_top():
     rate_B = _phase_rate(res.t, w[:, 1] + 1j * w[:, 2])
     relative_to_rotor = rate_B - spin
     assert relative_to_rotor == pytest.approx((J - I) / I * spin, rel=1e-6)
-    assert relative_to_rotor == pytest.approx(309.23, abs=0.005)  # physics.md, 2 decimals
+    # docs/physics.md#coning-rates, 2 decimals
+    assert relative_to_rotor == pytest.approx(309.23, abs=0.005)
 
     # b1 cones about the fixed H_L at |H|/I = J spin / (I cos theta)
     coning = _coning_rate(res)
     theta = res.coning[0]
     assert coning == pytest.approx(J * spin / (I * math.cos(theta)), rel=1e-6)
-    assert coning == pytest.approx(1356.43, abs=0.005)  # physics.md: 216 Hz
+    assert coning == pytest.approx(1356.43, abs=0.005)  # docs/physics.md#coning-rates: 216 Hz
 
 
 def test_coning_rate_at_large_cone_angle_is_H_over_I():
@@ -154,7 +156,8 @@ def test_paper_aero_moment_spinning_craft_holds_angle_of_attack_nonspinning_dive
 
 
 def test_gyrostat_spin_rate_follows_motor_torque():
-    """J (w1_dot + psi_ddot) = T_motor: the rotor row of the corrected Eq. 1."""
+    """J (w1_dot + psi_ddot) = T_motor: the rotor row of the corrected Eq. 1
+    (docs/references.md#paper-eq-1)."""
     model = torque_free(table1_flight5(), carrier=GYROSTAT_CARRIER)
     rhs = build_coast_rhs(model)
     p = parameter_values(model)

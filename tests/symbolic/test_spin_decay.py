@@ -1,4 +1,8 @@
-"""Spin decay: paper Eq. 6 exponential law, rotating-disk friction (physics.md section 4)."""
+"""Spin decay: paper Eq. 6 exponential law, rotating-disk friction (docs/physics.md#spin-decay).
+
+The paper is the seed paper (docs/references.md#paper-eq-6); the disk laws are von Karman's
+(docs/references.md#von-karman-1921) and Schlichting's (docs/references.md#schlichting).
+"""
 
 from __future__ import annotations
 
@@ -38,7 +42,7 @@ def torque(model: SpinDecayModel, w: float, p: np.ndarray, rho: float = RHO) -> 
 
 
 def disk_by_hand(w: float, radius: float, rho: float = RHO) -> tuple[float, float]:
-    """Laminar and turbulent torque of a free disk, physics.md section 4 (both faces)."""
+    """Laminar and turbulent torque of a free disk, docs/physics.md#spin-decay (both faces)."""
     nu = MU / rho
     laminar = 0.616 * math.pi * rho * radius**4 * math.sqrt(nu * abs(w) ** 3)
     turbulent = 0.073 * rho * w**2 * radius**5 * (nu / (radius**2 * abs(w))) ** 0.2
@@ -71,7 +75,8 @@ def test_exponential_decay_paper_eq6(flight5: Model) -> None:
 
 
 def test_rotating_disk_time_constant_flight5(flight5: Model) -> None:
-    """Flight 5 at 10,000 RPM: J w / |T| between 10 and 16 s (physics.md, derived)."""
+    """Flight 5 at 10,000 RPM: J w / |T| between 10 and 16 s (docs/physics.md#spin-decay,
+    derived)."""
     p = params(flight5, disk_faces=1.0)
     T = torque(SpinDecayModel.ROTATING_DISK, W0, p)
     assert T < 0
