@@ -48,7 +48,8 @@ from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, _closed_loop
 from lightcraft_opt.files.problem import _problem_errors
-from lightcraft_opt.files.problem_tables import NUMBER, TEXT, Spec, choice, quantity, read_table
+from lightcraft_opt.files.problem_tables import read_table
+from lightcraft_opt.files.schema import NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 
 __all__ = ["load_campaign"]

@@ -91,17 +91,8 @@ from lightcraft_opt.files import schema
 
 # problem_files' own readers of the model and [initial] tables: one convention for both
 from lightcraft_opt.files.problem import _initial_state, _model, _problem_errors
-from lightcraft_opt.files.problem_tables import (
-    INTEGER,
-    NUMBER,
-    NUMBERS,
-    TEXT,
-    Spec,
-    Table,
-    choice,
-    quantity,
-    read_table,
-)
+from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
+from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, STATE
 
 __all__ = ["ClosedLoopProblem", "load_closed_loop"]
@@ -320,7 +311,7 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
     if wind is None:
         return {}
     try:
-        values, keys = schema.read_table(src, wind, "plant.wind", mf.SCHEMA["wind"], params.Wind)
+        values, keys = schema.read_fields(src, wind, "plant.wind", mf.SCHEMA["wind"], params.Wind)
         structural = [k for k in values if k not in _WIND_PARAMETERS]
         if structural:
             raise ProblemFileError(

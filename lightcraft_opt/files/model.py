@@ -52,7 +52,7 @@ from lightcraft_opt.files.schema import (
     build,
     choice,
     quantity,
-    read_table,
+    read_fields,
     read_toml,
 )
 
@@ -188,7 +188,7 @@ def load_site(path: str | Path) -> params.Site:
         Naming the file and the key, for any problem with the file.
     """
     src, data = read_toml(Path(path))
-    values, keys = read_table(src, data, "", SCHEMA["site"], params.Site)
+    values, keys = read_fields(src, data, "", SCHEMA["site"], params.Site)
     return build(src, {"site": ("", keys)}, params.Site, values)
 
 
@@ -206,7 +206,7 @@ def load_laser(path: str | Path) -> params.Laser:
         Naming the file and the key, for any problem with the file.
     """
     src, data = read_toml(Path(path))
-    values, keys = read_table(src, data, "", SCHEMA["laser"], params.Laser)
+    values, keys = read_fields(src, data, "", SCHEMA["laser"], params.Laser)
     return build(src, {"laser": ("", keys)}, params.Laser, values)
 
 
@@ -232,14 +232,14 @@ def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.M
     """:func:`load_model` on the tables of a flight file already read (``src`` names it in
     errors; ``file`` locates the site and laser files), e.g. with a problem file's
     overrides merged in (problem_files)."""
-    top, _ = read_table(
+    top, _ = read_fields(
         src, data, "", SCHEMA["model"], params.Model, ("craft", "flight", "environment")
     )
     site = load_site(_component(src, file, top, "site"))
     laser = load_laser(_component(src, file, top, "laser"))
     craft = _craft(src, _required_table(src, data, "craft"))
     flight_table = _required_table(src, data, "flight")
-    fvalues, fkeys = read_table(src, flight_table, "flight", SCHEMA["flight"], params.Flight)
+    fvalues, fkeys = read_fields(src, flight_table, "flight", SCHEMA["flight"], params.Flight)
     places = {"flight": ("flight", fkeys)}
     flight = build(src, places, params.Flight, fvalues)
     environment = _environment(src, _table(src, data, "environment"))
@@ -257,7 +257,7 @@ def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.M
 # --------------------------------------------------------------------------- tables
 def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
     subtables = ("liner", "carrier", "rcs", "aero", "spin_decay", "engine")
-    values, keys = read_table(src, data, "craft", SCHEMA["craft"], params.Craft, subtables)
+    values, keys = read_fields(src, data, "craft", SCHEMA["craft"], params.Craft, subtables)
     places: dict[str, tuple[str, Mapping[str, str]]] = {"craft": ("craft", keys)}
     simple: tuple[tuple[str, type], ...] = (
         ("liner", params.Liner),
@@ -271,7 +271,7 @@ def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
         table = _table(src, data, name, where)
         if table is None:
             continue
-        part, part_keys = read_table(src, table, where, SCHEMA[name], cls)
+        part, part_keys = read_fields(src, table, where, SCHEMA[name], cls)
         places[name] = (where, part_keys)
         values[name] = build(src, {name: places[name]}, cls, part)
     rcs = _table(src, data, "rcs", "craft.rcs")
@@ -281,7 +281,7 @@ def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
 
 
 def _rcs(src: str, data: Mapping[str, Any]) -> tuple[params.Rcs, tuple[str, Mapping[str, str]]]:
-    values, keys = read_table(src, data, "craft.rcs", SCHEMA["rcs"], params.Rcs, ("thrusters",))
+    values, keys = read_fields(src, data, "craft.rcs", SCHEMA["rcs"], params.Rcs, ("thrusters",))
     rows = data.get("thrusters")
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
         raise ModelFileError(
@@ -290,7 +290,7 @@ def _rcs(src: str, data: Mapping[str, Any]) -> tuple[params.Rcs, tuple[str, Mapp
     thrusters = []
     for i, row in enumerate(rows):
         where = f"craft.rcs.thrusters[{i}]"
-        t_values, t_keys = read_table(src, row, where, SCHEMA["thruster"], params.Thruster)
+        t_values, t_keys = read_fields(src, row, where, SCHEMA["thruster"], params.Thruster)
         thrusters.append(build(src, {"thruster": (where, t_keys)}, params.Thruster, t_values))
     place = ("craft.rcs", {**keys, "thrusters": "thrusters"})
     values["thrusters"] = tuple(thrusters)
@@ -300,12 +300,12 @@ def _rcs(src: str, data: Mapping[str, Any]) -> tuple[params.Rcs, tuple[str, Mapp
 def _environment(src: str, data: Mapping[str, Any] | None) -> params.Environment:
     if data is None:
         return params.Environment()
-    values, keys = read_table(
+    values, keys = read_fields(
         src, data, "environment", SCHEMA["environment"], params.Environment, ("wind",)
     )
     wind = _table(src, data, "wind", "environment.wind")
     if wind is not None:
-        w_values, w_keys = read_table(src, wind, "environment.wind", SCHEMA["wind"], params.Wind)
+        w_values, w_keys = read_fields(src, wind, "environment.wind", SCHEMA["wind"], params.Wind)
         values["wind"] = build(src, {"wind": ("environment.wind", w_keys)}, params.Wind, w_values)
     return build(src, {"environment": ("environment", keys)}, params.Environment, values)
 

@@ -125,21 +125,16 @@ from lightcraft_opt.files.problem_tables import (
     BLOCKS,
     CONSTRAINTS,
     CONTROL,
-    INTEGER,
-    NUMBER,
     NUMBERS,
     OBJECTIVES,
-    TEXT,
-    Spec,
     Table,
-    choice,
-    quantity,
     read_array,
     read_item,
     read_kind,
     read_table,
     si_note,
 )
+from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (

@@ -17,7 +17,6 @@ import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
-from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +24,19 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError, ProblemFileError
 from lightcraft_opt.files import model as mf
-from lightcraft_opt.files.schema import NOT_SI, Spec, match_key, parse_number, parse_value
+from lightcraft_opt.files.schema import (
+    INTEGER,
+    NOT_SI,
+    NUMBER,
+    TEXT,
+    Spec,
+    choice,
+    join_key,
+    match_key,
+    parse_number,
+    parse_value,
+    quantity,
+)
 from lightcraft_opt.layout import STATE
 from lightcraft_opt.ocp.problem import (
     CaptureFraction,
@@ -49,20 +60,13 @@ __all__ = [
     "BLOCKS",
     "CONSTRAINTS",
     "CONTROL",
-    "INTEGER",
-    "NUMBER",
     "NUMBERS",
     "OBJECTIVES",
     "SLOT",
     "SLOT_QUANTITY",
     "SLOT_RATE",
-    "TEXT",
-    "Spec",
     "Table",
     "TableKind",
-    "choice",
-    "join",
-    "quantity",
     "read_array",
     "read_item",
     "read_kind",
@@ -70,20 +74,10 @@ __all__ = [
     "si_note",
 ]
 
-TEXT, NUMBER = Spec("text"), Spec("dimensionless")
-INTEGER = Spec("dimensionless", "integer")
 SLOT = Spec("in the unit of its slot")  # one number or one per component, inf allowed
 SLOT_RATE = Spec("in the unit of its slot per second")
 NUMBERS = Spec("one number or one per component")
 BLOCKS = Spec("pulses per block")  # an integer or a list of integers
-
-
-def quantity(kind: str, shape: str = "scalar", length: int = 0) -> Spec:
-    return Spec(kind, shape, length)
-
-
-def choice(enum: type[Enum]) -> Spec:
-    return Spec("choice", choices=enum)
 
 
 #: Quantity of each slot whose bounds may carry a unit in the key (model_files.QUANTITIES).
@@ -180,7 +174,7 @@ class Table:
 
     def key(self, field: str) -> str:
         """The field's key as written (its bare name if not written)."""
-        return join(self.where, self.keys.get(field, field))
+        return join_key(self.where, self.keys.get(field, field))
 
 
 def read_array(src: str, data: Mapping[str, Any], key: str) -> list[Any]:
@@ -318,7 +312,7 @@ def read_table(
     for key, raw in data.items():
         if key in tables:
             continue
-        name = join(where, key)
+        name = join_key(where, key)
         field, factor = _slot_key(src, name, schema, slot)
         unit = None
         if field is None:
@@ -326,7 +320,7 @@ def read_table(
             factor = mf.QUANTITIES[schema[field].kind][unit] if unit else "1"
         if field in keys:
             raise ProblemFileError(
-                src, name, f"{field} is also given as {join(where, keys[field])}; give it once"
+                src, name, f"{field} is also given as {join_key(where, keys[field])}; give it once"
             )
         keys[field] = key
         spec = schema[field]
@@ -345,7 +339,9 @@ def read_table(
     for field in required:
         if field not in keys:
             raise ProblemFileError(
-                src, join(where, field), f"missing required key; write {_spelling(field, schema)}"
+                src,
+                join_key(where, field),
+                f"missing required key; write {_spelling(field, schema)}",
             )
     return Table(where, values, keys)
 
@@ -401,5 +397,3 @@ def si_note(key: str, reason: str) -> str:
     return reason + (" (converted to SI)" if converted else "")
 
 
-def join(where: str, key: str) -> str:
-    return f"{where}.{key}" if where else key

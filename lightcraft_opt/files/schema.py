@@ -3,7 +3,7 @@
 A non-SI value carries its unit in the key (``mass_g``, ``spin_rpm``, ``beam_side_cm``), an
 SI value the SI suffix (``mass_kg``); dimensionless numbers, text, switches and choices are
 bare. :data:`QUANTITIES` gives each quantity's suffixes and factors to SI; a :class:`Spec`
-says what one dataclass field holds in a file; :func:`read_table` converts one table to SI
+says what one dataclass field holds in a file; :func:`read_fields` converts one table to SI
 keyword arguments and :func:`build` makes the dataclass, every failure a ModelFileError
 naming the file and the key as written. Model, problem, closed-loop and campaign files all
 read through it (files/model.py, files/problem.py, files/closed_loop.py, files/campaign.py).
@@ -41,7 +41,7 @@ __all__ = [
     "parse_number",
     "parse_value",
     "quantity",
-    "read_table",
+    "read_fields",
     "read_toml",
 ]
 
@@ -107,7 +107,7 @@ Places = Mapping[str, tuple[str, Mapping[str, str]]]
 
 
 # --------------------------------------------------------------------------- keys and values
-def read_table(
+def read_fields(
     src: str,
     data: Mapping[str, Any],
     where: str,
