@@ -46,8 +46,8 @@ from lightcraft_opt.campaign.dispersions import DISPERSED, Dispersions, Normal, 
 from lightcraft_opt.campaign.run import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
-from lightcraft_opt.files.closed_loop import ClosedLoopProblem, _closed_loop
-from lightcraft_opt.files.problem import _problem_errors
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables
+from lightcraft_opt.files.problem import as_problem_file_errors
 from lightcraft_opt.files.problem_tables import read_table
 from lightcraft_opt.files.schema import NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
@@ -85,7 +85,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
     ProblemFileError naming the file and the key as written.
     """
     file = Path(path)
-    with _problem_errors():
+    with as_problem_file_errors():
         src, data = schema.read_toml(file)
         raw_campaign = data.pop("campaign", {})
         raw_dispersions = data.pop("dispersions", {})
@@ -97,7 +97,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
                 "a campaign seeds each run from its seed (--seed) and the run index: "
                 "remove plant.seed",
             )
-        problem = _closed_loop(src, file, data, duration)
+        problem = closed_loop_from_tables(src, file, data, duration)
         table = read_table(src, raw_campaign, "campaign", _CAMPAIGN)
         dispersions = _dispersions(src, raw_dispersions, _nominal(problem))
         return Campaign(

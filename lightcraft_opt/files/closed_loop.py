@@ -90,12 +90,16 @@ from lightcraft_opt.files import model as mf
 from lightcraft_opt.files import schema
 
 # problem_files' own readers of the model and [initial] tables: one convention for both
-from lightcraft_opt.files.problem import _initial_state, _model, _problem_errors
+from lightcraft_opt.files.problem import (
+    as_problem_file_errors,
+    initial_state_from_table,
+    model_with_overrides,
+)
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, STATE
 
-__all__ = ["ClosedLoopProblem", "load_closed_loop"]
+__all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
 _TABLES = ("model_overrides", "initial", "controller", "plant")
 _TOP: dict[str, Spec] = {"title": TEXT, "model": TEXT, "duration": quantity("time")}
@@ -190,16 +194,19 @@ def load_closed_loop(path: str | Path, *, duration: float | None = None) -> Clos
     file, the model file or the values they give.
     """
     file = Path(path)
-    with _problem_errors():
+    with as_problem_file_errors():
         src, data = schema.read_toml(file)
-        return _closed_loop(src, file, data, duration)
+        return closed_loop_from_tables(src, file, data, duration)
 
 
-def _closed_loop(
+def closed_loop_from_tables(
     src: str, file: Path, data: dict[str, Any], duration: float | None
 ) -> ClosedLoopProblem:
+    """The closed-loop problem of the parsed file ``data`` (``src`` its path as text,
+    ``file`` its path, relative model paths resolved from it); ``duration`` [s] overrides
+    the file's. Shared with campaign files, which are closed-loop files with more tables."""
     top = read_table(src, data, "", _TOP, required=("model", "duration"), tables=_TABLES)
-    model = _model(src, file, top.values["model"], data.get("model_overrides"))
+    model = model_with_overrides(src, file, top.values["model"], data.get("model_overrides"))
     t_end = top.values["duration"] if duration is None else duration
     if not (math.isfinite(t_end) and t_end > 0):
         raise ProblemFileError(src, top.key("duration"), f"must be positive, got {t_end!r} s")
@@ -225,7 +232,7 @@ def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
     raw = dict(raw or {})
     coning = read_table(src, {k: raw.pop(k) for k in list(raw) if k.startswith("coning")},
                         "initial", _CONING).values  # fmt: skip
-    x0 = _initial_state(src, model, raw)
+    x0 = initial_state_from_table(src, model, raw)
     if coning:
         w = STATE.index("w_B")
         if abs(x0[w][0]) > 0 and coning.get("coning", 0.0):

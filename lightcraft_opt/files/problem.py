@@ -146,7 +146,14 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 
-__all__ = ["ProblemFile", "load_problem", "objective_names"]
+__all__ = [
+    "ProblemFile",
+    "as_problem_file_errors",
+    "initial_state_from_table",
+    "load_problem",
+    "model_with_overrides",
+    "objective_names",
+]
 
 _TABLES = (
     "model_overrides",
@@ -284,14 +291,14 @@ def load_problem(
         model file or the values they give.
     """
     file = Path(path)
-    with _problem_errors():
+    with as_problem_file_errors():
         src, data = schema.read_toml(file)
     for key, value in (("horizon_pulses", horizon), ("name", solver), ("max_iter", max_iter)):
         if value is not None:
             table = data if key == "horizon_pulses" else data.setdefault("solver", {})
             if isinstance(table, dict):
                 table[key] = value
-    with _problem_errors():
+    with as_problem_file_errors():
         return _problem_file(src, file, data)
 
 
@@ -315,10 +322,10 @@ def objective_names(problem: OcpProblem) -> tuple[str, ...]:
 # --------------------------------------------------------------------------- the file
 def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
     top = read_table(src, data, "", _TOP, required=("model", "horizon_pulses"), tables=_TABLES)
-    model = _model(src, file, top.values["model"], data.get("model_overrides"))
+    model = model_with_overrides(src, file, top.values["model"], data.get("model_overrides"))
     horizon = top.values["horizon_pulses"]
     t0 = top.values.get("t0", 0.0)
-    x0 = _initial_state(src, model, data.get("initial"))
+    x0 = initial_state_from_table(src, model, data.get("initial"))
     times = t0 + np.arange(horizon + 1) / model.flight.pulse_rate if horizon > 0 else None
     items: dict[str, list[Table]] = {"objective": [], "constraints": [], "controls": []}
     made: dict[str, list[Any]] = {"objective": [], "constraints": [], "controls": []}
@@ -372,7 +379,7 @@ def _guess_inputs(src: str, problem: OcpProblem, raw: Any) -> dict[str, tuple[fl
     return out
 
 
-def _model(src: str, file: Path, name: str, overrides: Any) -> params.Model:
+def model_with_overrides(src: str, file: Path, name: str, overrides: Any) -> params.Model:
     """The model file ``name`` (relative to the problem file) with ``overrides`` merged in."""
     if overrides is not None and not isinstance(overrides, dict):
         raise ProblemFileError(src, "model_overrides", f"must be a table, got {overrides!r}")
@@ -433,7 +440,10 @@ def _override_key(field: str | None, overrides: Mapping[str, Any]) -> str | None
     return first
 
 
-def _initial_state(src: str, model: params.Model, raw: Any) -> np.ndarray:
+def initial_state_from_table(src: str, model: params.Model, raw: Any) -> np.ndarray:
+    """(STATE.size,) launch state of ``model`` from an ``[initial]`` table ``raw`` (position
+    and velocity in L, tilt and its azimuth, w_B in B, spin; layout.initial_state's defaults
+    where a key is absent)."""
     v = read_table(src, raw or {}, "initial", _INITIAL).values
     try:
         return initial_state(
@@ -486,7 +496,7 @@ def _problem_key(field: str, top: Table, items: Mapping[str, list[Table]]) -> st
 
 
 @contextmanager
-def _problem_errors() -> Iterator[None]:
+def as_problem_file_errors() -> Iterator[None]:
     """model_files' errors about the problem file become ProblemFileErrors."""
     try:
         yield
