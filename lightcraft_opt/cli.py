@@ -1,4 +1,4 @@
-"""The ``lightcraft`` command line (floor 3). Units at this edge: degrees, m/s."""
+"""The ``lightcraft`` command line. Units at this edge: degrees, m/s."""
 
 from __future__ import annotations
 
@@ -261,9 +261,8 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="lightcraft", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
+def add_simulate(sub: argparse._SubParsersAction) -> None:
+    """Add ``lightcraft simulate`` to the subcommands ``sub``."""
     sim = sub.add_parser("simulate", help="simulate a flight from a model file")
     sim.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
     sim.add_argument("--duration", type=float, default=10.0, help="seconds (default 10)")
@@ -310,6 +309,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sim.set_defaults(run=_simulate)
 
+
+def add_optimize(sub: argparse._SubParsersAction) -> None:
+    """Add ``lightcraft optimize`` to the subcommands ``sub``."""
     opt = sub.add_parser(
         "optimize",
         help="solve an optimal control problem from a problem file",
@@ -336,6 +338,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     opt.set_defaults(run=_optimize)
 
+
+def add_closed_loop(sub: argparse._SubParsersAction) -> None:
+    """Add ``lightcraft closed-loop`` to the subcommands ``sub``."""
     loop = sub.add_parser(
         "closed-loop",
         help="fly a closed-loop problem file under a controller",
@@ -359,6 +364,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     loop.set_defaults(run=_closed_loop)
 
+
+def add_montecarlo(sub: argparse._SubParsersAction) -> None:
+    """Add ``lightcraft montecarlo`` to the subcommands ``sub``."""
     mc = sub.add_parser(
         "montecarlo",
         help="run a Monte Carlo campaign from a campaign file",
@@ -385,6 +393,9 @@ def build_parser() -> argparse.ArgumentParser:
     mc.add_argument("--quiet", action="store_true", help="no progress line")
     mc.set_defaults(run=_montecarlo)
 
+
+def add_calibrate(sub: argparse._SubParsersAction) -> None:
+    """Add ``lightcraft calibrate`` to the subcommands ``sub``."""
     cal = sub.add_parser(
         "calibrate",
         help="fit model parameters to a tracked flight",
@@ -420,6 +431,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cal.add_argument("--verbose", action="store_true", help="print one line per iteration")
     cal.set_defaults(run=_calibrate)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``lightcraft`` parser: one ``add_<command>`` per subcommand."""
+    parser = argparse.ArgumentParser(prog="lightcraft", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for add in (add_simulate, add_optimize, add_closed_loop, add_montecarlo, add_calibrate):
+        add(sub)
     return parser
 
 

@@ -1,4 +1,4 @@
-"""Compile a casadi.Function to C, cached on disk, for faster evaluation (floor 2).
+"""Compile a casadi.Function to C, cached on disk, for faster evaluation.
 
 The generated C of a Function is compiled by the system C compiler into a shared library
 and loaded back with ``casadi.external``; the result evaluates the same expression graph

@@ -1,4 +1,4 @@
-"""What a Monte Carlo campaign draws for each run, and the drawing itself (floor 0).
+"""What a Monte Carlo campaign draws for each run, and the drawing itself.
 
 A campaign declares distributions of a fixed set of quantities (:data:`DISPERSED`), in SI.
 Each run ``index`` of a campaign with seed ``seed`` draws each declared quantity from its

@@ -1,4 +1,4 @@
-"""A progress line on stderr: done/total, runs per minute, time left (floor 2).
+"""A progress line on stderr: done/total, runs per minute, time left.
 
 On a terminal the line overwrites itself (carriage return); otherwise (a log file, a
 pipe) a plain line is printed every ``every`` runs and at the end.

@@ -1,4 +1,4 @@
-"""An append-only CSV table, one row per run, that survives being killed (floor 2).
+"""An append-only CSV table, one row per run, that survives being killed.
 
 Rows are appended as runs finish, each written, flushed and fsynced at once, so a killed
 campaign loses at most the row being written. Reopening the table drops a trailing partial

@@ -1,4 +1,4 @@
-"""Statistics of a campaign's run table (numpy only, floor 2).
+"""Statistics of a campaign's run table (numpy only).
 
 :func:`campaign_summary` reads the columns of runs.csv (and of timings.csv) and gives the
 apogee's mean, standard deviation and percentiles, the mean and covariance of the landing

@@ -1,4 +1,4 @@
-"""Writing a calibration to disk: the fitted model file and the fit report (floor 3, edge).
+"""Writing a calibration to disk: the fitted model file and the fit report (edge).
 
 The fitted model file is the original flight file's tables with each fitted value put in
 its key, in SI with the unit in the key (``impulse_per_pulse_ns``, ``blast_angle_rad``,

@@ -1,4 +1,4 @@
-"""Writing a closed-loop flight to disk: steps.csv and summary.json (floor 3, the edge).
+"""Writing a closed-loop flight to disk: steps.csv and summary.json (the edge).
 
 The flight itself goes to trajectory.csv and pulses.csv by :mod:`.simulation_outputs` (the
 same columns as ``lightcraft simulate``'s); here the controller's side: one row per

@@ -1,4 +1,4 @@
-"""Writing an optimal control solution to disk: solution.csv, summary.json (floor 3).
+"""Writing an optimal control solution to disk: solution.csv, summary.json.
 
 Column names carry their units and match trajectory.csv's (:mod:`.simulation_outputs`):
 positions in L (x east, y north, z up, docs/frames.md), impulses in B. A failed solve is

@@ -1,4 +1,4 @@
-"""Writing a simulated flight to disk: CSV, JSON summary (floor 3, the edge).
+"""Writing a simulated flight to disk: CSV, JSON summary (the edge).
 
 Column names carry their units (``z_m``, ``w1_radps``); positions are in L
 (x east, y north, z up), as docs/frames.md says.

@@ -1,4 +1,4 @@
-"""Reading a tracked flight (CSV from video tracking) into a :class:`Track` (floor 3, edge).
+"""Reading a tracked flight (CSV from video tracking) into a :class:`Track` (edge).
 
 The file: a header row naming the columns, then one row per video frame::
 

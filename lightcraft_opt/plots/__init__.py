@@ -1,4 +1,4 @@
-"""Plots of flights (floor 3, the only matplotlib user).
+"""Plots of flights (the only matplotlib user).
 
 Axes-level functions take a result and an optional ``ax`` and return the artists
 (``trajectory``: time histories; ``track``: the beam plane); ``figures`` builds the whole

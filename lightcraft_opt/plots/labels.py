@@ -1,6 +1,6 @@
 """Axis labels from the state layout, and the display units of lengths.
 
-Plots are an edge of the package (floor 3): the library is SI, and a plot may show a
+Plots are an edge of the package: the library is SI, and a plot may show a
 length in cm or mm when that reads better. The unit lands in the label, never in the data.
 """
 
