@@ -2,8 +2,8 @@
 
 ``import lightcraft_opt as lc`` reaches the public API of every capability: models and
 files, the pulse map Φ, simulation, optimal control, control (MPC, LQR, closed loop),
-linearisation, calibration and Monte Carlo campaigns, and every result type. The control,
-campaign and linearisation names load on first use (python-control takes ~2 s to import).
+linearisation, calibration and Monte Carlo campaigns, and every result type. The
+controllers and linearisation load on first use (python-control takes ~2 s to import).
 Frames and units: docs/frames.md; the physics: docs/physics.md; the house:
 docs/architecture.md. Everything inside is SI.
 """
@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from lightcraft_opt import control
 from lightcraft_opt.calibration import (
     CalibrationOptions,
     CalibrationResult,
@@ -20,6 +21,8 @@ from lightcraft_opt.calibration import (
     Track,
     calibrate,
 )
+from lightcraft_opt.campaign import Campaign, CampaignResult, campaign_summary, run_campaign
+from lightcraft_opt.control import ClosedLoopOptions, ClosedLoopResult, MpcOptions, closed_loop
 from lightcraft_opt.errors import (
     LightcraftError,
     ModelFileError,
@@ -30,6 +33,7 @@ from lightcraft_opt.errors import (
 from lightcraft_opt.files import (
     ClosedLoopProblem,
     ProblemFile,
+    load_campaign,
     load_closed_loop,
     load_model,
     load_problem,
@@ -60,46 +64,24 @@ from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 if TYPE_CHECKING:
     from lightcraft_opt import linearize
-    from lightcraft_opt.campaign import Campaign, CampaignResult, campaign_summary, run_campaign
     from lightcraft_opt.control import (
-        ClosedLoopOptions,
-        ClosedLoopResult,
         LqrController,
         MpcController,
-        MpcOptions,
         OpenLoopController,
-        closed_loop,
         coning_model,
     )
-    from lightcraft_opt.files.campaign import load_campaign
 
-#: Names loaded on first use, and the module that holds each.
-_LAZY = {
-    "Campaign": "lightcraft_opt.campaign",
-    "CampaignResult": "lightcraft_opt.campaign",
-    "campaign_summary": "lightcraft_opt.campaign",
-    "run_campaign": "lightcraft_opt.campaign",
-    "load_campaign": "lightcraft_opt.files.campaign",
-    "ClosedLoopOptions": "lightcraft_opt.control",
-    "ClosedLoopResult": "lightcraft_opt.control",
-    "LqrController": "lightcraft_opt.control",
-    "MpcController": "lightcraft_opt.control",
-    "MpcOptions": "lightcraft_opt.control",
-    "OpenLoopController": "lightcraft_opt.control",
-    "closed_loop": "lightcraft_opt.control",
-    "coning_model": "lightcraft_opt.control",
-}
+#: Controller names that control/ itself loads on first use.
+_FROM_CONTROL = frozenset(("LqrController", "MpcController", "OpenLoopController", "coning_model"))
 
 
 def __getattr__(name: str) -> Any:
-    """The control and campaign names and the ``linearize`` package, imported when first
-    asked for."""
+    """The controllers (from :mod:`lightcraft_opt.control`) and the ``linearize`` package,
+    imported when first asked for."""
     if name == "linearize":
         return importlib.import_module("lightcraft_opt.linearize")
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
+    if name in _FROM_CONTROL:
+        return getattr(control, name)
     raise AttributeError(f"module 'lightcraft_opt' has no attribute {name!r}")
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
@@ -36,7 +37,6 @@ from lightcraft_opt.control.result import (
 )
 
 if TYPE_CHECKING:
-    from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
     from lightcraft_opt.control.controllers import (
         Controller,
         LqrController,
@@ -55,11 +55,12 @@ if TYPE_CHECKING:
         turn,
     )
 
-#: The controllers, the MPC and the loop load on first use: their prediction model
-#: linearises Φ through linearize/, which imports python-control (~2 s); a file reader
-#: that needs only the options stays quick.
+#: The controllers and the MPC load on first use: their prediction model linearises Φ
+#: through linearize/, which imports python-control (~2 s); a file reader that needs only
+#: the options, or a campaign that flies open loop, stays quick. (The closed loop is
+#: imported above: a lazy name that is also a submodule's name would be shadowed by the
+#: submodule once anything imports it.)
 _LAZY = {
-    **dict.fromkeys(("closed_loop", "disperse", "measured"), "closed_loop"),
     **dict.fromkeys(
         (
             "Controller",
@@ -82,7 +83,7 @@ _LAZY = {
 
 
 def __getattr__(name: str) -> Any:
-    """A controller, MPC or closed-loop name, imported from its module when first asked for."""
+    """A controller or MPC name, imported from its module when first asked for."""
     if name not in _LAZY:
         raise AttributeError(f"module 'lightcraft_opt.control' has no attribute {name!r}")
     value = getattr(importlib.import_module(f"lightcraft_opt.control.{_LAZY[name]}"), name)

@@ -4,11 +4,11 @@ named ``*_outputs``, and the TOML schema reader they all share.
 Readers: :mod:`.model` (:func:`load_model`), :mod:`.problem` (:func:`load_problem`) over
 :mod:`.problem_tables`, :mod:`.closed_loop` (:func:`load_closed_loop`), :mod:`.campaign`
 (:func:`load_campaign`), :mod:`.track` (:func:`read_track`); :mod:`.schema` converts keys
-with units to SI for all of them. (:mod:`.campaign` is not imported here: it loads the
-closed loop, and with it python-control.) Writers: :mod:`.simulation_outputs`, :mod:`.ocp_outputs`,
+with units to SI for all of them. Writers: :mod:`.simulation_outputs`, :mod:`.ocp_outputs`,
 :mod:`.closed_loop_outputs`, :mod:`.calibration_outputs`.
 """
 
+from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_laser, load_model, load_site
 from lightcraft_opt.files.problem import ProblemFile, load_problem
@@ -17,6 +17,7 @@ from lightcraft_opt.files.track import read_track
 __all__ = [
     "ClosedLoopProblem",
     "ProblemFile",
+    "load_campaign",
     "load_closed_loop",
     "load_laser",
     "load_model",
