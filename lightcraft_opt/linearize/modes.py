@@ -108,7 +108,8 @@ class Multipliers:
         return float(np.max(self.magnitude)) if self.values.size else float("nan")
 
 
-def _matrices(sys: control.StateSpace) -> tuple[np.ndarray, np.ndarray]:
+def state_space_matrices(sys: control.StateSpace) -> tuple[np.ndarray, np.ndarray]:
+    """(A (n, n), B (n, m)) of ``sys`` as float arrays."""
     return np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)
 
 
@@ -120,7 +121,7 @@ def multipliers(sys: control.StateSpace) -> Multipliers:
     ``FULL`` model), where left eigenvectors are ill-defined, the participation falls
     back to |r_ki|^2 of the unit right eigenvector.
     """
-    A, _ = _matrices(sys)
+    A, _ = state_space_matrices(sys)
     values, V = np.linalg.eig(A)
     order = np.argsort(-np.abs(values), kind="stable")
     values, V = values[order], V[:, order]
@@ -200,7 +201,7 @@ def controllability(sys: control.StateSpace, *, tol: float = 1e-9) -> Controllab
     makes, ~1e-9 of its lateral reach, so at the default tolerance r_L[up], v_L[up] are
     uncontrollable without the energy input.
     """
-    A, B = _matrices(sys)
+    A, B = state_space_matrices(sys)
     n = A.shape[0]
     blocks, Ak_B = [], B
     for _ in range(n):

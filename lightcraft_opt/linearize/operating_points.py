@@ -82,16 +82,18 @@ def pulse_map_jacobian(pulse_map: PulseMap) -> PulseMapJacobian:
     return PulseMapJacobian(pulse_map, f)
 
 
-def _jacobian(
+def jacobian_for(
     model: Model, pulse_map: PulseMap | PulseMapJacobian | None, options: PulseMapOptions | None
 ) -> PulseMapJacobian:
+    """``pulse_map`` when it is already a :class:`PulseMapJacobian`, else the Jacobian
+    Functions of it (or of Φ built for ``model`` with ``options`` when it is None)."""
     if isinstance(pulse_map, PulseMapJacobian):
         return pulse_map
     return pulse_map_jacobian(pulse_map or build_pulse_map(model, options))
 
 
 @functools.cache
-def _chart() -> tuple[ca.Function, ca.Function, ca.Function]:
+def error_state_chart() -> tuple[ca.Function, ca.Function, ca.Function]:
     """(local, ∂retract/∂δ, ∂local/∂x) of the error-state chart, built on first use."""
     retract, local = build_error_state()
     return (
@@ -118,7 +120,7 @@ def error_state(
     B], spin [rad/s], liner_mass, rcs_mass [kg], pulses, in the order asked.
     """
     x_op = point.x if isinstance(point, OperatingPoint) else point
-    dx = np.asarray(_chart()[0](x_op, checked_vector("x", x, STATE.size))).ravel()
+    dx = np.asarray(error_state_chart()[0](x_op, checked_vector("x", x, STATE.size))).ravel()
     return dx[select_entries(ERROR_STATE, states, "states")]
 
 
@@ -251,7 +253,7 @@ def trim_hover(
     ``max_energy`` or the optic catches nothing there (the point then holds the last
     iterate); ``NOT_CONVERGED`` when Newton ran out of iterations.
     """
-    jac = _jacobian(model, pulse_map, options)
+    jac = jacobian_for(model, pulse_map, options)
     e_max = model.laser.pulse_energy_max if max_energy is None else max_energy
     period = jac.pulse_map.period
     x = initial_state(model, r_L=(0.0, 0.0, altitude), spin=spin)

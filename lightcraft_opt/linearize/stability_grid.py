@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lightcraft_opt.linearize.modes import ModeKind, multipliers
-from lightcraft_opt.linearize.operating_points import PulseMapJacobian, _jacobian, climb_point
+from lightcraft_opt.linearize.operating_points import PulseMapJacobian, climb_point, jacobian_for
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
@@ -70,7 +70,7 @@ def stability_map(
     One Jacobian of Φ per cell (milliseconds at 8 substeps, ~0.1 s at 32, after the
     Jacobian Function is built once). ``progress(done, total)`` is called after each cell.
     """
-    jac = _jacobian(model, pulse_map, options)
+    jac = jacobian_for(model, pulse_map, options)
     s = np.asarray(spins, dtype=float).ravel()
     d = np.asarray(offsets, dtype=float).ravel()
     e = model.flight.pulse_energy if energy is None else energy

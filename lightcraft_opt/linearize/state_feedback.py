@@ -17,9 +17,9 @@ import numpy as np
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.linearize.modes import (
     Multipliers,
-    _matrices,
     controllability,
     multipliers,
+    state_space_matrices,
 )
 from lightcraft_opt.linearize.operating_points import OperatingPoint, error_state
 from lightcraft_opt.linearize.signal_names import select_entries
@@ -81,7 +81,7 @@ def lqr(
     (A, B) is not stabilisable (e.g. a neutral consumable or the gauge w_B[b1] kept in
     the states), when a weight has the wrong shape or sign, or when control.dlqr fails.
     """
-    A, B = _matrices(sys)
+    A, B = state_space_matrices(sys)
     n, m = B.shape
     Qm, Rm = _weight("Q", Q, n, definite=False), _weight("R", R, m, definite=True)
     c = controllability(sys)

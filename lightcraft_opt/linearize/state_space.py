@@ -33,8 +33,8 @@ from lightcraft_opt.layout import STATE
 from lightcraft_opt.linearize.operating_points import (
     OperatingPoint,
     PulseMapJacobian,
-    _chart,
-    _jacobian,
+    error_state_chart,
+    jacobian_for,
 )
 from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.options import PulseMapOptions
@@ -86,7 +86,7 @@ def linearize(
     [s]; state and output names ``r_L[east]``, ``theta_B[b2]``, ... (units: those of
     the layouts, SI), input names ``pointing_L[east]``, ``energy``, ...
     """
-    jac = _jacobian(model, pulse_map, options)
+    jac = jacobian_for(model, pulse_map, options)
     ulay = jac.pulse_map.inputs or point.input_layout(model)
     if point.inputs is not None and point.inputs != ulay:
         raise ParameterError(
@@ -99,7 +99,7 @@ def linearize(
     x_next, A, B = jac(point.x, point.u, point.p, point.t)
     wanted: Sequence[str] | None
     if coordinates is Coordinates.ERROR_STATE:
-        _, retract_jac, local_jac = _chart()
+        _, retract_jac, local_jac = error_state_chart()
         E = np.asarray(retract_jac(point.x, np.zeros(ERROR_STATE.size)))
         L = np.asarray(local_jac(x_next, x_next))
         A, B = L @ A @ E, L @ B
