@@ -1,7 +1,7 @@
 """Monte Carlo campaigns: many dispersed flights, on local processes or a Dask cluster.
 
 ``run_campaign(campaign, runs, seed, out_dir)`` makes runs 0 .. runs - 1 of a
-:class:`~lightcraft_opt.campaign.run.Campaign` (each by
+:class:`~lightcraft_opt.campaign.spec.Campaign` (each by
 :func:`~lightcraft_opt.campaign.run.run_one`: a run depends only on the campaign, the
 seed and its index) and writes, in ``out_dir``:
 
@@ -35,8 +35,9 @@ import numpy as np
 
 from lightcraft_opt.campaign import engines as engines
 from lightcraft_opt.campaign.progress import Progress
-from lightcraft_opt.campaign.run import TIMING_COLUMNS, Campaign, run_one
+from lightcraft_opt.campaign.run import run_one
 from lightcraft_opt.campaign.run_table import RunTable, read_table
+from lightcraft_opt.campaign.spec import TIMING_COLUMNS, Campaign
 from lightcraft_opt.campaign.summary import campaign_summary
 from lightcraft_opt.errors import ParameterError
 

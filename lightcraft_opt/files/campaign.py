@@ -43,7 +43,7 @@ from pathlib import Path
 from typing import Any
 
 from lightcraft_opt.campaign.dispersions import DISPERSED, Dispersions, Normal, Uniform
-from lightcraft_opt.campaign.run import DISPERSED_PARAMETER, Campaign, CampaignController
+from lightcraft_opt.campaign.spec import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables

@@ -22,7 +22,7 @@ from lightcraft_opt.campaign.dispersions import (
     draw_many,
     loop_seed,
 )
-from lightcraft_opt.campaign.run import CampaignController
+from lightcraft_opt.campaign.spec import CampaignController
 from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.files.campaign import load_campaign
 

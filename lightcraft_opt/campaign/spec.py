@@ -1,0 +1,156 @@
+"""What a Monte Carlo campaign flies, before its draws: the spec every run starts from, and
+the columns of its run table (SI, the unit in the column name)."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from lightcraft_opt.campaign.dispersions import Dispersions
+from lightcraft_opt.control.options import ClosedLoopOptions, MpcOptions
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import STATE, checked_vector, initial_state
+from lightcraft_opt.params import Model
+
+__all__ = [
+    "CAMPAIGN_TIME_BUDGET",
+    "DISPERSED_PARAMETER",
+    "OUTPUT_COLUMNS",
+    "TIMING_COLUMNS",
+    "Campaign",
+    "CampaignController",
+]
+
+#: The MPC's wall-clock budget in campaign runs [s]: large enough that no solve is late.
+CAMPAIGN_TIME_BUDGET = 3600.0
+
+#: Outputs of a run, after its index and drawn inputs (SI; angles in rad).
+OUTPUT_COLUMNS = (
+    "status",
+    "message",
+    "apogee_m",
+    "apogee_time_s",
+    "flight_time_s",
+    "final_east_m",
+    "final_north_m",
+    "final_up_m",
+    "landing_east_m",
+    "landing_north_m",
+    "left_beam",
+    "pulses",
+    "dropped_pulses",
+    "max_tilt_rad",
+    "max_coning_rad",
+    "final_coning_rad",
+    "max_offset_m",
+    "rcs_used_kg",
+    "fallbacks",
+    "iterations_total",
+    "iterations_max",
+)
+#: Wall-clock columns of timings.csv (machine-dependent, never in the run table).
+TIMING_COLUMNS = (
+    "run",
+    "wall_s",
+    "solve_time_median_s",
+    "solve_time_p99_s",
+    "solve_time_max_s",
+    "solve_time_total_s",
+)
+#: The PARAMETERS slot of each dispersed quantity that is a model parameter.
+DISPERSED_PARAMETER = {
+    "mass": "rotor_mass_dry",
+    "inertia_axial": "rotor_axial_inertia_dry",
+    "inertia_transverse": "rotor_transverse_inertia_dry",
+    "coupling": "impulse_per_pulse",
+    "wind_speed": "wind_speed_ref",
+    "wind_direction_from": "wind_direction_from",
+}
+
+class CampaignController(Enum):
+    """Who flies the runs: the MPC, the LQR, or nobody (the open loop)."""
+
+    MPC = "mpc"
+    LQR = "lqr"
+    NONE = "none"
+
+
+@dataclass(frozen=True, eq=False)
+class Campaign:
+    """What every run of a campaign flies, before its draws (SI).
+
+    Attributes
+    ----------
+    model : the controller's model; the plant's before the campaign's draws.
+    duration : of each flight [s].
+    controller : :class:`CampaignController`.
+    x0 : (STATE.size,) state at the first pulse (default: on the pad, upright).
+    mpc : the MPC's options (the LQR takes their weights); ``time_budget`` is replaced
+        by :data:`CAMPAIGN_TIME_BUDGET` in runs.
+    loop : the closed loop's noise, relative dispersion, drop-outs and injected faults;
+        its ``seed`` is replaced by each run's (:func:`.dispersions.loop_seed`).
+    plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not
+        (its wind), before the draws.
+    dispersions : what each run draws (:class:`~lightcraft_opt.campaign.dispersions.Dispersions`).
+    compiled : fly the plant Φ compiled to C (compiled.py; cached on disk).
+    title : a name for reports.
+    """
+
+    model: Model
+    duration: float
+    controller: CampaignController = CampaignController.NONE
+    x0: np.ndarray | None = None
+    mpc: MpcOptions = field(default_factory=MpcOptions)
+    loop: ClosedLoopOptions = field(default_factory=ClosedLoopOptions)
+    plant_parameters: Mapping[str, Any] = field(default_factory=dict)
+    dispersions: Dispersions = field(default_factory=Dispersions)
+    compiled: bool = False
+    title: str = "campaign"
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.duration, int | float) and math.isfinite(self.duration)):
+            raise ParameterError("duration", f"must be a number of seconds, got {self.duration!r}")
+        if self.duration <= 0:
+            raise ParameterError("duration", f"must be positive, got {self.duration!r} s")
+        if not isinstance(self.controller, CampaignController):
+            allowed = [c.value for c in CampaignController]
+            raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")
+        if not isinstance(self.dispersions, Dispersions):
+            raise ParameterError("dispersions", f"must be Dispersions, got {self.dispersions!r}")
+        x0 = initial_state(self.model) if self.x0 is None else self.x0
+        object.__setattr__(self, "x0", checked_vector("x0", x0, STATE.size).copy())
+
+    @cached_property
+    def fingerprint(self) -> str:
+        """sha256 of everything a run depends on (not the title): equal fingerprints fly
+        equal runs."""
+        p = {k: np.ravel(v).tolist() for k, v in sorted(self.plant_parameters.items())}
+        parts = (
+            repr(self.model),
+            repr(float(self.duration)),
+            self.controller.value,
+            repr(np.asarray(self.x0).tolist()),
+            repr(self.mpc),
+            repr(self.loop),
+            repr(p),
+            repr(self.dispersions),
+            repr(self.compiled),
+        )
+        return hashlib.sha256("\0".join(parts).encode()).hexdigest()
+
+    @property
+    def input_columns(self) -> tuple[str, ...]:
+        """Columns of the drawn inputs, then the run's closed-loop seed."""
+        return (*self.dispersions.columns, "loop_seed")
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The run table's header."""
+        return ("run", *self.input_columns, *OUTPUT_COLUMNS)
