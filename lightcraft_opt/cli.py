@@ -9,8 +9,12 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
+from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
-from lightcraft_opt.errors import LightcraftError
+from lightcraft_opt.errors import LightcraftError, ParameterError
+from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
+from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
 from lightcraft_opt.files.model import load_model
@@ -21,11 +25,15 @@ from lightcraft_opt.files.simulation_outputs import (
     write_summary,
     write_trajectory_csv,
 )
+from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.solve import CompiledOcp
+from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.plots.closed_loop import closed_loop_figures
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
+from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
@@ -166,9 +174,6 @@ def _closed_loop(args: argparse.Namespace) -> int:
 
 
 def _montecarlo(args: argparse.Namespace) -> int:
-    from lightcraft_opt.campaign.runner import run_campaign
-    from lightcraft_opt.files.campaign import load_campaign
-    from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 
     source = Path(args.problem)
     campaign = load_campaign(source, duration=args.duration)
@@ -203,16 +208,6 @@ def _montecarlo(args: argparse.Namespace) -> int:
 
 
 def _calibrate(args: argparse.Namespace) -> int:
-    # here, not at the top: only this command needs them
-    from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
-    from lightcraft_opt.errors import ParameterError
-    from lightcraft_opt.files.calibration_outputs import (
-        write_calibration_report,
-        write_fitted_model,
-    )
-    from lightcraft_opt.files.track import read_track
-    from lightcraft_opt.options import PulseMapOptions
-    from lightcraft_opt.plots.calibration import calibration_figures
 
     source = Path(args.model)
     model = load_model(source)
