@@ -8,6 +8,19 @@ piecewise constant on sub-intervals, or phase-locked to the coning mode; layout
 serves simulation, optimal control, MPC, linearisation, calibration and Monte Carlo
 (docs/architecture.md#rule-1).
 
+Structure (docs/architecture.md#rule-17): Φ is a short MX graph over named SX pieces
+(pulse_map_pieces.py), not one flat expression::
+
+    x_n = normalise_attitude(x)
+    x_+, engine = pulse_jump(x_n, pulse(u), p)
+    X = coast_substep.mapaccum(substeps)(x_+, W(u, x_+), p, t + h [0 .. substeps-1])
+    x_next = normalise_attitude(X[:, -1])
+
+Its generated C is about a megabyte and compiles in seconds (compiled.py), and its
+derivatives can be chained over the compiled pieces (pulse_map_derivatives.py). It
+evaluates the expressions of the flat construction (flat_pulse_map.py) in the same
+order: the two agree to rounding (tests/symbolic/test_pulse_map_structure.py).
+
 The attitude quaternion is scaled to unit length on the way in and on the way out, so
 Φ depends on the direction of ``q_LB`` only: Φ(c q) = Φ(q) for any c > 0. On the unit
 sphere this changes nothing; off it (the trial points of a Newton-type solver over a
@@ -19,29 +32,26 @@ from |q| ~ 2 on, and IPOPT stalled on problems/crosswind_climb.toml (its header)
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import assert_never
 
 import casadi as ca
+import numpy as np
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import (
-    ENGINE,
     PARAMETERS,
     PULSE_INPUT,
     STATE,
     VectorLayout,
-    input_layout,
     map_input_layout,
     rcs_levels,
 )
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.coast import Rhs, Rhses, coning_rate_B, rk4_coast, split_coast
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.rcs import phase_locked_thrust
+from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces, build_pulse_map_pieces
 
-__all__ = ["PulseMap", "build_pulse_map"]
+__all__ = ["PulseMap", "build_pulse_map", "check_pulse_map_options", "substep_inputs"]
+
 
 @dataclass(frozen=True)
 class PulseMap:
@@ -59,6 +69,8 @@ class PulseMap:
         options' RCS profile): read it instead of rebuilding it from the model. None only
         for a map assembled without it.
     options : the options Φ was built with (None likewise).
+    pieces : the named sub-Functions Φ is composed of (None for the flat reference
+        construction and for maps assembled by hand).
     """
 
     step: ca.Function
@@ -66,6 +78,20 @@ class PulseMap:
     period: float
     inputs: VectorLayout | None = None
     options: PulseMapOptions | None = None
+    pieces: PulseMapPieces | None = None
+
+
+def check_pulse_map_options(model: Model, options: PulseMapOptions) -> VectorLayout:
+    """The layout of u for ``model`` under ``options``; OptionError when a profile other
+    than HOLD is asked of a craft without an RCS."""
+    craft = model.craft
+    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    if options.rcs_profile is not RcsProfile.HOLD and not n_thr:
+        raise OptionError(
+            f"PulseMapOptions.rcs_profile {options.rcs_profile.value!r} needs a craft with an "
+            f"RCS; {model.name!r} has none: use 'hold'"
+        )
+    return map_input_layout(n_thr, craft.has_carrier, options.rcs_profile, options.rcs_subintervals)
 
 
 def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> PulseMap:
@@ -76,89 +102,58 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
     other than HOLD needs a craft with an RCS (OptionError otherwise).
     """
     opts = options or PulseMapOptions()
-    craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
-    if opts.rcs_profile is not RcsProfile.HOLD and not n_thr:
-        raise OptionError(
-            f"PulseMapOptions.rcs_profile {opts.rcs_profile.value!r} needs a craft with an RCS; "
-            f"{model.name!r} has none: use 'hold'"
-        )
-    ulay = map_input_layout(n_thr, craft.has_carrier, opts.rcs_profile, opts.rcs_subintervals)
+    ulay = check_pulse_map_options(model, opts)
+    pieces = build_pulse_map_pieces(model, opts)
     period = 1.0 / model.flight.pulse_rate
 
-    x = ca.SX.sym("x", STATE.size)
-    u = ca.SX.sym("u", ulay.size)
-    p = ca.SX.sym("p", PARAMETERS.size)
-    t = ca.SX.sym("t")
-    pulse = u[: PULSE_INPUT.size]
-
-    x_plus, eng = pulse_jump(_normalised(x), pulse, p, model)  # Φ(c q) = Φ(q)
-    f = _coast_rhs(model, opts, ulay, n_thr, u, p, t, x_plus)
-    if opts.scheme is CoastScheme.RK4:
-        states = rk4_coast(f, t, x_plus, period, opts.substeps)
-    else:
-        order = 2 if opts.scheme is CoastScheme.SPLIT else 4
-        states = split_coast(f, p, model, t, x_plus, period, opts.substeps, order=order)
-    x_next = _normalised(states[-1])
-    engine = ca.vertcat(*(eng[name] for name in ENGINE.names))
+    x = ca.MX.sym("x", STATE.size)
+    u = ca.MX.sym("u", ulay.size)
+    p = ca.MX.sym("p", PARAMETERS.size)
+    t = ca.MX.sym("t")
+    x_plus, engine = pieces.jump(pieces.normalise(x), u[: PULSE_INPUT.size], p)
+    W = substep_inputs(pieces, opts, ulay, u, t, x_plus, p)
+    times = t + ca.DM(pieces.step_length * np.arange(opts.substeps)).T
+    coast = pieces.substep.mapaccum("coast", opts.substeps)
+    states = coast(x_plus, W, ca.repmat(p, 1, opts.substeps), times)
+    x_next = pieces.normalise(states[:, -1])
     every = opts.substeps // opts.dense
-    samples = [states[k - 1] for k in range(every, opts.substeps, every)] + [x_next]
-    dense = ca.horzcat(*samples)
+    dense = ca.horzcat(states[:, every - 1 : opts.substeps - 1 : every], x_next)
     names_in = ["x", "u", "p", "t"]
     step = ca.Function("pulse_map", [x, u, p, t], [x_next, engine], names_in, ["x_next", "engine"])
     dense_f = ca.Function(
         "pulse_map_dense", [x, u, p, t], [dense, engine], names_in, ["X", "engine"]
     )
-    return PulseMap(step=step, dense=dense_f, period=period, inputs=ulay, options=opts)
+    return PulseMap(step, dense_f, period, inputs=ulay, options=opts, pieces=pieces)
 
 
-def _coast_rhs(
-    model: Model,
-    opts: PulseMapOptions,
-    ulay: VectorLayout,
-    n_thr: int,
-    u: ca.SX,
-    p: ca.SX,
-    t: ca.SX,
-    x_plus: ca.SX,
-) -> Rhses:
-    """The coast's right-hand side (t, x) -> xdot with the continuous inputs of u: one
-    for HOLD and PHASE_LOCKED (thrust a function of the stage time), one per substep for
-    SUBINTERVALS (levels constant on each substep)."""
-    craft = model.craft
-    rhs = build_coast_rhs(model)
-    coast_layout = input_layout(n_thr, craft.has_carrier)
-    motor = [ulay.get("motor_torque", u)] if craft.has_carrier else []
-
-    def with_inputs(u_coast: ca.SX) -> Rhs:
-        assert u_coast.numel() == coast_layout.size
-
-        def f(tt: ca.SX, xx: ca.SX) -> ca.SX:
-            return rhs(tt, xx, u_coast, p)
-
-        return f
-
-    if opts.rcs_profile is RcsProfile.HOLD:
-        return with_inputs(u[PULSE_INPUT.size :])
-    if opts.rcs_profile is RcsProfile.SUBINTERVALS:
-        per_level = opts.substeps // opts.rcs_subintervals
-        levels = [
-            with_inputs(ca.vertcat(u[rcs_levels(ulay, n_thr, j)], *motor))
-            for j in range(opts.rcs_subintervals)
-        ]
-        return [levels[k // per_level] for k in range(opts.substeps)]
-    # PHASE_LOCKED: ω from the state right after the jump, fixed over the interval
-    omega = coning_rate_B(x_plus, p)
-    mean, cos_, sin_ = (ulay.get(name, u) for name in ("rcs_thrust", "rcs_cos", "rcs_sin"))
-
-    def f_phase(tt: ca.SX, xx: ca.SX) -> ca.SX:
-        thrust = phase_locked_thrust(mean, cos_, sin_, omega, tt - t)
-        return rhs(tt, xx, ca.vertcat(thrust, *motor), p)
-
-    return f_phase
-
-
-def _normalised(x: ca.SX) -> ca.SX:
-    """x with its attitude quaternion scaled back to unit length."""
-    q = STATE.get("q_LB", x)
-    return assemble(STATE, {"q_LB": q / ca.norm_2(q)}, base=x)
+def substep_inputs(
+    pieces: PulseMapPieces,
+    options: PulseMapOptions,
+    inputs: VectorLayout,
+    u: ca.MX,
+    t: ca.MX,
+    x_plus: ca.MX,
+    p: ca.MX,
+) -> ca.MX:
+    """(w size, substeps): each coast substep's inputs (pulse_map_pieces.py) from the map
+    input u (layout ``inputs``), the pulse time t [s] and, for the PHASE_LOCKED profile, the
+    coning rate of the state x_+ just after the jump (STATE layout, L and B frames)."""
+    n = options.substeps
+    n_thr, has_carrier = pieces.n_thrusters, pieces.has_carrier
+    motor = [inputs.get("motor_torque", u)] if has_carrier else []
+    match options.rcs_profile:
+        case RcsProfile.HOLD:
+            return ca.repmat(u[PULSE_INPUT.size :], 1, n)
+        case RcsProfile.SUBINTERVALS:
+            per_level = n // options.rcs_subintervals
+            levels = [
+                ca.vertcat(u[rcs_levels(inputs, n_thr, j)], *motor)
+                for j in range(options.rcs_subintervals)
+            ]
+            return ca.horzcat(*(levels[k // per_level] for k in range(n)))
+        case RcsProfile.PHASE_LOCKED:  # ω from the state right after the jump
+            omega = pieces.coning_rate(x_plus, p)
+            amplitudes = [inputs.get(name, u) for name in ("rcs_thrust", "rcs_cos", "rcs_sin")]
+            return ca.repmat(ca.vertcat(*amplitudes, *motor, omega, t), 1, n)
+        case _:
+            assert_never(options.rcs_profile)
