@@ -64,7 +64,7 @@ def _simulate(args: argparse.Namespace) -> int:
             x0=x0,
             dropout_rate=args.dropout_rate,
             seed=args.seed,
-            compiled=args.compiled,
+            compiled=False if args.interpreted else None,
         )
         write_pulses_csv(result, out / "pulses.csv")
     write_trajectory_csv(result, out / "trajectory.csv")
@@ -292,10 +292,11 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
     )
     sim.add_argument("--seed", type=int, default=None, help="seed of the pulse drop-outs")
     sim.add_argument(
-        "--compiled",
+        "--interpreted",
         action="store_true",
-        help="compile the pulse map to C with gcc first, cached in $LIGHTCRAFT_CACHE or "
-        "~/.cache/lightcraft_opt (the first run of a model structure takes minutes)",
+        help="step the interpreted pulse map; by default it is compiled to C with gcc, cached "
+        "in $LIGHTCRAFT_CACHE or ~/.cache/lightcraft_opt (the first run of a model structure "
+        "compiles for 5-15 s; LIGHTCRAFT_COMPILE=0 also turns it off)",
     )
     sim.add_argument(
         "--coast-only",

@@ -15,32 +15,42 @@ share a cache neither clobber nor duplicate each other's work. Anything that goe
 (no compiler, a failed compile, an unwritable cache) gives back the interpreted Function
 with a :class:`CompilationWarning` that names the cause.
 
-Cost, measured for Flight 5 with the default options (530k SX instructions, gcc 12 on
-2 cores): gcc -O2 takes about 3 min and 2.8 GB once per model structure; a cache hit costs
-0.6 s (serialising and hashing the Function); a step then takes 0.73 ms instead of 1.2 ms,
-with results identical here to the last bit (promised: to round-off). It pays off over
-many runs (compile once, pass the compiled map to each), not for one flight. A small map
-(62k instructions) compiles in 10 s and steps 2.7 times faster. -O0 compiles several
-times faster but runs 6 times slower than casadi's interpreter; -O1 took longer and far
-more memory than -O2 on this straight-line code.
+Φ is compiled by default (:func:`pulse_map_for`): ``simulate``, the closed loop and Monte
+Carlo ask for the pulse map of a model through it and get the compiled map, built once per
+process and model (an in-process memo) and compiled once per structure (the disk cache).
+``LIGHTCRAFT_COMPILE=0`` in the environment, or ``compiled=False``, keeps the interpreted
+map; without a C compiler the interpreted map comes with one warning.
+
+Cost, measured for Flight 5 with the default options (Φ composed of named pieces,
+symbolic/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14 s (idle to
+loaded) and under 0.3 GB once per model structure; a cache hit costs a few ms (serialising
+and hashing the Function); a pulse then takes 0.15-0.4 ms instead of 0.9-2 ms, with results
+identical here to the last bit (promised: to round-off). The flat SX construction of
+before (flat_pulse_map.py) took 3 min and 2.8 GB to compile and gained 1.6x. -O0 compiles
+faster but runs slower than casadi's interpreter; -O1 took longer and more memory than -O2
+on straight-line code.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import hashlib
 import os
 import shutil
 import subprocess
 import tempfile
 import warnings
+from collections import OrderedDict
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import casadi as ca
 
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.params import Model
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 try:  # POSIX: serialise compilations of one key across processes
     import fcntl
@@ -51,9 +61,11 @@ __all__ = [
     "DEFAULT_FLAGS",
     "CompilationWarning",
     "cache_dir",
+    "compile_by_default",
     "compile_function",
     "compile_pulse_map",
     "library_path",
+    "pulse_map_for",
 ]
 
 #: Optimisation flags of the default build. -O2 keeps IEEE semantics, so the library
@@ -88,8 +100,10 @@ def _compiler_command(compiler: str | None) -> str:
     return compiler or os.environ.get("CC") or "gcc"
 
 
+@functools.lru_cache(maxsize=8)
 def _compiler_version(cc: str) -> str:
-    """First line of ``cc --version``; raises _CompileError when there is no such compiler."""
+    """First line of ``cc --version``; raises _CompileError when there is no such compiler.
+    Asked once per process and compiler (a failure is not cached: a later call asks again)."""
     try:
         proc = subprocess.run(
             [cc, "--version"], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60
@@ -224,3 +238,70 @@ def _locked(lock_path: Path) -> Iterator[None]:
             yield
         finally:
             fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+# --------------------------------------------------------------------------- Φ by default
+
+#: Pulse maps built in this process, by (model, options, compiled); the oldest dropped first.
+_MAPS: OrderedDict[tuple[Model, PulseMapOptions, bool], PulseMap] = OrderedDict()
+_MAPS_KEPT = 16
+_warned_once = False
+
+
+def compile_by_default() -> bool:
+    """Whether Φ is compiled when the caller does not say: yes, unless the environment sets
+    ``LIGHTCRAFT_COMPILE`` to 0, false, no or off."""
+    flag = os.environ.get("LIGHTCRAFT_COMPILE", "1").strip().lower()
+    return flag not in {"0", "false", "no", "off"}
+
+
+def pulse_map_for(
+    model: Model, options: PulseMapOptions | None = None, *, compiled: bool | None = None
+) -> PulseMap:
+    """The pulse map Φ of ``model``: built once per process for equal models and options
+    (kept for the 16 latest), compiled to C where a compiler works (:func:`compile_pulse_map`,
+    cached on disk by structure, so a model with other numbers compiles nothing).
+
+    Parameters
+    ----------
+    model : the model; its numbers go in through p, so one map serves every p.
+    options : Φ's options (default :class:`~lightcraft_opt.options.PulseMapOptions`).
+    compiled : True or False to choose; None (default) for :func:`compile_by_default`.
+
+    Returns
+    -------
+    PulseMap; the interpreted map, with one :class:`CompilationWarning` per process,
+    when compiling fails. The compiled map evaluates values only: derivatives need the
+    interpreted map (``compiled=False``).
+    """
+    opts = options or PulseMapOptions()
+    want = compile_by_default() if compiled is None else bool(compiled)
+    key = (model, opts, want)
+    if key in _MAPS:
+        _MAPS.move_to_end(key)
+        return _MAPS[key]
+    interpreted = (
+        _MAPS[(model, opts, False)]
+        if (model, opts, False) in _MAPS
+        else build_pulse_map(model, opts)
+    )
+    phi = _compiled_once_warned(interpreted) if want else interpreted
+    _MAPS[key] = phi
+    while len(_MAPS) > _MAPS_KEPT:
+        _MAPS.popitem(last=False)
+    return phi
+
+
+def _compiled_once_warned(phi: PulseMap) -> PulseMap:
+    """compile_pulse_map, its CompilationWarning shown the first time in this process only."""
+    global _warned_once
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", CompilationWarning)
+        out = compile_pulse_map(phi)
+    for w in caught:
+        if not issubclass(w.category, CompilationWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        elif not _warned_once:
+            _warned_once = True
+            warnings.warn(w.message, CompilationWarning, stacklevel=3)
+    return out

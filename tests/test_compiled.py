@@ -253,3 +253,54 @@ def test_mapaccum_chunks_fly_the_per_pulse_policy_flight(flight5, case, status, 
         assert n == pulses
     if dropout_rate:
         assert 0 < np.sum(chunked.pulses.u[:, energy] == 0.0) < n
+
+
+# --------------------------------------------------------------------------- Φ by default
+@pytest.fixture
+def fresh_memo(monkeypatch):
+    """pulse_map_for's in-process memo and one-warning flag, emptied for one test."""
+    monkeypatch.setattr(compiled, "_MAPS", type(compiled._MAPS)())
+    monkeypatch.setattr(compiled, "_warned_once", False)
+
+
+def test_pulse_map_for_builds_once_and_compiles_by_default(small, fresh_memo, monkeypatch):
+    model, phi, _ = small
+    monkeypatch.delenv("LIGHTCRAFT_COMPILE", raising=False)
+    assert compiled.compile_by_default()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompilationWarning)
+        first = compiled.pulse_map_for(model, SMALL)  # a cache hit on disk: no gcc
+    assert first.dense.is_a("External") and not phi.dense.is_a("External")
+    assert first.dense.name() == phi.dense.name() and first.pieces is not None
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("built Φ again for an equal model")
+
+    monkeypatch.setattr(compiled, "build_pulse_map", no_build)
+    assert compiled.pulse_map_for(model, SMALL) is first
+    assert compiled.pulse_map_for(_small_model(), SMALL) is first  # equal, not the same object
+    again = simulate(model, 0.5, options=SMALL)  # simulate asks pulse_map_for
+    reference = simulate(model, 0.5, pulse_map=phi)
+    np.testing.assert_array_equal(again.t, reference.t)
+    _close(reference.x, again.x)
+
+
+@pytest.mark.parametrize("flag", ["0", "false", "off"])
+def test_environment_turns_compiling_off(small, fresh_memo, monkeypatch, flag):
+    model, _, _ = small
+    monkeypatch.setenv("LIGHTCRAFT_COMPILE", flag)
+    assert not compiled.compile_by_default()
+    assert not compiled.pulse_map_for(model, SMALL).dense.is_a("External")
+    assert compiled.pulse_map_for(model, SMALL, compiled=True).dense.is_a("External")
+
+
+def test_without_a_compiler_one_warning_per_process(small, fresh_memo, monkeypatch):
+    model, _, _ = small
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    with pytest.warns(CompilationWarning, match="nonexistent") as record:
+        a = compiled.pulse_map_for(model, SMALL, compiled=True)
+        b = compiled.pulse_map_for(model, replace(SMALL, dense=4), compiled=True)
+    assert len([w for w in record if issubclass(w.category, CompilationWarning)]) == 1
+    assert not a.dense.is_a("External") and not b.dense.is_a("External")
+    x, u, p = initial_state(model), nominal_inputs(model), parameter_values(model)
+    _close(a.step(x, u, p, 0.0)[0], b.step(x, u, p, 0.0)[0])

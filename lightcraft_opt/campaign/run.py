@@ -37,6 +37,7 @@ from lightcraft_opt.campaign.spec import (
     Campaign,
     CampaignController,
 )
+from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import (
@@ -46,7 +47,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap
 
 if TYPE_CHECKING:
     from lightcraft_opt.control.controllers import Controller
@@ -137,14 +138,11 @@ class _Flyer:
     def __init__(self, campaign: Campaign) -> None:
         self.campaign = c = campaign
         # the closed loop's plant; a craft without RCS: Φ's defaults (no RCS profile)
-        plant = build_pulse_map(c.model, PLANT_MAP if c.model.craft.rcs else PulseMapOptions())
-        assert plant.inputs is not None  # build_pulse_map always records it
-        self.controller = _controller(c, plant)
-        if c.compiled:
-            from lightcraft_opt.compiled import compile_pulse_map
-
-            plant = compile_pulse_map(plant)
-        self.plant: PulseMap = plant
+        options = PLANT_MAP if c.model.craft.rcs else PulseMapOptions()
+        interpreted = pulse_map_for(c.model, options, compiled=False)
+        assert interpreted.inputs is not None  # build_pulse_map always records it
+        self.controller = _controller(c, interpreted)
+        self.plant: PulseMap = pulse_map_for(c.model, options, compiled=c.compiled)
 
     def fly(self, draws: Mapping[str, float], seed: int) -> ClosedLoopResult:
         c = self.campaign

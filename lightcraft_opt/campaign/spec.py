@@ -74,6 +74,7 @@ DISPERSED_PARAMETER = {
     "wind_direction_from": "wind_direction_from",
 }
 
+
 class CampaignController(Enum):
     """Who flies the runs: the MPC, the LQR, or nobody (the open loop)."""
 
@@ -99,7 +100,8 @@ class Campaign:
     plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not
         (its wind), before the draws.
     dispersions : what each run draws (:class:`~lightcraft_opt.campaign.dispersions.Dispersions`).
-    compiled : fly the plant Φ compiled to C (compiled.py; cached on disk).
+    compiled : fly the plant Φ compiled to C (compiled.py; cached on disk): True, False,
+        or None (default) for compiled unless ``LIGHTCRAFT_COMPILE=0``.
     title : a name for reports.
     """
 
@@ -111,7 +113,7 @@ class Campaign:
     loop: ClosedLoopOptions = field(default_factory=ClosedLoopOptions)
     plant_parameters: Mapping[str, Any] = field(default_factory=dict)
     dispersions: Dispersions = field(default_factory=Dispersions)
-    compiled: bool = False
+    compiled: bool | None = None
     title: str = "campaign"
 
     def __post_init__(self) -> None:

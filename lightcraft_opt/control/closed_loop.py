@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.options import ClosedLoopOptions, MeasurementNoise, PlantDispersion
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerLog, StepStats
 from lightcraft_opt.errors import ParameterError
@@ -44,7 +45,7 @@ from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.error_state import build_error_state
 from lightcraft_opt.symbolic.invariants import build_invariants
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap
 
 if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
     from lightcraft_opt.control.controllers import Controller
@@ -118,7 +119,9 @@ def closed_loop(
     x0 : state at the first pulse (default: on the pad, upright, spinning).
     parameters : {PARAMETERS slot: value} overriding the plant's parameters before the
         dispersion (wind, gusts: the disturbance the controller does not know).
-    pulse_map : the plant Φ (default :data:`PLANT_MAP`); its inputs are the controller's.
+    pulse_map : the plant Φ; its inputs are the controller's. Default: Φ of ``model`` with
+        :data:`PLANT_MAP` from :func:`~lightcraft_opt.compiled.pulse_map_for` (built once
+        per process, compiled to C where a compiler works).
     options : noise, dispersion, drop-outs, injected faults, seed.
 
     Returns
@@ -130,7 +133,7 @@ def closed_loop(
     opts = options or ClosedLoopOptions()
     if not (np.isfinite(duration) and duration > 0):
         raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
-    phi = pulse_map or build_pulse_map(model, PLANT_MAP)
+    phi = pulse_map or pulse_map_for(model, PLANT_MAP)
     lay = phi.inputs
     if lay is None:
         raise ParameterError("pulse_map", "needs its input layout (build_pulse_map gives it)")

@@ -6,7 +6,8 @@ wind) with two more tables::
 
     [campaign]
     controller = "mpc"                     # "lqr", or "none": the open loop (default)
-    compiled = false                       # fly Φ compiled to C (compiled.py)
+    compiled = false                       # optional: Φ interpreted (default: compiled to C
+                                           # where gcc works, compiled.py)
 
     [dispersions.mass]                     # one table per dispersed quantity
     distribution = "normal"
@@ -109,7 +110,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
             loop=problem.loop,
             plant_parameters=problem.plant_parameters,
             dispersions=dispersions,
-            compiled=table.values.get("compiled", False),
+            compiled=table.values.get("compiled"),
             title=problem.title,
         )
 

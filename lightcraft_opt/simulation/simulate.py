@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import compile_pulse_map
+from lightcraft_opt.compiled import compile_pulse_map, pulse_map_for
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     PARAMETERS,
@@ -32,7 +32,7 @@ from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.flight_log import FlightLog
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap
 
 __all__ = ["InputPolicy", "simulate"]
 
@@ -70,7 +70,7 @@ def simulate(
     options: PulseMapOptions | None = None,
     dropout_rate: float = 0.0,
     seed: int | None = None,
-    compiled: bool = False,
+    compiled: bool | None = None,
 ) -> SimulationResult:
     """Simulate a flight of ``model`` under the laser for ``duration`` seconds.
 
@@ -86,12 +86,15 @@ def simulate(
         same flight, to the last bit.
     x0 : state at the first pulse (default: on the pad, upright, spinning).
     p : parameter vector (default from ``model``).
-    pulse_map : a prebuilt Φ (saves building it again); else built with ``options``.
+    pulse_map : a Φ to step (used as given); else Φ of ``model`` with ``options``
+        from :func:`~lightcraft_opt.compiled.pulse_map_for`: built once per process and
+        model, compiled to C where a compiler works.
     dropout_rate : probability that the laser drops a pulse (its energy set to 0).
     seed : of the drop-out random generator (one draw per pulse, in order).
-    compiled : compile Φ to C first (:func:`~lightcraft_opt.compiled.compile_pulse_map`,
-        cached on disk; falls back to the interpreted Φ with a warning). For many runs,
-        compile once and pass ``pulse_map`` instead.
+    compiled : True or False to choose whether Φ is compiled to C (cached on disk; falls
+        back to the interpreted Φ with a warning); None (default): compiled unless
+        ``LIGHTCRAFT_COMPILE=0`` (:func:`~lightcraft_opt.compiled.compile_by_default`), and
+        a given ``pulse_map`` as it is.
 
     Returns
     -------
@@ -102,9 +105,10 @@ def simulate(
         raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
     if not 0.0 <= dropout_rate < 1.0:
         raise ParameterError("dropout_rate", f"must lie in [0, 1), got {dropout_rate!r}")
-    phi = pulse_map or build_pulse_map(model, options)
-    if compiled:
-        phi = compile_pulse_map(phi)
+    if pulse_map is None:
+        phi = pulse_map_for(model, options, compiled=compiled)
+    else:
+        phi = compile_pulse_map(pulse_map) if compiled else pulse_map
     craft = model.craft
     lay = phi.inputs or map_input_layout(
         len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
