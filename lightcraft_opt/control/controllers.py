@@ -43,7 +43,9 @@ __all__ = [
 
 
 class Controller(Protocol):
-    """What the closed loop needs of a controller."""
+    """What the closed loop needs of a controller. A controller whose input never depends
+    on the state may also have ``fixed_input`` (that input, an array): the closed loop then
+    flies it a second of pulses per call of Φ (:class:`OpenLoopController`)."""
 
     name: str
     last: StepStats
@@ -247,6 +249,11 @@ class OpenLoopController:
     ----------
     model : gives the nominal input.
     inputs : the map-input layout (the plant Φ's ``inputs``).
+
+    Attributes
+    ----------
+    fixed_input : the input of every pulse, whatever the state: the closed loop flies
+        such a controller a second of pulses per call of Φ (closed_loop.py).
     """
 
     name = "none"
@@ -254,6 +261,10 @@ class OpenLoopController:
     def __init__(self, model: Model, inputs: VectorLayout) -> None:
         self._u = nominal_inputs(model, inputs)
         self.last = StepStats(ControllerStatus.OPEN_LOOP)
+
+    @property
+    def fixed_input(self) -> np.ndarray:
+        return self._u.copy()
 
     def reset(self) -> None:
         self.last = StepStats(ControllerStatus.OPEN_LOOP)

@@ -4,15 +4,14 @@
 to the next pulse. The flight ends when the duration is reached, the craft lands
 (mass centre back below the pad) or leaves the beam (the optic captures under 1 %
 of the pulse's energy for three fired pulses in a row; dropped pulses do not count).
-Open-loop inputs are stepped a second of pulses per call (Φ's mapaccum), then checked
-pulse by pulse exactly as a policy's flight is.
+Open-loop inputs are stepped a second of pulses per call (chunks.py: Φ's mapaccum), then
+checked pulse by pulse exactly as a policy's flight is.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-import casadi as ca
 import numpy as np
 
 from lightcraft_opt.compiled import compile_pulse_map, pulse_map_for
@@ -29,6 +28,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
+from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
@@ -38,8 +38,6 @@ __all__ = ["InputPolicy", "simulate"]
 
 #: A per-pulse input policy: (pulse index k, time t [s], state x) -> map input u.
 InputPolicy = Callable[[int, float, np.ndarray], Sequence[float] | np.ndarray]
-
-CHUNK_SECONDS = 1.0  # open-loop inputs: pulses per mapaccum call, in seconds of flight
 
 
 def _input_rows(
@@ -133,7 +131,7 @@ def simulate(
     else:
         U = _input_rows(model, inputs, lay, n_pulses)
         U[dropped, i_energy] = 0.0
-        _step_in_chunks(phi, U, xk, pk, flight, max(1, round(CHUNK_SECONDS / phi.period)))
+        step_in_chunks(phi, U, xk, pk, flight)
     record = PulseRecord(
         t=np.asarray(flight.pulse_t),
         u=np.asarray(flight.pulse_u).reshape(-1, lay.size),
@@ -143,41 +141,3 @@ def simulate(
     return flight_result(
         model, np.asarray(flight.times), states, pk, flight.status, flight.message, record
     )
-
-
-def _step_in_chunks(
-    phi: PulseMap, U: np.ndarray, x0: np.ndarray, p: np.ndarray, flight: FlightLog, chunk: int
-) -> None:
-    """Step Φ over the rows of ``U`` (n, map-input size), ``chunk`` pulses per call of its
-    mapaccum, checking each pulse in order and stopping at the first that ends the flight
-    (at most one chunk is computed beyond it)."""
-    maps: dict[int, ca.Function] = {}
-    xk = x0
-    for k0 in range(0, len(U), chunk):
-        m = min(chunk, len(U) - k0)
-        if m not in maps:
-            maps[m] = _chunk_map(phi, m)
-        ts = np.arange(k0, k0 + m) * phi.period  # the same floats as k * period
-        x_next, X, E = (np.asarray(v) for v in maps[m](xk, U[k0 : k0 + m].T, p, ts[None, :]))
-        d = X.shape[1] // m
-        for j in range(m):
-            if flight.ended_by(float(ts[j]), U[k0 + j], X[:, j * d : (j + 1) * d], E[:, j]):
-                return
-        xk = x_next[:, -1]
-
-
-def _chunk_map(phi: PulseMap, m: int) -> ca.Function:
-    """``(x, U, p, T) -> (x_next per pulse, X, engine)``: m pulses of ``phi.dense`` in one
-    call, each starting from the last state of the one before (no new physics: the dense
-    Function called m times and its last column carried)."""
-    dense = phi.dense
-    x, u, p, t = (ca.MX.sym(dense.name_in(i), dense.sparsity_in(i)) for i in range(4))
-    X, engine = dense(x, u, p, t)
-    one = ca.Function(
-        "pulse_map_carry",
-        [x, u, p, t],
-        [X[:, -1], X, engine],
-        ["x", "u", "p", "t"],
-        ["x_next", "X", "engine"],
-    )
-    return one.mapaccum(f"pulse_map_chunk{m}", m)

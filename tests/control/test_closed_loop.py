@@ -247,3 +247,47 @@ def test_dropouts_noise_and_dispersion_follow_the_seed(plant):
     assert np.array_equal(q[~named], p[~named])
     ratio = q[named] / p[named]
     assert np.all(np.abs(ratio - 1) <= 3 * 0.2) and np.any(ratio != 1)
+
+
+class _StepByStep:
+    """The open loop without ``fixed_input``: the closed loop calls it every pulse."""
+
+    def __init__(self, inner: OpenLoopController) -> None:
+        self.inner, self.name = inner, inner.name
+
+    @property
+    def last(self):
+        return self.inner.last
+
+    def step(self, x, t=0.0, *, fault=None):
+        return self.inner.step(x, t, fault=fault)
+
+    def reset(self) -> None:
+        self.inner.reset()
+
+
+@pytest.mark.parametrize(
+    ("tilt_deg", "status"),
+    [
+        (0.0, SimulationStatus.DURATION_REACHED),
+        (9.0, SimulationStatus.LEFT_BEAM),  # ends inside the second chunk
+    ],
+)
+def test_open_loop_in_chunks_flies_the_pulse_by_pulse_flight(plant, tilt_deg, status):
+    """The open loop stepped a second of pulses per call of Φ (its fixed_input) and the
+    same controller asked every pulse: the same flight, record and log to the last bit,
+    with drop-outs, noise and dispersion drawn from one seed."""
+    none = OpenLoopController(MODEL, plant.inputs)
+    start = initial_state(MODEL, r_L=(0, 0, 1.0), v_L=(0, 0, 6.0), tilt=math.radians(tilt_deg))
+    options = ClosedLoopOptions(dropout_rate=0.2, seed=9, noise=NOISE, dispersion=DISPERSION)
+    fast = closed_loop(MODEL, none, 2.0, x0=start, pulse_map=plant, options=options)
+    slow = closed_loop(MODEL, _StepByStep(none), 2.0, x0=start, pulse_map=plant, options=options)
+    assert fast.flight.status is status and slow.flight.status is status
+    if status is SimulationStatus.LEFT_BEAM:
+        assert 26 < len(fast.pulse_t) < 52
+    for name in ("t", "x"):
+        np.testing.assert_array_equal(getattr(fast.flight, name), getattr(slow.flight, name))
+    for name in ("pulse_t", "coning", "tilt", "offset", "rcs_used", "commanded", "dropped"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name))
+    np.testing.assert_array_equal(fast.flight.pulses.engine, slow.flight.pulses.engine)
+    assert list(fast.log.status) == list(slow.log.status)
