@@ -44,6 +44,7 @@ import tempfile
 import warnings
 from collections import OrderedDict
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import casadi as ca
@@ -51,6 +52,12 @@ import casadi as ca
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map_derivatives import (
+    DerivativePieces,
+    PulseMapDerivatives,
+    build_derivative_pieces,
+    chain_derivatives,
+)
 
 try:  # POSIX: serialise compilations of one key across processes
     import fcntl
@@ -59,11 +66,15 @@ except ImportError:  # pragma: no cover - Windows: atomic replace only
 
 __all__ = [
     "DEFAULT_FLAGS",
+    "DERIVATIVE_FLAGS",
+    "DERIVATIVE_INSTRUCTION_LIMIT",
     "CompilationWarning",
     "cache_dir",
     "compile_by_default",
     "compile_function",
     "compile_pulse_map",
+    "compile_pulse_map_derivatives",
+    "derivatives_for",
     "library_path",
     "pulse_map_for",
 ]
@@ -75,6 +86,18 @@ __all__ = [
 #: blinds simulate's non-finite check; -march=native may fuse multiply-adds (different
 #: last bits) and ties the library to one CPU. Pass ``flags=`` to choose otherwise.
 DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
+
+#: Flags of the derivative pieces (symbolic/pulse_map_derivatives.py). Their SX is long
+#: straight-line code (the jump's Hessian for a 4 x 16 optic: 106k instructions, 2.9 MB of
+#: C) on which gcc -O2 spends minutes; -O1 compiles it in 27 s and runs it 9x faster than
+#: casadi's interpreter (-O0: 9 s, 2.6x). Same IEEE semantics as -O2.
+DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
+
+#: Derivative pieces above this many SX instructions stay interpreted: gcc's time and memory
+#: grow faster than the code (the Hessian of one Yoshida substep, 553k instructions, is 13 MB
+#: of C that takes 3.3 GB and over a minute even at -O0). The OCP's Strang map (2 substeps,
+#: 4 x 16 optic; substep Hessian 229k) compiles whole.
+DERIVATIVE_INSTRUCTION_LIMIT = 250_000
 
 _BUILD = ("-fPIC", "-shared")  # always: a loadable shared library
 _CACHE_FORMAT = b"lightcraft_opt.compiled 1"
@@ -294,14 +317,97 @@ def pulse_map_for(
 
 def _compiled_once_warned(phi: PulseMap) -> PulseMap:
     """compile_pulse_map, its CompilationWarning shown the first time in this process only."""
-    global _warned_once
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CompilationWarning)
         out = compile_pulse_map(phi)
+    _warn_once(caught)
+    return out
+
+
+def _warn_once(caught: list[warnings.WarningMessage]) -> None:
+    """Re-emit ``caught``: other warnings as they were, a CompilationWarning only the first
+    time in this process."""
+    global _warned_once
     for w in caught:
         if not issubclass(w.category, CompilationWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         elif not _warned_once:
             _warned_once = True
-            warnings.warn(w.message, CompilationWarning, stacklevel=3)
-    return out
+            warnings.warn(w.message, CompilationWarning, stacklevel=4)
+
+
+# --------------------------------------------------------------------------- derivatives
+
+_DERIVATIVES: OrderedDict[tuple[Model, PulseMapOptions, bool], PulseMapDerivatives] = OrderedDict()
+
+
+def compile_pulse_map_derivatives(
+    phi: PulseMap,
+    derivatives: DerivativePieces | None = None,
+    *,
+    compiler: str | None = None,
+    workers: int | None = None,
+    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+) -> PulseMapDerivatives:
+    """Φ's explicit-chain derivatives (symbolic/pulse_map_derivatives.py) over compiled
+    pieces: each value piece (:data:`DEFAULT_FLAGS`) and derivative piece
+    (:data:`DERIVATIVE_FLAGS`) of at most ``max_instructions`` SX instructions is its own
+    library, cached like any other, compiled ``workers`` at a time (default: the cores);
+    bigger pieces stay interpreted. A piece that does not compile stays interpreted (with
+    the warning of :func:`compile_function`)."""
+    if phi.pieces is None:
+        raise ValueError("compile_pulse_map_derivatives needs a Φ from build_pulse_map")
+    pieces = phi.pieces
+    derivatives = derivatives or build_derivative_pieces(pieces)
+    values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
+    jobs = [(f, DEFAULT_FLAGS) for f in values] + [
+        (f, DERIVATIVE_FLAGS) for f in derivatives.functions() if f is not None
+    ]
+
+    def compiled_or_not(job: tuple[ca.Function, tuple[str, ...]]) -> ca.Function:
+        f, flags = job
+        if f.n_instructions() > max_instructions:
+            return f
+        return compile_function(f, compiler=compiler, flags=flags)
+
+    n = workers or os.cpu_count() or 1
+    with ThreadPoolExecutor(max_workers=max(1, n)) as pool:
+        done = list(pool.map(compiled_or_not, jobs))
+    normalise, jump, substep, coning_rate = done[:4]
+    fast = dataclasses.replace(
+        pieces, normalise=normalise, jump=jump, substep=substep, coning_rate=coning_rate
+    )
+    compiled_derivatives = iter(done[4:])
+    replaced = tuple(
+        None if f is None else next(compiled_derivatives) for f in derivatives.functions()
+    )
+    return chain_derivatives(phi, DerivativePieces.of(replaced), fast)
+
+
+def derivatives_for(
+    model: Model, options: PulseMapOptions | None = None, *, compiled: bool | None = None
+) -> PulseMapDerivatives:
+    """Φ's explicit-chain derivatives for ``model``: built once per process for equal
+    models and options, over compiled pieces unless ``compiled`` is False or
+    :func:`compile_by_default` says no (the first compile of the OCP's map takes about a
+    minute on 2 cores, then comes from the disk cache)."""
+    opts = options or PulseMapOptions()
+    want = compile_by_default() if compiled is None else bool(compiled)
+    key = (model, opts, want)
+    if key in _DERIVATIVES:
+        _DERIVATIVES.move_to_end(key)
+        return _DERIVATIVES[key]
+    phi = pulse_map_for(model, opts, compiled=False)
+    if want:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", CompilationWarning)
+            der = compile_pulse_map_derivatives(phi)
+        if caught:
+            _warn_once(caught)
+    else:
+        assert phi.pieces is not None  # build_pulse_map always records its pieces
+        der = chain_derivatives(phi, build_derivative_pieces(phi.pieces))
+    _DERIVATIVES[key] = der
+    while len(_DERIVATIVES) > _MAPS_KEPT:
+        _DERIVATIVES.popitem(last=False)
+    return der

@@ -1,0 +1,294 @@
+"""Φ's first and second derivatives as an explicit chain over its pieces.
+
+casadi's AD through the composed MX graph of Φ works (tests use it as the reference), but
+it is slow in the virtual machine and its generated C is too big to compile in reasonable
+time. Here the chain rule is written out over the pieces of pulse_map_pieces.py, each
+piece differentiated on its own (small SX Functions with ``{"cse": True}`` that compile in
+seconds), in the order the pieces run. With v = (x, u) the pulse's variables:
+
+Forward (the Jacobian), s_0 = x_+ the state after the jump, s_k after substep k::
+
+    D_n  = ∂N(x)/∂x [I 0]                        (normalised entry state)
+    D_y  = [D_n; 0 I_pulse]                      (the jump's inputs (x_n, pulse))
+    D_0  = J_y D_y,   D_e = E_y D_y              (state after the jump, engine)
+    D_{k+1} = A_k D_k + B_k W_k                  (A_k = ∂S/∂s, B_k = ∂S/∂w; W_k = ∂w_k/∂v)
+    ∂x_next/∂v = ∂N(s_n)/∂s D_n
+
+where W_k selects u's entries of substep k, plus, for the PHASE_LOCKED profile, the coning
+rate ω(x_+): W_k += e_ω ∂ω/∂x D_0.
+
+Backward (the Hessian of the Lagrangian term λᵀ x_next + νᵀ engine): every piece adds
+G^T ∇²(ρ^T piece) G, where G is the Jacobian of the piece's inputs with respect to v (from
+the forward sweep) and ρ the adjoint of its outputs, swept back from λ and ν::
+
+    ρ_n = ∂N(s_n)/∂sᵀ λ;   ρ_k = A_kᵀ ρ_{k+1};   a_ω += (B_kᵀ ρ_{k+1})_ω
+    ρ_jump = (ρ_0 + a_ω ∂ω/∂x_+ᵀ, ν);   ρ_entry = J_y[:, x]ᵀ ρ_jump,x + E_y[:, x]ᵀ ν
+
+The selections of u into w are linear and add nothing. Each piece's Hessian is casadi's
+SX Hessian of ρᵀ piece, so nothing here is a hand derivation: only the chain is.
+tests/symbolic/test_pulse_map_derivatives.py checks both against casadi's AD through Φ
+and against finite differences.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import ENGINE, PARAMETERS, PULSE_INPUT, STATE
+from lightcraft_opt.options import RcsProfile
+from lightcraft_opt.symbolic.pulse_map import PulseMap, substep_inputs
+from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
+
+__all__ = [
+    "DerivativePieces",
+    "PulseMapDerivatives",
+    "build_derivative_pieces",
+    "build_pulse_map_derivatives",
+    "chain_derivatives",
+]
+
+_SX_OPTIONS = {"cse": True}
+
+
+@dataclass(frozen=True)
+class DerivativePieces:
+    """Each piece's ``<piece>_jacobian(inputs...) -> jac`` and ``<piece>_hessian(inputs...,
+    adjoint) -> (jac, hess)`` (module docstring), for the normalisation, the jump, the coast
+    substep and the coning rate: what gets compiled (compiled.py)."""
+
+    normalise_jacobian: ca.Function
+    normalise_hessian: ca.Function | None
+    jump_jacobian: ca.Function
+    jump_hessian: ca.Function | None
+    substep_jacobian: ca.Function
+    substep_hessian: ca.Function | None
+    coning_rate_jacobian: ca.Function
+    coning_rate_hessian: ca.Function | None
+
+    @property
+    def has_hessians(self) -> bool:
+        return all(getattr(self, f.name) is not None for f in fields(self))
+
+    def functions(self) -> tuple[ca.Function | None, ...]:
+        """The eight Functions (None for Hessians not built), in field order."""
+        return tuple(getattr(self, f.name) for f in fields(self))
+
+    @classmethod
+    def of(cls, functions: tuple[ca.Function | None, ...]) -> DerivativePieces:
+        """From eight Functions in field order (e.g. compiled ones)."""
+        return cls(*functions)
+
+
+@dataclass(frozen=True)
+class PulseMapDerivatives:
+    """Φ's derivatives with respect to v = (x, u) of one pulse.
+
+    Attributes
+    ----------
+    jacobian : casadi.Function ``pulse_map_jacobian(x, u, p, t) -> (x_next, engine,
+        dx_next_dv, dengine_dv)``; the Jacobians are (STATE.size, nv) and (ENGINE.size, nv)
+        with nv = STATE.size + u's size, columns x first, then u.
+    hessian : casadi.Function ``pulse_map_hessian(x, u, p, t, lam_x, lam_e) -> hess_v_v``:
+        the (nv, nv) Hessian of lam_xᵀ x_next + lam_eᵀ engine; None when the pieces were
+        built without Hessians (Jacobians only: linearisation).
+    pieces : the pieces' derivative Functions the chain calls.
+    """
+
+    jacobian: ca.Function
+    hessian: ca.Function | None
+    pieces: DerivativePieces
+
+    @cached_property
+    def n_v(self) -> int:
+        return int(self.jacobian.size_out(2)[1])
+
+
+def _piece_derivatives(
+    f: ca.Function, wrt: tuple[int, ...], hessian: bool = True
+) -> tuple[ca.Function, ca.Function | None]:
+    """``<f>_jacobian(inputs of f...) -> jac`` and ``<f>_hessian(inputs..., adjoint) ->
+    (jac, hess)``: the Jacobian of f's outputs (stacked) with respect to its inputs ``wrt``
+    (stacked), and the Hessian of adjointᵀ outputs with respect to them (None unless
+    ``hessian``: its symbolic construction is the slow part)."""
+    args = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    outs = ca.vertcat(*(ca.vec(o) for o in f.call(args)))
+    z = ca.vertcat(*(args[i] for i in wrt))
+    rho = ca.SX.sym("adjoint", outs.numel())
+    jac = ca.densify(ca.jacobian(outs, z))
+    jacobian = ca.Function(f"{f.name()}_jacobian", args, [jac], f.name_in(), ["jac"], _SX_OPTIONS)
+    if not hessian:
+        return jacobian, None
+    hess, _ = ca.hessian(ca.dot(rho, outs), z)
+    second = ca.Function(
+        f"{f.name()}_hessian",
+        [*args, rho],
+        [jac, ca.densify(hess)],
+        [*f.name_in(), "adjoint"],
+        ["jac", "hess"],
+        _SX_OPTIONS,
+    )
+    return jacobian, second
+
+
+def build_derivative_pieces(pieces: PulseMapPieces, *, hessians: bool = True) -> DerivativePieces:
+    """The derivative Functions of Φ's pieces (casadi's SX AD on each piece alone); the
+    Hessians only with ``hessians``."""
+    return DerivativePieces(
+        *_piece_derivatives(pieces.normalise, (0,), hessians),
+        *_piece_derivatives(pieces.jump, (0, 1), hessians),
+        *_piece_derivatives(pieces.substep, (0, 1), hessians),
+        *_piece_derivatives(pieces.coning_rate, (0,), hessians),
+    )
+
+
+def build_pulse_map_derivatives(phi: PulseMap, *, hessians: bool = True) -> PulseMapDerivatives:
+    """The explicit-chain Jacobian and (with ``hessians``) Lagrangian Hessian of the
+    structured ``phi`` (:func:`~lightcraft_opt.symbolic.pulse_map.build_pulse_map`),
+    interpreted."""
+    if phi.pieces is None:
+        raise ParameterError(
+            "phi", "the explicit chain needs a Φ from build_pulse_map, with its pieces"
+        )
+    return chain_derivatives(phi, build_derivative_pieces(phi.pieces, hessians=hessians))
+
+
+def chain_derivatives(
+    phi: PulseMap, derivatives: DerivativePieces, pieces: PulseMapPieces | None = None
+) -> PulseMapDerivatives:
+    """The chain (module docstring) over given piece Functions: ``derivatives`` and the
+    value ``pieces`` (default ``phi.pieces``), interpreted or compiled alike."""
+    pieces = pieces or phi.pieces
+    opts, ulay = phi.options, phi.inputs
+    if pieces is None or opts is None or ulay is None:
+        raise ParameterError(
+            "phi", "the explicit chain needs a Φ from build_pulse_map, with its pieces"
+        )
+    nx, nu, ne, npulse = STATE.size, ulay.size, ENGINE.size, PULSE_INPUT.size
+    nv = nx + nu
+    d = derivatives
+    jN, hN, jJ, hJ = d.normalise_jacobian, d.normalise_hessian, d.jump_jacobian, d.jump_hessian
+    jS, hS, jW, hW = (
+        d.substep_jacobian,
+        d.substep_hessian,
+        d.coning_rate_jacobian,
+        d.coning_rate_hessian,
+    )
+    nw = pieces.substep_inputs.size
+    phase_locked = opts.rcs_profile is RcsProfile.PHASE_LOCKED
+    i_omega = pieces.substep_inputs.slot("coning_rate").start if phase_locked else -1
+
+    x = ca.MX.sym("x", nx)
+    u = ca.MX.sym("u", nu)
+    p = ca.MX.sym("p", PARAMETERS.size)
+    t = ca.MX.sym("t")
+    lam_x = ca.MX.sym("lam_x", nx)
+    lam_e = ca.MX.sym("lam_e", ne)
+
+    # ------------------------------------------------------------ forward sweep
+    xn = pieces.normalise(x)
+    Nx_in = jN(x)
+    D_n = ca.horzcat(Nx_in, ca.MX.zeros(nx, nu))
+    pulse_select = np.zeros((npulse, nv))
+    pulse_select[:, nx : nx + npulse] = np.eye(npulse)
+    D_y = ca.vertcat(D_n, ca.DM(pulse_select))
+    x_plus, engine = pieces.jump(xn, u[:npulse], p)
+    J_y = jJ(xn, u[:npulse], p)
+    D_0 = ca.mtimes(J_y[:nx, :], D_y)
+    D_e = ca.mtimes(J_y[nx:, :], D_y)
+    W_inputs, W_u = _substep_input_map(phi, pieces, u, p, t, x_plus)
+    if phase_locked:
+        omega_x = jW(x_plus, p)
+        d_omega = ca.mtimes(omega_x, D_0)  # (1, nv)
+    states, Ds, Gs = [x_plus], [D_0], []
+    s, D = x_plus, D_0
+    for k in range(opts.substeps):
+        t_k = t + pieces.step_length * k
+        w_k = W_inputs[:, k]
+        Dw = ca.MX(ca.DM(W_u[k]))
+        if phase_locked:
+            Dw = Dw + ca.mtimes(ca.DM(_unit(nw, i_omega)), d_omega)
+        jac_k = jS(s, w_k, p, t_k)
+        A_k, B_k = jac_k[:, :nx], jac_k[:, nx:]
+        Gs.append(ca.vertcat(D, Dw))
+        D = ca.mtimes(A_k, D) + ca.mtimes(B_k, Dw)
+        s = pieces.substep(s, w_k, p, t_k)
+        states.append(s)
+        Ds.append(D)
+    x_next = pieces.normalise(s)
+    Nx_out = jN(s)
+    dx_next = ca.mtimes(Nx_out, D)
+    jacobian = ca.Function(
+        "pulse_map_jacobian",
+        [x, u, p, t],
+        [x_next, engine, dx_next, D_e],
+        ["x", "u", "p", "t"],
+        ["x_next", "engine", "dx_next_dv", "dengine_dv"],
+    )
+
+    if hN is None or hJ is None or hS is None or hW is None:
+        return PulseMapDerivatives(jacobian, None, derivatives)
+
+    # ------------------------------------------------------------ backward sweep
+    _, H_out = hN(s, lam_x)
+    H = ca.mtimes([D.T, H_out, D])
+    rho = ca.mtimes(Nx_out.T, lam_x)
+    a_omega = ca.MX(0)
+    for k in reversed(range(opts.substeps)):
+        t_k = t + pieces.step_length * k
+        jac_k, H_k = hS(states[k], W_inputs[:, k], p, t_k, rho)
+        H = H + ca.mtimes([Gs[k].T, H_k, Gs[k]])
+        if phase_locked:
+            a_omega = a_omega + ca.mtimes(jac_k[:, nx + i_omega].T, rho)
+        rho = ca.mtimes(jac_k[:, :nx].T, rho)
+    if phase_locked:
+        omega_x, H_omega = hW(x_plus, p, a_omega)
+        rho = rho + a_omega * omega_x.T
+        H = H + ca.mtimes([D_0.T, H_omega, D_0])
+    _, H_jump = hJ(xn, u[:npulse], p, ca.vertcat(rho, lam_e))
+    H = H + ca.mtimes([D_y.T, H_jump, D_y])
+    entry = ca.mtimes(J_y[:nx, :nx].T, rho) + ca.mtimes(J_y[nx:, :nx].T, lam_e)
+    _, H_in = hN(x, entry)
+    H = H + ca.diagcat(H_in, ca.MX.zeros(nu, nu))
+    hessian = ca.Function(
+        "pulse_map_hessian",
+        [x, u, p, t, lam_x, lam_e],
+        [H],
+        ["x", "u", "p", "t", "lam_x", "lam_e"],
+        ["hess_v_v"],
+    )
+    return PulseMapDerivatives(jacobian, hessian, derivatives)
+
+
+def _unit(n: int, i: int) -> np.ndarray:
+    e = np.zeros((n, 1))
+    e[i] = 1.0
+    return e
+
+
+def _substep_input_map(
+    phi: PulseMap, pieces: PulseMapPieces, u: ca.MX, p: ca.MX, t: ca.MX, x_plus: ca.MX
+) -> tuple[ca.MX, list[np.ndarray]]:
+    """The substeps' inputs (w size, substeps) as Φ builds them (with ``pieces``), and for
+    each substep the constant part of ∂w_k/∂v (w size, nv): the selection of u's entries
+    (the coning rate's dependence on x_+ is added by the caller)."""
+    ulay, opts, own = phi.inputs, phi.options, phi.pieces
+    assert ulay is not None and opts is not None and own is not None
+    W = substep_inputs(pieces, opts, ulay, u, t, x_plus, p)
+    # W is linear in u apart from ω and t: read the selection off its Jacobian in u, taken
+    # through Φ's own (interpreted, differentiable) pieces
+    u_sym = ca.MX.sym("u", ulay.size)
+    x_sym = ca.MX.sym("x_plus", STATE.size)
+    W_sym = substep_inputs(own, opts, ulay, u_sym, t, x_sym, p)
+    select = ca.Function("w_of_u", [u_sym, x_sym, p, t], [ca.jacobian(ca.vec(W_sym), u_sym)])
+    nw = own.substep_inputs.size
+    S = np.asarray(select(np.zeros(ulay.size), np.ones(STATE.size), np.zeros(PARAMETERS.size), 0))
+    out = []
+    for k in range(own.substeps):
+        rows = S[k * nw : (k + 1) * nw, :]
+        out.append(np.hstack([np.zeros((nw, STATE.size)), rows]))
+    return W, out
