@@ -32,8 +32,8 @@ class OcpSolver(Enum):
 class HessianApproximation(Enum):
     """Second derivatives the NLP solver uses.
 
-    ``EXACT``: the Hessian of the Lagrangian by automatic differentiation through Φ
-    (quadratic convergence; its construction dominates the first build). ``LIMITED_MEMORY``:
+    ``EXACT``: the Hessian of the Lagrangian (quadratic convergence), from Φ's explicit
+    chain (``OcpOptions.chain_derivatives``, IPOPT) or by casadi's AD through Φ. ``LIMITED_MEMORY``:
     quasi-Newton (L-BFGS in IPOPT, BFGS in sqpmethod): cheaper iterations, more of them.
     ``GAUSS_NEWTON``: 2 J^T J of the objective's least-squares residuals, the constraints'
     curvature dropped (transcription.MultipleShooting.gauss_newton_hessian): iterations
@@ -76,6 +76,10 @@ class OcpOptions:
         solves the problem in calm air, then with the wind (reference speed and gust)
         scaled by 1/n, 2/n, ... 1, each solve warm-started from the last: a crosswind can
         blow the nominal rollout out of the beam, where Φ gives the solver no gradient.
+    chain_derivatives : with IPOPT and the exact Hessian, take the NLP's gradient,
+        Jacobian and Hessian from Φ's explicit-chain derivatives over compiled pieces
+        (symbolic/pulse_map_derivatives.py; transcription.MultipleShooting.chain_derivatives)
+        instead of casadi's AD through Φ: equal to rounding, faster to evaluate. False: AD.
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -87,8 +91,14 @@ class OcpOptions:
     threads: int = 1
     print_level: int = 0
     wind_ramp: int = 0
+    chain_derivatives: bool = True
 
     def __post_init__(self) -> None:
+        if not isinstance(self.chain_derivatives, bool):
+            raise OptionError(
+                "OcpOptions.chain_derivatives must be true or false, got "
+                f"{self.chain_derivatives!r}"
+            )
         if not isinstance(self.solver, OcpSolver):
             allowed = [s.value for s in OcpSolver]
             raise OptionError(f"OcpOptions.solver must be one of {allowed}, got {self.solver!r}")

@@ -26,6 +26,11 @@ from typing import Any, cast
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.compiled import (
+    compile_by_default,
+    compile_pulse_map_derivatives,
+    derivatives_for,
+)
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
@@ -33,6 +38,7 @@ from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
 
@@ -89,6 +95,15 @@ def rollout(
     return np.array(X), np.array(U).reshape(N, lay.size)
 
 
+def _uses_chain(opts: OcpOptions) -> bool:
+    """Whether the NLP's derivatives come from Φ's explicit chain (OcpOptions)."""
+    return (
+        opts.chain_derivatives
+        and opts.solver is OcpSolver.IPOPT
+        and opts.hessian is HessianApproximation.EXACT
+    )
+
+
 def _solver_options(opts: OcpOptions, tr: MultipleShooting) -> tuple[str, dict[str, Any]]:
     """nlpsol plugin name and options for ``opts``."""
     quiet = opts.print_level == 0
@@ -101,6 +116,8 @@ def _solver_options(opts: OcpOptions, tr: MultipleShooting) -> tuple[str, dict[s
     }
     if opts.hessian is HessianApproximation.GAUSS_NEWTON:
         common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
+    elif _uses_chain(opts) and tr.derivatives is not None:
+        common.update(tr.chain_derivatives(upper=True))
     exact = opts.hessian is not HessianApproximation.LIMITED_MEMORY
     equality = tr.equality
     if opts.solver is OcpSolver.IPOPT:
@@ -257,8 +274,17 @@ class CompiledOcp:
                 "problem.pulse_map_options(...)",
             )
         blocks = opts.blocks(problem.horizon)
+        derivatives = None
+        if _uses_chain(opts):
+            derivatives = (
+                derivatives_for(problem.model, problem.pulse_map_options(opts.pulse_map))
+                if pulse_map is None
+                else compile_pulse_map_derivatives(self.pulse_map)
+                if compile_by_default()
+                else build_pulse_map_derivatives(self.pulse_map)
+            )
         self.transcription = tr = MultipleShooting(
-            problem, self.pulse_map, blocks=blocks, threads=opts.threads
+            problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives
         )
         name, solver_opts = _solver_options(opts, tr)
         try:

@@ -23,7 +23,17 @@ m_i the mean level and c_i, s_i the cosine and sine amplitudes: the thrust then 
 [0, max_i] at every phase (the mean's own bounds keep it in [0, max_i]).
 
 Φ enters through one ``map`` over the horizon: the jump is exact and every derivative is
-the AD derivative of Φ (no finite differences). Variables are scaled (state slots by their
+an exact derivative of Φ (no finite differences). Given Φ's explicit-chain derivatives
+(symbolic/pulse_map_derivatives.py, compiled pieces), :meth:`MultipleShooting.chain_derivatives`
+builds the NLP's gradient, constraint Jacobian and Lagrangian Hessian from them instead of
+casadi's AD through Φ: the NLP is written a second time with Φ's outputs as free symbols Y
+(ℓ(w, Y) = λ_f f + λ_gᵀ g, cheap to differentiate), and at the point w̄
+
+    L(w) ≈ ℓ(w, Y(w̄) + J(w̄) (z(w) - z(w̄))) + Σ_k ½ (z_k(w) - z_k(w̄))ᵀ H_k(w̄) (z_k(w) - z_k(w̄))
+
+(z_k = (x_k, u_k) the physical arguments of pulse k, affine in w; J the chain's Jacobian;
+H_k the chain's Hessian of μ_kᵀ Φ with μ_k = ∂ℓ/∂Y_k) has L's gradient and Hessian at w̄
+exactly; casadi differentiates that surrogate, never Φ. Variables are scaled (state slots by their
 natural size, inputs by their bounds) so the gaps have unit coefficients on x_{k+1}.
 
 The run-time inputs of the NLP, its parameter vector (:attr:`MultipleShooting.parameters`):
@@ -61,6 +71,7 @@ from lightcraft_opt.ocp.problem import (
 from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.pulse_map_derivatives import PulseMapDerivatives
 
 __all__ = ["MultipleShooting", "state_scale"]
 
@@ -111,6 +122,8 @@ class MultipleShooting:
     phi : the pulse map Φ of ``problem.model``.
     blocks : move blocking, lengths [pulses] summing to the horizon; () or all 1: none.
     threads : evaluate Φ over the horizon on this many threads.
+    derivatives : Φ's explicit-chain derivatives, for :meth:`chain_derivatives` (None:
+        casadi's AD through Φ only).
 
     Attributes
     ----------
@@ -136,8 +149,11 @@ class MultipleShooting:
         *,
         blocks: tuple[int, ...] = (),
         threads: int = 1,
+        derivatives: PulseMapDerivatives | None = None,
     ) -> None:
         self.problem, self.period = problem, phi.period
+        self.derivatives = derivatives
+        self._phi = phi
         N, nu = problem.horizon, problem.inputs.size
         free = np.flatnonzero(problem.free)
         self.free, nf = free, free.size
@@ -180,6 +196,7 @@ class MultipleShooting:
         g, lbg, ubg = self._constraints(st)
         terms, self.residuals = self._objective(st)
         self.nlp = {"x": w, "f": ca.sum1(terms), "g": g, "p": self.P}
+        self._symbols = (xs, as_, vs, st)
         self.lbg, self.ubg = lbg, ubg
         self.equality = [bool(v) for v in lbg == ubg]
         names = (["w", "P"], ["X", "U", "engine"])
@@ -192,12 +209,15 @@ class MultipleShooting:
     # ----------------------------------------------------------------- symbols
     def _stages(
         self,
-        phi: PulseMap,
+        phi: PulseMap | None,
         xs: list[ca.MX],
         as_: list[ca.MX],
         vs: list[ca.MX],
         threads: int,
+        outputs: tuple[ca.MX, ca.MX] | None = None,
     ) -> _Stages:
+        """The stage quantities, Φ's outputs from ``phi`` over the horizon, or ``outputs``
+        (x_next, engine) given as symbols (:meth:`chain_derivatives`)."""
         pr, P, N = self.problem, self.P, self.problem.horizon
         sx, su = ca.DM(self.x_scale), ca.DM(self.u_scale)
         p = self.parameters.get("p", P)
@@ -208,9 +228,12 @@ class MultipleShooting:
         select[self.free, np.arange(self.free.size)] = 1.0
         held = ca.DM((~pr.free).astype(float)) * self.parameters.get("u_fixed", P)
         U = ca.repmat(held, 1, N) + ca.mtimes(ca.DM(select), V)
-        step = phi.step.map(N, "thread", threads) if threads > 1 else phi.step.map(N)
-        t_k = self.parameters.get("t0", P) + ca.DM(self.period * np.arange(N)).T
-        x_next, engine = step(X[:, :N], U, p, t_k)
+        if outputs is None:
+            assert phi is not None
+            step = phi.step.map(N, "thread", threads) if threads > 1 else phi.step.map(N)
+            x_next, engine = step(X[:, :N], U, p, self._pulse_times())
+        else:
+            x_next, engine = outputs
         nodes = tuple(build_node_measures().map(N + 1)(X, p))
         pulses = tuple(build_pulse_measures().map(N)(engine, p))
         return _Stages(xs, as_, vs, X, A, V, U, x_next, engine, nodes, pulses)
@@ -379,6 +402,107 @@ class MultipleShooting:
             [H],
             ["x", "p", "lam_f", "lam_g"],
             ["hess_gamma_x_x"],
+        )
+
+    def _pulse_times(self) -> ca.MX:
+        """(1, N) t_k = t0 + k T [s]."""
+        N = self.problem.horizon
+        return self.parameters.get("t0", self.P) + ca.DM(self.period * np.arange(N)).T
+
+    def chain_derivatives(self, *, upper: bool = True) -> dict[str, ca.Function]:
+        """nlpsol's ``grad_f``, ``jac_g`` and ``hess_lag`` (upper triangle with ``upper``)
+        from Φ's explicit-chain derivatives (module docstring); they equal casadi's AD of
+        the NLP to rounding (tests/ocp/test_chain_derivatives.py)."""
+        der = self.derivatives
+        if der is None or der.hessian is None:
+            raise ValueError("MultipleShooting was built without Φ's chain Hessian")
+        xs, as_, vs, st = self._symbols
+        N, nx = self.problem.horizon, STATE.size
+        ne = int(der.jacobian.size_out(1)[0])
+        nv = der.n_v
+        w, P = self.nlp["x"], self.P
+        p = self.parameters.get("p", P)
+        # the NLP with Φ's outputs as symbols: ℓ is cheap to differentiate
+        Yx, Ye = ca.MX.sym("Y_x", nx, N), ca.MX.sym("Y_e", ne, N)
+        sy = self._stages(None, xs, as_, vs, 1, outputs=(Yx, Ye))
+        g_y, _, _ = self._constraints(sy)
+        terms_y, _ = self._objective(sy)
+        f_y = ca.sum1(terms_y)
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
+        ell_y = lam_f * f_y + ca.dot(lam_g, g_y)
+        tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y])
+        mu = ca.Function(
+            "ocp_output_multipliers",
+            [w, Yx, Ye, P, lam_f, lam_g],
+            [ca.gradient(ell_y, Yx), ca.gradient(ell_y, Ye)],
+        )
+        # Φ's arguments z_k = (x_k, u_k), affine in w
+        Z = ca.vertcat(st.X[:, :N], st.U)
+        z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z])
+        # the surrogate at w̄, whose Φ quantities enter as symbols: casadi differentiates it
+        # in w without ever differentiating Φ or its chain
+        Zb = ca.MX.sym("z_bar", nv, N)
+        XN, EN = ca.MX.sym("x_next_bar", nx, N), ca.MX.sym("engine_bar", ne, N)
+        # Φ's structural zeros (casadi's sparsity propagation through Φ), so the NLP's
+        # Jacobian and Hessian keep the sparsity AD would give them
+        jac_sp, hess_sp = self._phi_sparsity(nx, ne, nv)
+        pattern = ca.DM(jac_sp, 1)
+        DX = ca.MX.sym("dx_bar", ca.repmat(pattern[:nx, :], 1, N).sparsity())
+        DE = ca.MX.sym("de_bar", ca.repmat(pattern[nx:, :], 1, N).sparsity())
+        HB = ca.MX.sym("hess_bar", ca.repmat(ca.DM(hess_sp, 1), 1, N).sparsity())
+        dz = Z - Zb
+        blocks = range(N)
+        lin_x = ca.horzcat(
+            *(XN[:, k] + ca.mtimes(DX[:, k * nv : (k + 1) * nv], dz[:, k]) for k in blocks)
+        )
+        lin_e = ca.horzcat(
+            *(EN[:, k] + ca.mtimes(DE[:, k * nv : (k + 1) * nv], dz[:, k]) for k in blocks)
+        )
+        f_lin, g_lin = tilde(w, lin_x, lin_e, P)
+        quad = sum(0.5 * ca.bilin(HB[:, k * nv : (k + 1) * nv], dz[:, k], dz[:, k]) for k in blocks)
+        H = ca.hessian(lam_f * f_lin + ca.dot(lam_g, g_lin) + quad, w)[0]
+        H = ca.triu(H) if upper else H
+        first = [w, P, Zb, XN, EN, DX, DE]
+        surrogate_grad = ca.Function("ocp_surrogate_grad_f", first, [f_lin, ca.gradient(f_lin, w)])
+        surrogate_jac = ca.Function("ocp_surrogate_jac_g", first, [g_lin, ca.jacobian(g_lin, w)])
+        surrogate_hess = ca.Function("ocp_surrogate_hess", [*first, HB, lam_f, lam_g], [H])
+
+        # the chain at w̄ = w, then the surrogate
+        times = self._pulse_times()
+        jac_map, hess_map = der.jacobian.map(N), der.hessian.map(N)
+
+        def at(w_: ca.MX) -> tuple[ca.MX, list[ca.MX]]:
+            z = z_of(w_, P)
+            return z, [z, *jac_map(z[:nx, :], z[nx:, :], p, times)]
+
+        z, point = at(w)
+        grad_f = ca.Function(
+            "nlp_grad_f", [w, P], surrogate_grad.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
+        )
+        jac_g = ca.Function(
+            "nlp_jac_g", [w, P], surrogate_jac.call([w, P, *point]), ["x", "p"], ["g", "jac_g_x"]
+        )
+        _, xn, en, _, _ = point
+        mu_x, mu_e = mu(w, xn, en, P, lam_f, lam_g)
+        Hb = hess_map(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
+        hess_lag = ca.Function(
+            "nlp_hess_l",
+            [w, P, lam_f, lam_g],
+            [surrogate_hess(w, P, *point, Hb, lam_f, lam_g)],
+            ["x", "p", "lam_f", "lam_g"],
+            ["hess_gamma_x_x"],
+        )
+        return {"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}
+
+    def _phi_sparsity(self, nx: int, ne: int, nv: int) -> tuple[ca.Sparsity, ca.Sparsity]:
+        """Structural patterns of Φ's Jacobian in v = (x, u), (nx + ne, nv), and of the
+        Hessian of any λᵀ(x_next, engine), (nv, nv), by sparsity propagation through Φ."""
+        v = ca.MX.sym("v", nv)
+        p, t = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
+        out = ca.vertcat(*self._phi.step(v[:nx], v[nx:], p, t))
+        lam = ca.MX.sym("lam", nx + ne)
+        return ca.jacobian_sparsity(out, v), ca.jacobian_sparsity(
+            ca.gradient(ca.dot(lam, out), v), v
         )
 
     # ----------------------------------------------------------------- numbers

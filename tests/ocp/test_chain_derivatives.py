@@ -1,0 +1,144 @@
+"""The NLP's derivatives from Φ's explicit chain (MultipleShooting.chain_derivatives) against
+casadi's AD through Φ, and the optimum either reaches.
+
+References:
+
+- casadi's AD of the same NLP (gradient of f, Jacobian of g, Hessian of λ_f f + λ_gᵀ g)
+  at a point off the optimum with random multipliers: the same derivatives by another
+  route, equal to rounding (1e-12 relative to the largest entry);
+- IPOPT on the lateral beam-tracking problem of test_ocp.py with AD derivatives: the same
+  optimum (cost to 1e-9, inputs to 1e-7 m) in the same number of iterations or close.
+
+Problems: the lateral problem (slew limits, so the NLP carries the previous-input memory
+a_k; held pulse energy) and a PHASE_LOCKED RCS problem (the coning rate of the state after
+each jump feeds the coast), both with a cheap Φ (1-2 substeps, a coarse optic).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import casadi as ca
+import numpy as np
+import pytest
+from ocp.test_ocp import CHEAP_MAP, QUADRATURE, TOL, lateral_problem
+from support.models import table1_flight5
+from support.paths import MODELS
+
+from lightcraft_opt.files.model import load_model
+from lightcraft_opt.layout import initial_state
+from lightcraft_opt.ocp.options import OcpOptions
+from lightcraft_opt.ocp.problem import (
+    ControlBound,
+    ControlEffort,
+    OcpProblem,
+    RcsEnvelope,
+    TiltLimit,
+    TrackReference,
+)
+from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.solve import CompiledOcp, rollout
+from lightcraft_opt.ocp.transcription import MultipleShooting
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.params import Engine
+from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+
+RTOL = 1e-12
+
+
+def _lateral():
+    base = table1_flight5()
+    model = replace(base, craft=replace(base.craft, engine=Engine(**QUADRATURE)))  # type: ignore[arg-type]
+    return lateral_problem(model), CHEAP_MAP
+
+
+def _phase_locked():
+    model = load_model(MODELS / "flight5-rcs.toml")
+    model = replace(
+        model,
+        craft=replace(model.craft, engine=Engine(quadrature_radial=2, quadrature_azimuthal=8)),
+    )
+    x0 = initial_state(model, r_L=(0.0, 0.0, 3.0), v_L=(0.0, 0.0, 6.0), w_B=(0.0, 4.0, -3.0))
+    problem = OcpProblem(
+        model,
+        3,
+        (
+            TrackReference(np.zeros((4, 3)), (0.0, 1e-4, 1e-4), slot="w_B"),
+            ControlEffort("rcs_thrust", 1e-3),
+        ),
+        (TiltLimit(0.2), RcsEnvelope()),
+        controls=(ControlBound("energy", 420.0, 420.0),),
+        x0=x0,
+        rcs_profile=RcsProfile.PHASE_LOCKED,
+    )
+    return problem, PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=2, dense=2)
+
+
+@pytest.fixture(scope="module", params=["lateral", "phase_locked"])
+def nlp(request):
+    problem, options = {"lateral": _lateral, "phase_locked": _phase_locked}[request.param]()
+    phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
+    tr = MultipleShooting(problem, phi, derivatives=build_pulse_map_derivatives(phi))
+    X, U = rollout(problem, phi)
+    rng = np.random.default_rng(5)
+    w = tr.pack(X, U, problem.u_previous) * (1 + 1e-3 * rng.normal(size=tr.n_w))
+    u_fixed = np.where(problem.free, 0.0, problem.lower)
+    P = tr.parameter_vector(
+        problem.x0, problem.p, problem.t0, problem.u_previous, u_fixed, problem.reference()
+    )
+    return tr, w, P, 0.7, rng.normal(size=tr.lbg.size)
+
+
+def _rel(a, b):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    assert a.shape == b.shape
+    return float(np.max(np.abs(a - b)) / max(float(np.max(np.abs(b))), 1e-300))
+
+
+def test_chain_gradient_jacobian_and_hessian_equal_casadi_ad(nlp):
+    tr, w, P, lam_f, lam_g = nlp
+    W, Ps = tr.nlp["x"], tr.nlp["p"]
+    lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
+    lagrangian = lf * tr.nlp["f"] + ca.dot(lg, tr.nlp["g"])
+    ad = ca.Function(
+        "ad",
+        [W, Ps, lf, lg],
+        [
+            tr.nlp["f"],
+            ca.gradient(tr.nlp["f"], W),
+            tr.nlp["g"],
+            ca.jacobian(tr.nlp["g"], W),
+            ca.triu(ca.hessian(lagrangian, W)[0]),
+        ],
+    )
+    f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
+    chain = tr.chain_derivatives(upper=True)
+    f_c, grad_c = chain["grad_f"](w, P)
+    g_c, jac_c = chain["jac_g"](w, P)
+    hess_c = chain["hess_lag"](w, P, lam_f, lam_g)
+    assert _rel(f_c, f) < RTOL and _rel(g_c, g) < RTOL
+    assert _rel(grad_c, grad) < RTOL
+    assert _rel(jac_c, jac) < RTOL
+    assert _rel(hess_c, hess) < RTOL
+    # the sparsity casadi hands IPOPT: no entry outside AD's pattern
+    assert chain["hess_lag"].sparsity_out(0).nnz() <= hess.sparsity().nnz() + tr.n_w
+    assert chain["jac_g"].sparsity_out(1).nnz() <= jac.sparsity().nnz() + tr.lbg.size
+
+
+def test_ipopt_reaches_the_same_optimum_with_chain_or_ad_derivatives():
+    problem, options = _lateral()
+    phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
+    results = {
+        chain: CompiledOcp(
+            problem,
+            OcpOptions(pulse_map=options, tol=TOL, chain_derivatives=chain),
+            pulse_map=phi,
+        ).solve()
+        for chain in (True, False)
+    }
+    with_chain, with_ad = results[True], results[False]
+    assert with_chain.status is OcpStatus.SOLVED and with_ad.status is OcpStatus.SOLVED
+    assert with_chain.cost == pytest.approx(with_ad.cost, rel=1e-9)
+    np.testing.assert_allclose(with_chain.u, with_ad.u, atol=1e-7)
+    assert abs(with_chain.iterations - with_ad.iterations) <= 2
