@@ -43,9 +43,10 @@ import subprocess
 import tempfile
 import warnings
 from collections import OrderedDict
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import TypeVar
 
 import casadi as ca
 
@@ -265,8 +266,11 @@ def _locked(lock_path: Path) -> Iterator[None]:
 
 # --------------------------------------------------------------------------- Φ by default
 
+_Key = tuple[Model, PulseMapOptions, bool]
+_T = TypeVar("_T")
+
 #: Pulse maps built in this process, by (model, options, compiled); the oldest dropped first.
-_MAPS: OrderedDict[tuple[Model, PulseMapOptions, bool], PulseMap] = OrderedDict()
+_MAPS: OrderedDict[_Key, PulseMap] = OrderedDict()
 _MAPS_KEPT = 16
 _warned_once = False
 
@@ -299,20 +303,24 @@ def pulse_map_for(
     """
     opts = options or PulseMapOptions()
     want = compile_by_default() if compiled is None else bool(compiled)
-    key = (model, opts, want)
-    if key in _MAPS:
-        _MAPS.move_to_end(key)
-        return _MAPS[key]
-    interpreted = (
-        _MAPS[(model, opts, False)]
-        if (model, opts, False) in _MAPS
-        else build_pulse_map(model, opts)
-    )
-    phi = _compiled_once_warned(interpreted) if want else interpreted
-    _MAPS[key] = phi
-    while len(_MAPS) > _MAPS_KEPT:
-        _MAPS.popitem(last=False)
-    return phi
+
+    def build() -> PulseMap:
+        interpreted = _MAPS.get((model, opts, False)) or build_pulse_map(model, opts)
+        return _compiled_once_warned(interpreted) if want else interpreted
+
+    return _remembered(_MAPS, (model, opts, want), build)
+
+
+def _remembered(table: OrderedDict[_Key, _T], key: _Key, build: Callable[[], _T]) -> _T:
+    """``table[key]``, built by ``build`` the first time; the oldest of more than
+    :data:`_MAPS_KEPT` entries dropped."""
+    if key in table:
+        table.move_to_end(key)
+        return table[key]
+    value = table[key] = build()
+    while len(table) > _MAPS_KEPT:
+        table.popitem(last=False)
+    return value
 
 
 def _compiled_once_warned(phi: PulseMap) -> PulseMap:
@@ -338,7 +346,8 @@ def _warn_once(caught: list[warnings.WarningMessage]) -> None:
 
 # --------------------------------------------------------------------------- derivatives
 
-_DERIVATIVES: OrderedDict[tuple[Model, PulseMapOptions, bool], PulseMapDerivatives] = OrderedDict()
+#: Φ's chain derivatives built in this process, likewise.
+_DERIVATIVES: OrderedDict[_Key, PulseMapDerivatives] = OrderedDict()
 
 
 def compile_pulse_map_derivatives(
@@ -393,21 +402,16 @@ def derivatives_for(
     minute on 2 cores, then comes from the disk cache)."""
     opts = options or PulseMapOptions()
     want = compile_by_default() if compiled is None else bool(compiled)
-    key = (model, opts, want)
-    if key in _DERIVATIVES:
-        _DERIVATIVES.move_to_end(key)
-        return _DERIVATIVES[key]
-    phi = pulse_map_for(model, opts, compiled=False)
-    if want:
+
+    def build() -> PulseMapDerivatives:
+        phi = pulse_map_for(model, opts, compiled=False)
+        assert phi.pieces is not None  # build_pulse_map always records its pieces
+        if not want:
+            return chain_derivatives(phi, build_derivative_pieces(phi.pieces))
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", CompilationWarning)
             der = compile_pulse_map_derivatives(phi)
-        if caught:
-            _warn_once(caught)
-    else:
-        assert phi.pieces is not None  # build_pulse_map always records its pieces
-        der = chain_derivatives(phi, build_derivative_pieces(phi.pieces))
-    _DERIVATIVES[key] = der
-    while len(_DERIVATIVES) > _MAPS_KEPT:
-        _DERIVATIVES.popitem(last=False)
-    return der
+        _warn_once(caught)
+        return der
+
+    return _remembered(_DERIVATIVES, (model, opts, want), build)

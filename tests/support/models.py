@@ -6,10 +6,12 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.params import (
     Aerodynamics,
     Carrier,
     Craft,
+    Engine,
     Environment,
     Flight,
     Laser,
@@ -17,6 +19,7 @@ from lightcraft_opt.params import (
     Site,
     SpinDecay,
 )
+from support.paths import MODELS
 
 RPM = 2 * math.pi / 60
 
@@ -52,3 +55,14 @@ def torque_free(model: Model, carrier: Carrier | None = None) -> Model:
         carrier=carrier,
     )
     return replace(model, craft=craft, environment=Environment(earth_rotation=False))
+
+
+#: The cheapest optic quadrature that is still the full engine model (2 radii x 8 sectors):
+#: for tests of Φ's structure and derivatives, not of its accuracy.
+COARSE_OPTIC = Engine(quadrature_radial=2, quadrature_azimuthal=8)
+
+
+def flight5_rcs_coarse() -> Model:
+    """models/flight5-rcs.toml (Flight 5 with its four rim thrusters) with :data:`COARSE_OPTIC`."""
+    model = load_model(MODELS / "flight5-rcs.toml")
+    return replace(model, craft=replace(model.craft, engine=COARSE_OPTIC))

@@ -14,32 +14,21 @@ the symbolic Hessians quick to build.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import casadi as ca
 import numpy as np
 import pytest
 from support.jacobian_check import state_step_scale
-from support.models import table1_flight5
-from support.paths import MODELS
+from support.models import COARSE_OPTIC, flight5_rcs_coarse, table1_flight5
 
 from lightcraft_opt.errors import LightcraftError
-from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import ENGINE, STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Engine
 from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
 
-COARSE_OPTIC = Engine(quadrature_radial=2, quadrature_azimuthal=8)
 AD_RTOL = 1e-9
 FD_RTOL = 1e-5
-
-
-def _rcs_model():
-    model = load_model(MODELS / "flight5-rcs.toml")
-    return replace(model, craft=replace(model.craft, engine=COARSE_OPTIC))
 
 
 CASES = {
@@ -48,11 +37,11 @@ CASES = {
         PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=2, dense=2),
     ),
     "rcs-phase-locked": (
-        _rcs_model,
+        flight5_rcs_coarse,
         PulseMapOptions(substeps=4, dense=2, rcs_profile=RcsProfile.PHASE_LOCKED),
     ),
     "rcs-subintervals": (
-        _rcs_model,
+        flight5_rcs_coarse,
         PulseMapOptions(
             scheme=CoastScheme.SPLIT,
             substeps=4,

@@ -14,11 +14,9 @@ its direction only).
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
-from support.models import table1_flight5
+from support.models import COARSE_OPTIC, flight5_rcs_coarse, table1_flight5
 from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
@@ -30,11 +28,10 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Carrier, Engine
+from lightcraft_opt.params import Carrier
 from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
-COARSE_OPTIC = Engine(quadrature_radial=2, quadrature_azimuthal=8)
 CARRIER = Carrier(
     mass=0.010,
     inertia=(2.0e-5, 3.1e-5, 2.6e-5, 0.3e-5, -0.2e-5, 0.4e-5),
@@ -42,11 +39,6 @@ CARRIER = Carrier(
 )
 VALUE_RTOL = 1e-12
 DERIVATIVE_RTOL = 1e-9
-
-
-def _rcs_model():
-    model = load_model(MODELS / "flight5-rcs.toml")
-    return replace(model, craft=replace(model.craft, engine=COARSE_OPTIC))
 
 
 CASES = {
@@ -68,13 +60,13 @@ CASES = {
         PulseMapOptions(scheme=CoastScheme.RK4, substeps=48, dense=2),
     ),
     "rcs-subintervals": (
-        _rcs_model,
+        flight5_rcs_coarse,
         PulseMapOptions(
             substeps=8, dense=4, rcs_profile=RcsProfile.SUBINTERVALS, rcs_subintervals=4
         ),
     ),
     "rcs-phase-locked": (
-        _rcs_model,
+        flight5_rcs_coarse,
         PulseMapOptions(substeps=8, dense=2, rcs_profile=RcsProfile.PHASE_LOCKED),
     ),
 }
