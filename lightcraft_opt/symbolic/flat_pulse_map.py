@@ -1,4 +1,4 @@
-"""Today's Φ as one flat SX graph: the reference the structured Φ is tested against.
+"""Φ built as one flat SX graph: the reference the structured Φ is tested against.
 
 :func:`build_flat_pulse_map` inlines the jump and every coast substep into one SX
 expression (530k instructions for Flight 5 at the default options). It is what
@@ -6,29 +6,14 @@ expression (530k instructions for Flight 5 at the default options). It is what
 from named sub-Functions (pulse_map.py), kept so tests and bench/ can check that the
 structured Φ evaluates the same numbers. Use ``build_pulse_map``.
 
-The construction (unchanged): x[k+1] = Φ(x[k], u[k], p, t_k).
-
-At t_k the laser pulse jumps the state (pulse_jump.py); then the craft coasts for
-one pulse period (coast.py), so no integrator ever steps through a pulse. The motor
-torque is held over the coast; the RCS thrust follows the options' profile (held,
-piecewise constant on sub-intervals, or phase-locked to the coning mode; layout
-``map_input_layout``), evaluated at the coast scheme's stage times. One Function
-serves simulation, optimal control, MPC, linearisation, calibration and Monte Carlo
-(docs/architecture.md#rule-1).
-
-The attitude quaternion is scaled to unit length on the way in and on the way out, so
-Φ depends on the direction of ``q_LB`` only: Φ(c q) = Φ(q) for any c > 0. On the unit
-sphere this changes nothing; off it (the trial points of a Newton-type solver over a
-multiple-shooting NLP, where q is a free variable) Φ stays finite and flat along |q|.
-Without the entry scaling the DCM of a non-unit q grows like |q|^2, the coast returned NaN
-from |q| ~ 2 on, and IPOPT stalled on problems/crosswind_climb.toml (its header).
+The construction, the RCS profiles and the quaternion scaling are those of pulse_map.py
+(its module docstring); only the composition differs.
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
-from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import (
     ENGINE,
     PARAMETERS,
@@ -36,7 +21,6 @@ from lightcraft_opt.layout import (
     STATE,
     VectorLayout,
     input_layout,
-    map_input_layout,
     rcs_levels,
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
@@ -45,7 +29,7 @@ from lightcraft_opt.symbolic.assemble import assemble
 from lightcraft_opt.symbolic.coast import Rhs, Rhses, coning_rate_B, rk4_coast, split_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.pulse_map import PulseMap, check_pulse_map_options
 from lightcraft_opt.symbolic.rcs import phase_locked_thrust
 
 __all__ = ["build_flat_pulse_map"]
@@ -62,12 +46,7 @@ def build_flat_pulse_map(model: Model, options: PulseMapOptions | None = None) -
     opts = options or PulseMapOptions()
     craft = model.craft
     n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
-    if opts.rcs_profile is not RcsProfile.HOLD and not n_thr:
-        raise OptionError(
-            f"PulseMapOptions.rcs_profile {opts.rcs_profile.value!r} needs a craft with an RCS; "
-            f"{model.name!r} has none: use 'hold'"
-        )
-    ulay = map_input_layout(n_thr, craft.has_carrier, opts.rcs_profile, opts.rcs_subintervals)
+    ulay = check_pulse_map_options(model, opts)
     period = 1.0 / model.flight.pulse_rate
 
     x = ca.SX.sym("x", STATE.size)
