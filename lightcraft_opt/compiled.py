@@ -3,7 +3,9 @@
 The generated C of a Function is compiled by the system C compiler into a shared library
 and loaded back with ``casadi.external``; the result evaluates the same expression graph
 to round-off (IEEE arithmetic, no ``-ffast-math``) and has the same name, inputs and
-outputs. Only evaluation is compiled: take derivatives of the interpreted Function.
+outputs. A compiled Function has no derivatives of its own: Φ's derivatives are compiled
+as Functions in their own right (:func:`compile_pulse_map_derivatives`, the explicit chain
+of symbolic/pulse_map_derivatives.py over compiled pieces).
 
 Cache: the libraries live in ``$LIGHTCRAFT_CACHE``, else ``$XDG_CACHE_HOME/lightcraft_opt``,
 else ``~/.cache/lightcraft_opt``, one file per key, the sha256 of the Function's
@@ -50,6 +52,7 @@ from typing import TypeVar
 
 import casadi as ca
 
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
@@ -365,7 +368,7 @@ def compile_pulse_map_derivatives(
     bigger pieces stay interpreted. A piece that does not compile stays interpreted (with
     the warning of :func:`compile_function`)."""
     if phi.pieces is None:
-        raise ValueError("compile_pulse_map_derivatives needs a Φ from build_pulse_map")
+        raise ParameterError("phi", "needs a Φ from build_pulse_map, with its pieces")
     pieces = phi.pieces
     derivatives = derivatives or build_derivative_pieces(pieces)
     values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
