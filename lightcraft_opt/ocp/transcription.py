@@ -50,6 +50,7 @@ from typing import assert_never
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.problem import (
     CaptureFraction,
@@ -415,7 +416,9 @@ class MultipleShooting:
         the NLP to rounding (tests/ocp/test_chain_derivatives.py)."""
         der = self.derivatives
         if der is None or der.hessian is None:
-            raise ValueError("MultipleShooting was built without Φ's chain Hessian")
+            raise ParameterError(
+                "derivatives", "MultipleShooting needs Φ's chain derivatives with Hessians"
+            )
         xs, as_, vs, st = self._symbols
         N, nx = self.problem.horizon, STATE.size
         ne = int(der.jacobian.size_out(1)[0])
@@ -469,13 +472,8 @@ class MultipleShooting:
 
         # the chain at w̄ = w, then the surrogate
         times = self._pulse_times()
-        jac_map, hess_map = der.jacobian.map(N), der.hessian.map(N)
-
-        def at(w_: ca.MX) -> tuple[ca.MX, list[ca.MX]]:
-            z = z_of(w_, P)
-            return z, [z, *jac_map(z[:nx, :], z[nx:, :], p, times)]
-
-        z, point = at(w)
+        z = z_of(w, P)
+        point = [z, *der.jacobian.map(N)(z[:nx, :], z[nx:, :], p, times)]
         grad_f = ca.Function(
             "nlp_grad_f", [w, P], surrogate_grad.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
         )
@@ -484,7 +482,7 @@ class MultipleShooting:
         )
         _, xn, en, _, _ = point
         mu_x, mu_e = mu(w, xn, en, P, lam_f, lam_g)
-        Hb = hess_map(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
+        Hb = der.hessian.map(N)(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
         hess_lag = ca.Function(
             "nlp_hess_l",
             [w, P, lam_f, lam_g],
