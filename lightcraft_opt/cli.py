@@ -6,6 +6,7 @@ import argparse
 import dataclasses
 import math
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -438,14 +439,28 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _warning_line(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    line: str | None = None,
+) -> str:
+    """A warning as the command line shows it: one line, no source location."""
+    return f"lightcraft: warning: {message}\n"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``lightcraft``; returns the exit status."""
     args = build_parser().parse_args(argv)
+    shown, warnings.formatwarning = warnings.formatwarning, _warning_line
     try:
         return int(args.run(args))
     except LightcraftError as err:
         print(f"lightcraft: error: {err}", file=sys.stderr)
         return 2
+    finally:
+        warnings.formatwarning = shown
 
 
 if __name__ == "__main__":

@@ -332,3 +332,24 @@ def test_compiled_chain_derivatives_equal_the_interpreted_chain(small):
     _close(
         fast.hessian(x, u, p, 0.4, lam_x, lam_e), interpreted.hessian(x, u, p, 0.4, lam_x, lam_e)
     )
+
+
+def test_cli_without_a_compiler_warns_in_one_line_and_flies(tmp_path):
+    """`lightcraft simulate` where gcc is missing: the interpreted Φ, one warning line that
+    names the cause (no source location, no traceback), exit 0 and the usual files."""
+    env = {k: v for k, v in os.environ.items() if k != "LIGHTCRAFT_COMPILE"}
+    env.update(CC="/nonexistent/cc", LIGHTCRAFT_CACHE=str(tmp_path / "cache"))
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "lightcraft_opt.cli", "simulate", str(MODELS / "flight5.toml")]
+    proc = subprocess.run(
+        [*cmd, "--duration", "0.2", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+    )
+    assert proc.returncode == 0, proc.stderr
+    warning_lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(warning_lines) == 1, proc.stderr
+    assert warning_lines[0].startswith("lightcraft: warning: could not compile")
+    assert "/nonexistent/cc" in warning_lines[0]
+    assert (out / "summary.json").exists()
