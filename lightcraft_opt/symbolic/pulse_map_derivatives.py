@@ -204,7 +204,7 @@ def chain_derivatives(
     if phase_locked:
         omega_x = jW(x_plus, p)
         d_omega = ca.mtimes(omega_x, D_0)  # (1, nv)
-    states, Ds, Gs = [x_plus], [D_0], []
+    states, Gs = [x_plus], []
     s, D = x_plus, D_0
     for k in range(opts.substeps):
         t_k = t + pieces.step_length * k
@@ -218,7 +218,6 @@ def chain_derivatives(
         D = ca.mtimes(A_k, D) + ca.mtimes(B_k, Dw)
         s = pieces.substep(s, w_k, p, t_k)
         states.append(s)
-        Ds.append(D)
     x_next = pieces.normalise(s)
     Nx_out = jN(s)
     dx_next = ca.mtimes(Nx_out, D)
