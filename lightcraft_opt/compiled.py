@@ -309,7 +309,10 @@ def pulse_map_for(
 
     def build() -> PulseMap:
         interpreted = _MAPS.get((model, opts, False)) or build_pulse_map(model, opts)
-        return _compiled_once_warned(interpreted) if want else interpreted
+        if not want:
+            return interpreted
+        with _compilation_warned_once():
+            return compile_pulse_map(interpreted)
 
     return _remembered(_MAPS, (model, opts, want), build)
 
@@ -326,19 +329,14 @@ def _remembered(table: OrderedDict[_Key, _T], key: _Key, build: Callable[[], _T]
     return value
 
 
-def _compiled_once_warned(phi: PulseMap) -> PulseMap:
-    """compile_pulse_map, its CompilationWarning shown the first time in this process only."""
+@contextlib.contextmanager
+def _compilation_warned_once() -> Iterator[None]:
+    """Warnings raised inside are shown as they were, except that a CompilationWarning is
+    shown only the first time in this process."""
+    global _warned_once
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", CompilationWarning)
-        out = compile_pulse_map(phi)
-    _warn_once(caught)
-    return out
-
-
-def _warn_once(caught: list[warnings.WarningMessage]) -> None:
-    """Re-emit ``caught``: other warnings as they were, a CompilationWarning only the first
-    time in this process."""
-    global _warned_once
+        yield
     for w in caught:
         if not issubclass(w.category, CompilationWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
@@ -411,10 +409,7 @@ def derivatives_for(
         assert phi.pieces is not None  # build_pulse_map always records its pieces
         if not want:
             return chain_derivatives(phi, build_derivative_pieces(phi.pieces))
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", CompilationWarning)
-            der = compile_pulse_map_derivatives(phi)
-        _warn_once(caught)
-        return der
+        with _compilation_warned_once():
+            return compile_pulse_map_derivatives(phi)
 
     return _remembered(_DERIVATIVES, (model, opts, want), build)

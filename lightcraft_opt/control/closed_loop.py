@@ -163,21 +163,24 @@ def closed_loop(
         applied = np.tile(u, (n, 1))
         applied[dropped, i_energy] = 0.0
         nodes = step_in_chunks(phi, applied, x, p, flight)
-    for k in range(0 if fixed is None else n, n):
-        t = k * phi.period
-        fault = opts.fault if k in faults else None
-        y = measured(x, opts.noise, rng)
-        u = checked_vector(f"controller input {k}", controller.step(y, t, fault=fault), lay.size)
-        steps.append(controller.last)
-        commanded.append(u)
-        applied = u.copy()
-        if dropped[k]:
-            applied[i_energy] = 0.0
-        X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
-        if flight.ended_by(t, applied, X, eng.ravel()):
-            break
-        x = X[:, -1]
-        nodes.append(x)
+    else:
+        for k in range(n):
+            t = k * phi.period
+            fault = opts.fault if k in faults else None
+            y = measured(x, opts.noise, rng)
+            u = checked_vector(
+                f"controller input {k}", controller.step(y, t, fault=fault), lay.size
+            )
+            steps.append(controller.last)
+            commanded.append(u)
+            applied = u.copy()
+            if dropped[k]:
+                applied[i_energy] = 0.0
+            X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
+            if flight.ended_by(t, applied, X, eng.ravel()):
+                break
+            x = X[:, -1]
+            nodes.append(x)
     k_done = len(flight.pulse_t)
     record = PulseRecord(
         t=np.asarray(flight.pulse_t),
