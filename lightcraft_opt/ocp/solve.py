@@ -30,6 +30,7 @@ from lightcraft_opt.compiled import (
     compile_by_default,
     compile_pulse_map_derivatives,
     derivatives_for,
+    pulse_map_for,
 )
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
@@ -37,7 +38,7 @@ from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolv
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.transcription import MultipleShooting
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
@@ -261,8 +262,9 @@ class CompiledOcp:
         if not ca.has_nlpsol(plugin) or (opts.solver in _QP and not ca.has_conic(_QP[opts.solver])):
             raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
         self.problem, self.options = problem, opts
-        self.pulse_map = pulse_map or build_pulse_map(
-            problem.model, problem.pulse_map_options(opts.pulse_map)
+        # the interpreted map (the NLP differentiates it): the one derivatives_for builds on
+        self.pulse_map = pulse_map or pulse_map_for(
+            problem.model, problem.pulse_map_options(opts.pulse_map), compiled=False
         )
         if self.pulse_map.step.size1_in(1) != problem.inputs.size or (
             self.pulse_map.inputs is not None and self.pulse_map.inputs != problem.inputs
