@@ -232,7 +232,14 @@ def _calibrate(args: argparse.Namespace) -> int:
         f"({track.gaps} gaps dropped) ...",
         flush=True,
     )
-    result = calibrate(model, track, args.fit, initial=initial, options=options)
+    result = calibrate(
+        model,
+        track,
+        args.fit,
+        initial=initial,
+        options=options,
+        compiled=False if args.interpreted else None,
+    )
     fitted = write_fitted_model(result, source, out / f"{source.stem}-fitted.toml")
     report = write_calibration_report(
         result,
@@ -425,6 +432,12 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
         default=[],
         metavar="NAME=VALUE",
         help="start value of a fitted component in SI, e.g. cm=1.5e-4 (repeatable)",
+    )
+    cal.add_argument(
+        "--interpreted",
+        action="store_true",
+        help="interpreted pulse map and derivative pieces; by default they are compiled to C "
+        "with gcc, cached on disk (the first fit of a model structure compiles for a minute)",
     )
     cal.add_argument("--verbose", action="store_true", help="print one line per iteration")
     cal.set_defaults(run=_calibrate)

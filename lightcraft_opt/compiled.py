@@ -45,7 +45,7 @@ import subprocess
 import tempfile
 import warnings
 from collections import OrderedDict
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Hashable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import TypeVar
@@ -61,6 +61,12 @@ from lightcraft_opt.symbolic.pulse_map_derivatives import (
     PulseMapDerivatives,
     build_derivative_pieces,
     chain_derivatives,
+)
+from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
+from lightcraft_opt.symbolic.pulse_map_sensitivities import (
+    SensitivityPieces,
+    build_dense_sensitivity,
+    build_sensitivity_pieces,
 )
 
 try:  # POSIX: serialise compilations of one key across processes
@@ -78,6 +84,7 @@ __all__ = [
     "compile_function",
     "compile_pulse_map",
     "compile_pulse_map_derivatives",
+    "dense_sensitivity_for",
     "derivatives_for",
     "library_path",
     "pulse_map_for",
@@ -271,6 +278,7 @@ def _locked(lock_path: Path) -> Iterator[None]:
 
 _Key = tuple[Model, PulseMapOptions, bool]
 _T = TypeVar("_T")
+_K = TypeVar("_K", bound=Hashable)
 
 #: Pulse maps built in this process, by (model, options, compiled); the oldest dropped first.
 _MAPS: OrderedDict[_Key, PulseMap] = OrderedDict()
@@ -317,7 +325,7 @@ def pulse_map_for(
     return _remembered(_MAPS, (model, opts, want), build)
 
 
-def _remembered(table: OrderedDict[_Key, _T], key: _Key, build: Callable[[], _T]) -> _T:
+def _remembered(table: OrderedDict[_K, _T], key: _K, build: Callable[[], _T]) -> _T:
     """``table[key]``, built by ``build`` the first time; the oldest of more than
     :data:`_MAPS_KEPT` entries dropped."""
     if key in table:
@@ -367,12 +375,29 @@ def compile_pulse_map_derivatives(
     the warning of :func:`compile_function`)."""
     if phi.pieces is None:
         raise ParameterError("phi", "needs a Φ from build_pulse_map, with its pieces")
-    pieces = phi.pieces
-    derivatives = derivatives or build_derivative_pieces(pieces)
+    derivatives = derivatives or build_derivative_pieces(phi.pieces)
+    built = [f for f in derivatives.functions() if f is not None]
+    fast, done = _compiled_with_pieces(phi.pieces, built, compiler, workers, max_instructions)
+    compiled_derivatives = iter(done)
+    replaced = tuple(
+        None if f is None else next(compiled_derivatives) for f in derivatives.functions()
+    )
+    return chain_derivatives(phi, DerivativePieces.of(replaced), fast)
+
+
+def _compiled_with_pieces(
+    pieces: PulseMapPieces,
+    derivatives: Sequence[ca.Function],
+    compiler: str | None,
+    workers: int | None,
+    max_instructions: int,
+) -> tuple[PulseMapPieces, list[ca.Function]]:
+    """Φ's value pieces (:data:`DEFAULT_FLAGS`) and the given derivative pieces
+    (:data:`DERIVATIVE_FLAGS`) compiled, each its own library, ``workers`` at a time (default:
+    the cores); pieces over ``max_instructions`` SX instructions, or that do not compile,
+    stay interpreted."""
     values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
-    jobs = [(f, DEFAULT_FLAGS) for f in values] + [
-        (f, DERIVATIVE_FLAGS) for f in derivatives.functions() if f is not None
-    ]
+    jobs = [(f, DEFAULT_FLAGS) for f in values] + [(f, DERIVATIVE_FLAGS) for f in derivatives]
 
     def compiled_or_not(job: tuple[ca.Function, tuple[str, ...]]) -> ca.Function:
         f, flags = job
@@ -387,11 +412,7 @@ def compile_pulse_map_derivatives(
     fast = dataclasses.replace(
         pieces, normalise=normalise, jump=jump, substep=substep, coning_rate=coning_rate
     )
-    compiled_derivatives = iter(done[4:])
-    replaced = tuple(
-        None if f is None else next(compiled_derivatives) for f in derivatives.functions()
-    )
-    return chain_derivatives(phi, DerivativePieces.of(replaced), fast)
+    return fast, done[4:]
 
 
 def derivatives_for(
@@ -413,3 +434,44 @@ def derivatives_for(
             return compile_pulse_map_derivatives(phi)
 
     return _remembered(_DERIVATIVES, (model, opts, want), build)
+
+
+#: Φ's pieces in forward mode built in this process, by (model, options, compiled,
+#: directions), likewise.
+_SENSITIVITIES: OrderedDict[tuple[Model, PulseMapOptions, bool, int], SensitivityPieces] = (
+    OrderedDict()
+)
+
+
+def dense_sensitivity_for(
+    model: Model,
+    options: PulseMapOptions | None = None,
+    n_directions: int = 1,
+    *,
+    compiled: bool | None = None,
+) -> ca.Function:
+    """``pulse_map_dense_sensitivity(x, u, p, t, dx, dp) -> (X, dX)`` of ``model``'s Φ
+    (:func:`~lightcraft_opt.symbolic.pulse_map_sensitivities.build_dense_sensitivity`) in
+    ``n_directions`` directions, chained over pieces compiled (:data:`DERIVATIVE_FLAGS`)
+    unless ``compiled`` is False or :func:`compile_by_default` says no. The pieces are built
+    once per process for equal models, options and directions and compiled once per
+    structure (the disk cache); the chain itself, a short MX graph, is assembled on each
+    call."""
+    opts = options or PulseMapOptions()
+    want = compile_by_default() if compiled is None else bool(compiled)
+    phi = pulse_map_for(model, opts, compiled=False)
+    assert phi.pieces is not None  # build_pulse_map always records its pieces
+    own = phi.pieces
+
+    def build() -> SensitivityPieces:
+        interpreted = build_sensitivity_pieces(own, n_directions)
+        if not want:
+            return interpreted
+        with _compilation_warned_once():
+            _, done = _compiled_with_pieces(
+                own, interpreted.functions(), None, None, DERIVATIVE_INSTRUCTION_LIMIT
+            )
+        return interpreted.replaced(tuple(done))
+
+    key = (model, opts, want, n_directions)
+    return build_dense_sensitivity(phi, n_directions, _remembered(_SENSITIVITIES, key, build))

@@ -334,6 +334,27 @@ def test_compiled_chain_derivatives_equal_the_interpreted_chain(small):
     )
 
 
+def test_compiled_dense_sensitivity_equals_the_interpreted_chain(small, monkeypatch):
+    """The dense-output sensitivities calibration uses (forward-mode pieces, each its own
+    library at DERIVATIVE_FLAGS) against the same chain interpreted, in 2 random directions
+    of the state and every parameter."""
+    model, _, _ = small
+    monkeypatch.setattr(compiled, "_SENSITIVITIES", type(compiled._SENSITIVITIES)())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CompilationWarning)
+        fast = compiled.dense_sensitivity_for(model, SMALL, 2, compiled=True)
+    slow = compiled.dense_sensitivity_for(model, SMALL, 2, compiled=False)
+    assert compiled.dense_sensitivity_for(model, SMALL, 2, compiled=True) is not fast  # MX anew
+    assert len(compiled._SENSITIVITIES) == 2  # ... over the pieces built once
+    rng = np.random.default_rng(4)
+    x = initial_state(model, r_L=(0.01, -0.02, 4.0), v_L=(0.2, 0.1, 8.0), w_B=(0.0, 2.0, -1.0))
+    u, p = nominal_inputs(model), parameter_values(model)
+    S = rng.normal(size=(x.size, 2))
+    Q = 1e-2 * rng.normal(size=(p.size, 2)) * np.maximum(np.abs(p), 1e-3)[:, None]
+    for a, b in zip(fast(x, u, p, 0.4, S, Q), slow(x, u, p, 0.4, S, Q), strict=True):
+        _close(a, b)
+
+
 def test_cli_without_a_compiler_warns_in_one_line_and_flies(tmp_path):
     """`lightcraft simulate` where gcc is missing: the interpreted Φ, one warning line that
     names the cause (no source location, no traceback), exit 0 and the usual files."""

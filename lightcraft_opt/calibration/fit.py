@@ -36,10 +36,12 @@ from lightcraft_opt.calibration.problem import (
 )
 from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
 from lightcraft_opt.calibration.statistics import fit_statistics, identifiability_flags
+from lightcraft_opt.compiled import dense_sensitivity_for, pulse_map_for
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.pulse_map_sensitivities import build_dense_sensitivity
 
 __all__ = ["CalibrationOptions", "calibrate"]
 
@@ -108,6 +110,7 @@ def calibrate(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     options: CalibrationOptions | None = None,
     pulse_map: PulseMap | None = None,
+    compiled: bool | None = None,
 ) -> CalibrationResult:
     """Fit the components named by ``fit`` to ``track`` (module docstring).
 
@@ -122,7 +125,13 @@ def calibrate(
     initial : starting values by component name [SI], instead of the model's.
     bounds : (lower, upper) by component name [SI], instead of the catalogue's.
     options : solver and flag thresholds.
-    pulse_map : a prebuilt Φ of ``model`` (its dense output must have >= 2 states).
+    pulse_map : a prebuilt Φ of ``model`` (its dense output must have >= 2 states); its
+        Jacobian is then chained over its own pieces, interpreted (AD through its graph for
+        a Φ without pieces).
+    compiled : without ``pulse_map``, whether Φ and the pieces its Jacobian is chained over
+        are compiled (:func:`~lightcraft_opt.compiled.pulse_map_for`,
+        :func:`~lightcraft_opt.compiled.dense_sensitivity_for`); None: compiled unless
+        ``LIGHTCRAFT_COMPILE=0``.
 
     Returns
     -------
@@ -143,10 +152,15 @@ def calibrate(
             f"{track.t.size} points give {3 * track.t.size} residuals: too few "
             f"for {n} fitted components",
         )
-    phi = pulse_map or build_pulse_map(model, opts.pulse_map)
+    if pulse_map is None:
+        phi = pulse_map_for(model, opts.pulse_map, compiled=compiled)
+        sensitivity = dense_sensitivity_for(model, opts.pulse_map, n, compiled=compiled)
+    else:
+        phi = pulse_map
+        sensitivity = build_dense_sensitivity(phi, n) if phi.pieces is not None else None
     if phi.dense.size_out(0)[1] < 2:
         raise OptionError("pulse_map: its dense output needs >= 2 states per pulse")
-    problem = build_calibration_problem(model, track, comps, phi, x0)
+    problem = build_calibration_problem(model, track, comps, phi, x0, sensitivity)
     lower, upper = _bounds(comps, bounds)
     start = _start(comps, initial_values(comps, model, problem.x0), initial, lower, upper)
     t0 = time.perf_counter()

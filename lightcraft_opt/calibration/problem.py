@@ -12,10 +12,12 @@ the dense output's positions and velocities at the two nodes around t, so
 
     r(θ) = (r_L(t_i; θ) - r_L,i measured),  i = 1..m,  stacked (east, north, up) per point,
 
-with constant Hermite weights (the track times are fixed). Its Jacobian is exact (casadi
-AD). Near a pulse the velocity jumps: a time in the first dense sub-interval after the
-pulse at t_k is interpolated from the cubic through the first two nodes after the pulse
-(one sub-step of extrapolation, same order), never across the jump.
+with constant Hermite weights (the track times are fixed). Its Jacobian is exact: the forward
+sensitivities of the dense output in the directions of θ, chained over Φ's compiled pieces
+(symbolic/pulse_map_sensitivities.py) when a sensitivity Function is given, else casadi's
+AD through the graph. Near a pulse the velocity jumps: a time in the first dense
+sub-interval after the pulse at t_k is interpolated from the cubic through the first two
+nodes after the pulse (one sub-step of extrapolation, same order), never across the jump.
 
 Frames (docs/frames.md): positions r_L [m], L = east-north-up at the pad; the track's
 time origin t = 0 is the first laser pulse.
@@ -50,6 +52,7 @@ __all__ = [
     "build_calibration_problem",
     "hermite_weights",
     "initial_values",
+    "position_weights",
 ]
 
 
@@ -215,15 +218,42 @@ def hermite_weights(t: np.ndarray, period: float, dense: int) -> tuple[ca.DM, ca
     return ca.DM(A), ca.DM(B)
 
 
+def position_weights(A: ca.DM, B: ca.DM) -> ca.DM:
+    """The constant (3 m, STATE.size * columns) matrix M with vec(X_r A + X_v B) = M vec(X)
+    for dense states X (STATE.size, columns): the residual's linear dependence on the dense
+    output, laid out like ``vec`` (column after column)."""
+    a, b = np.asarray(A), np.asarray(B)
+    n_cols, m = a.shape
+    nx = STATE.size
+    r_slot, v_slot = STATE.slot("r_L").start, STATE.slot("v_L").start
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    for weights, start in ((a, r_slot), (b, v_slot)):
+        c, i = np.nonzero(weights)
+        for axis in range(3):
+            rows += list(3 * i + axis)
+            cols += list(c * nx + start + axis)
+            vals += list(weights[c, i])
+    return ca.DM.triplet(rows, cols, ca.DM(vals), 3 * m, nx * n_cols)
+
+
 def build_calibration_problem(
     model: Model,
     track: Track,
     components: Sequence[FitComponent],
     pulse_map: PulseMap,
     x0: Sequence[float] | np.ndarray | None = None,
+    sensitivity: ca.Function | None = None,
 ) -> CalibrationProblem:
     """Assemble r(θ) for ``track`` over as many pulses of ``pulse_map`` as the track spans
-    (module docstring); no physics built here, only Φ composed pulse by pulse."""
+    (module docstring); no physics built here, only Φ composed pulse by pulse.
+
+    ``sensitivity``: ``pulse_map_dense_sensitivity`` of the same Φ in len(components)
+    directions (:func:`~lightcraft_opt.symbolic.pulse_map_sensitivities.build_dense_sensitivity`,
+    or compiled from :func:`~lightcraft_opt.compiled.dense_sensitivity_for`) for the
+    chained Jacobian; None differentiates Φ's graph by AD (an interpreted Φ only).
+    """
     comps = tuple(components)
     base = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     p0 = parameter_values(model)
@@ -231,6 +261,11 @@ def build_calibration_problem(
     A, B = hermite_weights(track.t, pulse_map.period, dense)
     n_pulses = A.shape[0] // dense
     u = nominal_inputs(model, pulse_map.inputs)
+    if sensitivity is not None and sensitivity.size_in(4)[1] != len(comps):
+        raise ParameterError(
+            "sensitivity",
+            f"has {sensitivity.size_in(4)[1]} directions for {len(comps)} fitted components",
+        )
 
     spent = model.craft.engine.spent_coupling is None
     theta = ca.MX.sym("theta", len(comps))
@@ -245,9 +280,14 @@ def build_calibration_problem(
     pos = ca.mtimes(X_all[0:3, :], A) + ca.mtimes(X_all[3:6, :], B)  # (3, m)
     r = ca.reshape(pos - ca.DM(track.r_L.T), -1, 1)  # (east, north, up) per point
     residual = ca.Function("calibration_residual", [theta], [r], ["theta"], ["r"])
-    jacobian = ca.Function(
-        "calibration_jacobian", [theta], [r, ca.jacobian(r, theta)], ["theta"], ["r", "J"]
-    )
+    if sensitivity is None:
+        r_chain, J = r, ca.jacobian(r, theta)
+    else:  # the same r, from the chain's own values, and its Jacobian M ∂vec(X)/∂θ
+        X_vec, dX = _chained(sensitivity, theta, x_start, p, u, pulse_map.period, n_pulses)
+        M = position_weights(A, B)
+        r_chain = ca.mtimes(M, X_vec) - ca.vec(ca.DM(track.r_L.T))
+        J = ca.mtimes(M, dX)
+    jacobian = ca.Function("calibration_jacobian", [theta], [r_chain, J], ["theta"], ["r", "J"])
     setup = ca.Function("calibration_setup", [theta], [p, x_start], ["theta"], ["p", "x0"])
     flight = ca.Function("calibration_flight", [theta], [X_all], ["theta"], ["X"])
     h = pulse_map.period / dense
@@ -257,3 +297,27 @@ def build_calibration_problem(
     return CalibrationProblem(
         model, track, comps, base, residual, jacobian, setup, flight, flight_t, n_pulses
     )
+
+
+def _chained(
+    sensitivity: ca.Function,
+    theta: ca.MX,
+    x_start: ca.MX,
+    p: ca.MX,
+    u: np.ndarray,
+    period: float,
+    n_pulses: int,
+) -> tuple[ca.MX, ca.MX]:
+    """vec of the dense states of the flight and their Jacobian in θ, pulse by pulse through
+    ``sensitivity``: seeded with ∂x0/∂θ and ∂p/∂θ (casadi's AD of :func:`apply_fit` alone)."""
+    nx = STATE.size
+    Q = ca.jacobian(p, theta)
+    S = ca.jacobian(x_start, theta)
+    x = x_start
+    values, blocks = [], []
+    for k in range(n_pulses):
+        X, dX = sensitivity(x, u, p, k * period, S, Q)
+        values.append(ca.vec(X))
+        blocks.append(dX)
+        x, S = X[:, -1], dX[-nx:, :]
+    return ca.vertcat(*values), ca.vertcat(*blocks)
