@@ -98,7 +98,7 @@ def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, br
 
 def test_ruff_clean() -> None:
     _require("ruff")
-    paths = [p for p in ("lightcraft_opt", "tests", "bench") if (ROOT / p).exists()]
+    paths = [p for p in ("lightcraft_opt", "tests", "bench", "docs") if (ROOT / p).exists()]
     proc = _run([sys.executable, "-m", "ruff", "check", "--no-cache", *paths], ROOT)
     _assert_clean(proc)
 

@@ -22,6 +22,9 @@ The modules, in the order they build on each other:
   (:func:`lqr_policy`);
 - :mod:`.stability_grid`: multipliers over spin rate × beam offset
   (:func:`stability_map`);
+- :mod:`.beam_riding`: multipliers over altitude × focus schedule × offset
+  (:func:`altitude_stability`) and over the beam's side at the craft
+  (:func:`side_stability`), the focus that makes a side (:func:`focus_for_side`);
 - :mod:`.signal_names`: the names of layout entries, shared by the above.
 
 The nutation MPC's prediction model, linear models in coning coordinates scheduled on
@@ -30,6 +33,16 @@ spin and altitude, is :mod:`lightcraft_opt.control.prediction_model`.
 Everything public is re-exported here: ``from lightcraft_opt.linearize import ...``.
 """
 
+from lightcraft_opt.linearize.beam_riding import (
+    AltitudeStability,
+    FocusSchedule,
+    SideStability,
+    altitude_stability,
+    focus_for_side,
+    reachable_sides,
+    scheduled_focus,
+    side_stability,
+)
 from lightcraft_opt.linearize.modes import (
     Controllability,
     ModeKind,
@@ -53,25 +66,33 @@ from lightcraft_opt.linearize.state_space import REDUCED_STATES, Coordinates, li
 
 __all__ = [
     "REDUCED_STATES",
+    "AltitudeStability",
     "Controllability",
     "Coordinates",
+    "FocusSchedule",
     "LqrResult",
     "ModeKind",
     "Multipliers",
     "OperatingPoint",
     "PointStatus",
     "PulseMapJacobian",
+    "SideStability",
     "StabilityMap",
+    "altitude_stability",
     "beam_riding_modes",
     "climb_point",
     "controllability",
     "dlqr_gain",
     "error_state",
+    "focus_for_side",
     "linearize",
     "lqr",
     "lqr_policy",
     "multipliers",
     "pulse_map_jacobian",
+    "reachable_sides",
+    "scheduled_focus",
+    "side_stability",
     "stability_map",
     "trim_hover",
 ]

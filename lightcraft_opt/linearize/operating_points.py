@@ -196,6 +196,7 @@ class OperatingPoint:
 _Z = ERROR_STATE.slot("r_L").start + 2
 _VZ = ERROR_STATE.slot("v_L").start + 2
 _ENERGY = PULSE_INPUT.slot("energy").start  # the map input starts with the pulse slots
+_FOCUS = PULSE_INPUT.slot("focus").start
 
 
 def climb_point(
@@ -206,6 +207,7 @@ def climb_point(
     offset_L: Sequence[float] = (0.0, 0.0),
     spin: float | None = None,
     energy: float | None = None,
+    focus: float | None = None,
     t: float = 0.0,
     pulse_map: PulseMap | PulseMapJacobian | None = None,
     options: PulseMapOptions | None = None,
@@ -215,7 +217,8 @@ def climb_point(
     The craft upright at ``altitude`` [m] above the pad, moving up at ``speed`` [m/s]
     just before the pulse, ``offset_L`` (east, north) [m] from the beam axis (the beam
     on the pad axis), spinning at ``spin`` [rad/s] (default the craft's), under the
-    nominal inputs with pulse ``energy`` [J] (default the flight's). Since Φ(x) ≠ x,
+    nominal inputs with pulse ``energy`` [J] (default the flight's) and the director's
+    ``focus`` distance [m] (default its farthest; the ``waist`` beam only). Since Φ(x) ≠ x,
     the linearisation here is one step of a time-varying model (status ``TRAJECTORY``).
     """
     x = initial_state(
@@ -230,6 +233,8 @@ def climb_point(
     u = nominal_inputs(model, phi.inputs)
     if energy is not None:
         u[_ENERGY] = energy
+    if focus is not None:
+        u[_FOCUS] = focus
     p = parameter_values(model)
     x_next = np.asarray(phi.step(x, u, p, t)[0]).ravel()
     msg = "a climb, not a fixed point"

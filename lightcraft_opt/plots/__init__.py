@@ -13,7 +13,12 @@ from lightcraft_opt.plots.figures import (
     flight_overview,
     track_figure,
 )
-from lightcraft_opt.plots.stability import plot_multipliers, plot_stability_map
+from lightcraft_opt.plots.stability import (
+    plot_altitude_stability,
+    plot_multipliers,
+    plot_side_stability,
+    plot_stability_map,
+)
 
 __all__ = [
     "PLOT_DPI",
@@ -21,7 +26,9 @@ __all__ = [
     "attitude_figure",
     "flight_figures",
     "flight_overview",
+    "plot_altitude_stability",
     "plot_multipliers",
+    "plot_side_stability",
     "plot_stability_map",
     "track_figure",
 ]

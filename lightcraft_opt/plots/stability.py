@@ -22,7 +22,17 @@ from matplotlib.figure import Figure
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.plots.labels import length_factor, state_label
 
-__all__ = ["RPM", "MultipliersLike", "StabilityMapLike", "plot_multipliers", "plot_stability_map"]
+__all__ = [
+    "RPM",
+    "AltitudeStabilityLike",
+    "MultipliersLike",
+    "SideStabilityLike",
+    "StabilityMapLike",
+    "plot_altitude_stability",
+    "plot_multipliers",
+    "plot_side_stability",
+    "plot_stability_map",
+]
 
 
 class StabilityMapLike(Protocol):
@@ -40,6 +50,42 @@ class StabilityMapLike(Protocol):
     def speed(self) -> float: ...
     @property
     def energy(self) -> float: ...
+    @property
+    def model_name(self) -> str: ...
+
+
+class AltitudeStabilityLike(Protocol):
+    """What :func:`plot_altitude_stability` reads of a ``linearize.AltitudeStability``."""
+
+    @property
+    def altitudes(self) -> np.ndarray: ...  # (na,) [m]
+    @property
+    def offsets(self) -> np.ndarray: ...  # (no,) [m]
+    @property
+    def schedules(self) -> Sequence[_Kind]: ...  # (ns,) FocusSchedule
+    @property
+    def beam_riding(self) -> np.ndarray: ...  # (ns, na, no) [-]
+    @property
+    def size_model(self) -> _Kind: ...  # BeamSizeModel
+    @property
+    def speed(self) -> float: ...
+    @property
+    def model_name(self) -> str: ...
+
+
+class SideStabilityLike(Protocol):
+    """What :func:`plot_side_stability` reads of a ``linearize.SideStability``."""
+
+    @property
+    def sides(self) -> np.ndarray: ...  # (nsd,) [m]
+    @property
+    def offsets(self) -> np.ndarray: ...  # (no,) [m]
+    @property
+    def beam_riding(self) -> np.ndarray: ...  # (nsd, no) [-]
+    @property
+    def altitude(self) -> float: ...
+    @property
+    def speed(self) -> float: ...
     @property
     def model_name(self) -> str: ...
 
@@ -141,4 +187,82 @@ def plot_multipliers(result: MultipliersLike, *, ax: Axes | None = None) -> list
     ax.set_ylabel("Im λ [-]")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize="small")
+    return artists
+
+
+SCHEDULE_COLORS = {"far": "tab:blue", "at_craft": "tab:orange", "matched": "tab:green"}
+OFFSET_STYLES = ("-", "--", ":", "-.")
+BEAM_RIDING_LABEL = "max |λ| per pulse, beam-riding modes [-]"
+
+
+def plot_altitude_stability(
+    result: AltitudeStabilityLike,
+    *,
+    ax: Axes | None = None,
+    length_unit: str = "cm",
+    limits: tuple[float, float] = (0.95, 1.6),
+) -> list[Any]:
+    """Largest beam-riding multiplier |λ| against altitude: a colour per focus schedule (one
+    line, "linear beam", when the size model is linear: the focus does nothing), a line style
+    per offset, and |λ| = 1 in black (above it an offset grows every pulse).
+
+    Returns
+    -------
+    The Line2D artists, the |λ| = 1 line last.
+    """
+    ax = _axes(ax)
+    linear = result.size_model.value == "linear"
+    schedules = list(result.schedules)[:1] if linear else list(result.schedules)
+    artists: list[Any] = []
+    for i, schedule in enumerate(schedules):
+        colour = "tab:red" if linear else SCHEDULE_COLORS.get(schedule.value)
+        name = "linear beam" if linear else f"{schedule.value.replace('_', ' ')} focus"
+        for k, offset in enumerate(result.offsets):
+            style = OFFSET_STYLES[k % len(OFFSET_STYLES)]
+            label = f"{name}, {offset * length_factor(length_unit):g} {length_unit} off"
+            artists += ax.plot(
+                result.altitudes, result.beam_riding[i, :, k], style, color=colour, label=label
+            )
+    artists.append(ax.axhline(1.0, color="k", lw=0.8))
+    ax.set_ylim(*limits)
+    ax.set_xlabel("altitude above the pad [m]")
+    ax.set_ylabel(BEAM_RIDING_LABEL)
+    ax.set_title(f"{result.model_name}: {result.speed:g} m/s climb", fontsize="medium")
+    ax.legend(fontsize="x-small")
+    return artists
+
+
+def plot_side_stability(
+    result: SideStabilityLike,
+    *,
+    ax: Axes | None = None,
+    length_unit: str = "cm",
+    limits: tuple[float, float] = (0.95, 1.6),
+) -> list[Any]:
+    """Largest beam-riding multiplier |λ| against the beam's side at the craft, a line per
+    offset; sides the director cannot make at that height are left out (NaN).
+
+    Returns
+    -------
+    The Line2D artists, the |λ| = 1 line last.
+    """
+    ax = _axes(ax)
+    factor = length_factor(length_unit)
+    artists: list[Any] = []
+    for k, offset in enumerate(result.offsets):
+        artists += ax.plot(
+            result.sides * factor,
+            result.beam_riding[:, k],
+            OFFSET_STYLES[k % len(OFFSET_STYLES)],
+            marker=".",
+            label=f"{offset * factor:g} {length_unit} off the axis",
+        )
+    artists.append(ax.axhline(1.0, color="k", lw=0.8))
+    ax.set_ylim(*limits)
+    ax.set_xlabel(f"beam side at the craft [{length_unit}]")
+    ax.set_ylabel(BEAM_RIDING_LABEL)
+    ax.set_title(
+        f"{result.model_name}: at {result.altitude:g} m, {result.speed:g} m/s", fontsize="medium"
+    )
+    ax.legend(fontsize="x-small")
     return artists

@@ -11,13 +11,15 @@ Size along the beam (outer side a of the beam, or diameter for a disc) [m]:
 - ``LINEAR``:  a(z) = a0 + theta z, with a0 = ``beam_side`` (paper Table 1,
   docs/references.md#paper-table-1, at launch) and
   theta = ``beam_divergence`` (full angle).
-- ``WAIST``:   a(z) = a0 sqrt(1 + ((z - f)/z_R)^2) / sqrt(1 + (f/z_R)^2), with f the
-  ``focus`` input and z_R = ``beam_rayleigh_range``. A converging beam that leaves the
-  director with the Table 1 side: a(0) = a0 for *every* focus, so the launch beam
-  always matches Table 1 whatever focus is commanded, and the narrowest point (the
-  waist, a_w = a0 / sqrt(1 + (f/z_R)^2)) sits exactly at z = f: the focus input moves
-  it. Far from the waist the side shrinks like the geometric cone a0 |1 - z/f| (for
-  f >> z_R) and grows again beyond f.
+- ``WAIST``:   a(z) = a0 sqrt((1 - z/f)^2 + (z/z_R)^2), the side of a beam of fixed
+  quality (M^2) that leaves the director with the Table 1 side a0 and a wavefront converging
+  toward the geometric focus f, the ``focus`` input; z_R = ``beam_rayleigh_range`` is the
+  Rayleigh range of that beam leaving collimated, pi (a0/2)^2 / (M^2 lambda) (Siegman,
+  *Lasers*, 1986, ch. 17; docs/references.md#siegman). a(0) = a0 for every focus, so the
+  launch beam always matches Table 1. f -> infinity is the collimated beam, whose far field
+  a0 z/z_R is the LINEAR model's growth with theta = a0 / z_R. The waist sits at
+  z_w = f / (1 + (f/z_R)^2) <= z_R / 2, no farther whatever the focus; at z = f the side is
+  the diffraction-limited spot a0 f / z_R, the smallest the director can put at that range.
 
 Transverse profiles (:class:`lightcraft_opt.params.BeamProfile`), pulse energy E [J],
 soft-edge width w = ``beam_edge_width`` [m], logistic s(t) = (1 + tanh(t/2)) / 2:
@@ -81,7 +83,7 @@ def beam_side(z: Expr, focus: Expr, p: Expr, laser: Laser) -> Expr:
     ----------
     z : range along the beam, i.e. the L up coordinate of the point (any shape,
         elementwise) [m].
-    focus : focus distance f, the ``focus`` pulse input (WAIST only) [m].
+    focus : geometric focus f of the director, the ``focus`` pulse input (WAIST only) [m].
     p : (PARAMETERS.size,) parameters; reads ``beam_side`` a0 [m], ``beam_divergence``
         theta [rad] (LINEAR), ``beam_rayleigh_range`` z_R [m] (WAIST).
     laser : the size model (structural).
@@ -95,8 +97,7 @@ def beam_side(z: Expr, focus: Expr, p: Expr, laser: Laser) -> Expr:
     if laser.size_model is BeamSizeModel.LINEAR:
         return a0 + PARAMETERS.get("beam_divergence", p) * z
     z_r = PARAMETERS.get("beam_rayleigh_range", p)
-    waist = a0 / ca.sqrt(1 + (focus / z_r) ** 2)
-    return waist * ca.sqrt(1 + ((z - focus) / z_r) ** 2)
+    return a0 * ca.sqrt((1 - z / focus) ** 2 + (z / z_r) ** 2)
 
 
 def _soft_box(x: Expr, side: Expr, w: Expr) -> Expr:

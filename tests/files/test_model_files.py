@@ -213,13 +213,13 @@ def test_engine_keys_in_other_units(tmp_path: Path) -> None:
 
 def test_laser_size_model(tmp_path: Path) -> None:
     laser = load_laser(MODELS / "plvts.toml")
-    assert laser.size_model is BeamSizeModel.LINEAR and laser.rayleigh_range == 50.0
+    assert laser.size_model is BeamSizeModel.LINEAR and laser.rayleigh_range == 72.0
     flight = _copy(tmp_path)
     _replace(
         tmp_path / "plvts.toml",
         {
             'size_model = "linear"': 'size_model = "waist"',
-            "rayleigh_range_m = 50.0": "rayleigh_range_km = 0.12",
+            "rayleigh_range_m = 72.0": "rayleigh_range_km = 0.12",
         },
     )
     laser = load_model(flight).laser
@@ -286,7 +286,7 @@ BAD_ENGINE_AND_BEAM = [
     ),
     (
         "plvts.toml",
-        "rayleigh_range_m = 50.0",
+        "rayleigh_range_m = 72.0",
         "rayleigh_range_m = 0.0",
         "rayleigh_range_m",
         "positive",

@@ -121,21 +121,43 @@ def test_linear_size_grows_with_the_divergence() -> None:
 
 
 @pytest.mark.parametrize("focus", [2.0, 30.0, 71.0, 500.0])
-def test_waist_is_narrowest_at_the_focus_input(focus: float) -> None:
-    """WAIST: a(0) is the Table 1 side for every focus, the minimum sits at z = focus with
-    a_w = a0 / sqrt(1 + (f/z_R)^2), and da/dz vanishes there."""
+def test_waist_is_a_gaussian_beam_of_fixed_quality(focus: float) -> None:
+    """WAIST (Siegman ch. 17): a(0) is the Table 1 side for every focus; the waist sits at
+    z_w = f / (1 + (f/z_R)^2) <= z_R / 2 with side a0 (f/z_R) / sqrt(1 + (f/z_R)^2), where
+    da/dz vanishes; at z = f the side is a0 f / z_R; and the beam's quality is the same for
+    every focus: a_w^2 / z_w (waist side squared over its own Rayleigh range, proportional to
+    M^2 lambda) equals a0^2 / z_R, the collimated beam's."""
+    z_r, a0 = 72.0, 0.071974
     laser = _laser(size_model=BeamSizeModel.WAIST)
-    p = _params(beam_rayleigh_range=50.0)
+    p = _params(beam_rayleigh_range=z_r)
     z = ca.SX.sym("z")
     a = ca.Function("a", [z], [beam_side(z, ca.DM(focus), ca.DM(p), laser)])
     da = ca.Function("da", [z], [ca.jacobian(a(z), z)])
-    assert float(a(0.0)) == pytest.approx(0.071974, rel=1e-14)
+    assert float(a(0.0)) == pytest.approx(a0, rel=1e-14)
+    ratio = focus / z_r
+    z_waist = focus / (1 + ratio**2)
+    a_waist = a0 * ratio / math.sqrt(1 + ratio**2)
     zs = np.linspace(0.0, 1000.0, 100_001)
     sizes = np.asarray(a.map(zs.size)(zs)).ravel()
-    assert zs[np.argmin(sizes)] == pytest.approx(focus, abs=0.01)
-    assert float(a(focus)) == pytest.approx(0.071974 / math.sqrt(1 + (focus / 50.0) ** 2))
-    assert float(da(focus)) == 0.0
-    assert float(da(focus - 1.0)) < 0.0 < float(da(focus + 1.0))
+    assert zs[np.argmin(sizes)] == pytest.approx(z_waist, abs=0.01)
+    assert z_waist <= z_r / 2 + 1e-12
+    assert float(a(z_waist)) == pytest.approx(a_waist, rel=1e-12)
+    assert abs(float(da(z_waist))) < 1e-15
+    assert float(a(focus)) == pytest.approx(a0 * ratio, rel=1e-12)
+    # the waist's own Rayleigh range: where the side has grown by sqrt(2)
+    z_own = z_r * ratio**2 / (1 + ratio**2)
+    assert float(a(z_waist + z_own)) == pytest.approx(math.sqrt(2) * a_waist, rel=1e-12)
+    assert a_waist**2 / z_own == pytest.approx(a0**2 / z_r, rel=1e-12)
+
+
+def test_collimated_waist_beam_has_the_linear_far_field() -> None:
+    """f -> infinity: a(z) = a0 sqrt(1 + (z/z_R)^2), growing like a0 z / z_R far out: the
+    LINEAR model's divergence 1 mrad with z_R = a0 / 1 mrad = 72 m (plvts.toml)."""
+    laser = _laser(size_model=BeamSizeModel.WAIST)
+    p = _params()
+    a = float(beam_side(ca.DM(10_000.0), ca.DM(1e12), ca.DM(p), laser))
+    assert a == pytest.approx(0.071974 * math.sqrt(1 + (10_000.0 / 72.0) ** 2), rel=1e-9)
+    assert a / 10_000.0 == pytest.approx(1e-3, rel=1e-3)
 
 
 # --------------------------------------------------------------------------- derivatives

@@ -1,0 +1,342 @@
+"""Beam riding against altitude, focus and offset: how high the beam can hold the craft.
+
+Each cell is a climb point (:func:`~.operating_points.climb_point`: the craft upright,
+``speed`` up, ``offset`` east of the beam axis, at ``altitude``), Φ linearised there
+(:func:`~.state_space.linearize`) and its pulse-to-pulse multipliers
+(:func:`~.modes.multipliers`): the Floquet multipliers of the hybrid flow, frozen in time. A
+beam-riding multiplier above 1 means an offset grows by that factor a pulse: the craft
+leaves the beam however well it was launched.
+
+The beam's size at the craft decides it (docs/beam_riding.md). Under the ``waist`` size model
+(symbolic/beam.py: Gaussian optics of a beam of fixed quality) the director's geometric focus f
+sets the size at height h,
+
+    a(h; f) = a0 sqrt((1 - h/f)^2 + (h/z_R)^2),
+
+so a focus *schedule* f(h) is a lever:
+
+- ``FAR``: the farthest focus the director reaches (the nominal input): nearly collimated;
+- ``AT_CRAFT``: f = h, the smallest beam the director can put there, a0 h / z_R (the
+  diffraction-limited spot: larger than the launch beam above h = z_R);
+- ``MATCHED``: a chosen side at the craft; by default the launch beam a0 again, with
+  f = h / (1 + sqrt(1 - (h/z_R)^2)) (about h / 2 low down), possible up to h = z_R; above it
+  the nearest the director gets, the focus at the craft.
+
+Each schedule is clipped into the director's ``focus_range`` (the cell records the focus
+flown). Under the ``linear`` size model (a = a0 + θ h) the focus does nothing: every
+schedule gives the same cell.
+
+Since the multipliers depend on the altitude mostly through the beam's side at the craft,
+:func:`side_stability` scans that side directly at one altitude (the focus that makes it,
+:func:`focus_for_side`), and :func:`reachable_sides` says which sides the director can make
+at a height. docs/beam_riding.md gives the figures and what they mean.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from enum import Enum
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import PARAMETERS, parameter_values
+from lightcraft_opt.linearize.modes import ModeKind, multipliers
+from lightcraft_opt.linearize.operating_points import climb_point, jacobian_for
+from lightcraft_opt.linearize.state_space import linearize
+from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.params import BeamSizeModel, Laser, Model
+from lightcraft_opt.symbolic.beam import beam_side
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+
+__all__ = [
+    "AltitudeStability",
+    "FocusSchedule",
+    "SideStability",
+    "altitude_stability",
+    "focus_for_side",
+    "reachable_sides",
+    "scheduled_focus",
+    "side_stability",
+]
+
+
+class FocusSchedule(Enum):
+    """Where the director focuses for a craft at height h (module docstring)."""
+
+    FAR = "far"
+    AT_CRAFT = "at_craft"
+    MATCHED = "matched"
+
+
+def scheduled_focus(
+    schedule: FocusSchedule,
+    altitude: float,
+    laser: Laser,
+    p: np.ndarray,
+    matched_side: float | None = None,
+) -> float:
+    """The focus distance [m] of ``schedule`` for a craft at ``altitude`` [m] above the
+    director, inside ``laser.focus_range``. MATCHED puts a beam of ``matched_side`` [m] at
+    the craft (default: the launch side a0); where the director cannot make that side there,
+    the focus of the nearest side it can make."""
+    near, far = laser.focus_range
+    schedule = FocusSchedule(schedule)
+    if schedule is FocusSchedule.FAR:
+        return float(far)
+    if schedule is FocusSchedule.AT_CRAFT:
+        return float(min(max(altitude, near), far))
+    if laser.size_model is not BeamSizeModel.WAIST:
+        return float(min(max(0.5 * altitude, near), far))  # the focus does nothing here
+    if matched_side is None:
+        matched_side = float(PARAMETERS.get("beam_side", p))
+    f = focus_for_side(laser, p, altitude, matched_side)
+    if np.isfinite(f):
+        return f
+    smallest, _ = reachable_sides(laser, p, altitude)
+    if matched_side <= smallest:  # as small as it gets: the waist at (or nearest) the craft
+        return float(min(max(altitude, near), far))
+    wide = [near, far]  # as wide as it gets: whichever end of the range is wider there
+    return float(max(wide, key=lambda focus: side_at(laser, p, altitude, focus)))
+
+
+def side_at(laser: Laser, p: np.ndarray, altitude: float, focus: float) -> float:
+    """The beam's outer side (diameter for a disc) at ``altitude`` [m] for ``focus`` [m]."""
+    return float(beam_side(ca.DM(altitude), ca.DM(focus), ca.DM(p), laser))
+
+
+@dataclass(frozen=True)
+class AltitudeStability:
+    """Largest pulse-to-pulse multipliers over altitude × focus schedule × offset.
+
+    Attributes
+    ----------
+    altitudes : (na,) craft height above the pad [m].
+    offsets : (no,) craft offset east of the beam axis [m] (L frame).
+    schedules : (ns,) the focus schedules, in the order of the first axis.
+    focus : (ns, na) focus distance flown [m] (the schedule clipped into the range).
+    side : (ns, na) beam side at the craft [m].
+    beam_riding : (ns, na, no) max |λ| of the beam-riding modes [-].
+    coning : (ns, na, no) max |λ| of the coning modes [-].
+    speed, energy : of the climb points [m/s], [J].
+    size_model : the laser's size model (``linear``: the schedules coincide).
+    model_name : which model.
+    matched_side : the side MATCHED keeps at the craft [m] (None: the launch side).
+    """
+
+    altitudes: np.ndarray
+    offsets: np.ndarray
+    schedules: tuple[FocusSchedule, ...]
+    focus: np.ndarray
+    side: np.ndarray
+    beam_riding: np.ndarray
+    coning: np.ndarray
+    speed: float
+    energy: float
+    size_model: BeamSizeModel
+    model_name: str
+    matched_side: float | None = None
+
+    def ceiling(self, schedule: FocusSchedule, offset: float, limit: float = 1.01) -> float:
+        """The lowest altitude [m] of the grid where the beam-riding multiplier at
+        ``offset`` [m] (a grid value) exceeds ``limit`` (1 % growth a pulse by default:
+        doubling in 70 pulses, under 3 s); inf when it never does."""
+        i = self.schedules.index(FocusSchedule(schedule))
+        hits = np.flatnonzero(np.isclose(self.offsets, offset, rtol=0, atol=1e-12))
+        if not hits.size:
+            raise ParameterError("offset", f"{offset!r} m is not on the grid {self.offsets}")
+        above = np.flatnonzero(self.beam_riding[i, :, hits[0]] > limit)
+        return float(self.altitudes[above[0]]) if above.size else float("inf")
+
+
+def altitude_stability(
+    model: Model,
+    altitudes: Sequence[float] | np.ndarray,
+    offsets: Sequence[float] | np.ndarray,
+    schedules: Sequence[FocusSchedule | str] = tuple(FocusSchedule),
+    *,
+    speed: float = 10.0,
+    energy: float | None = None,
+    matched_side: float | None = None,
+    pulse_map: PulseMap | None = None,
+    options: PulseMapOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> AltitudeStability:
+    """Beam-riding and coning multipliers over ``altitudes`` [m] × ``schedules`` ×
+    ``offsets`` [m] (east), the craft climbing at ``speed`` [m/s] with ``energy`` [J]
+    pulses (default the flight's), the beam on the pad axis (module docstring); MATCHED
+    keeps ``matched_side`` [m] at the craft (default the launch side).
+
+    One Jacobian of Φ per cell (``options`` default: :class:`PulseMapOptions`, Φ's
+    Jacobian chained over its pieces, built once). ``progress(done, total)`` after each
+    cell.
+    """
+    h = np.asarray(altitudes, dtype=float).ravel()
+    d = np.asarray(offsets, dtype=float).ravel()
+    if not (h.size and np.all(np.isfinite(h)) and np.all(h > 0)):
+        raise ParameterError("altitudes", "need at least one finite altitude > 0 m")
+    if not (d.size and np.all(np.isfinite(d))):
+        raise ParameterError("offsets", "need at least one finite offset [m]")
+    try:
+        kinds = tuple(FocusSchedule(s) for s in schedules)
+    except ValueError:
+        names = ", ".join(s.value for s in FocusSchedule)
+        raise ParameterError("schedules", f"{list(schedules)!r}: each one of {names}") from None
+    jac = jacobian_for(model, pulse_map, options)
+    e = model.flight.pulse_energy if energy is None else float(energy)
+    p = parameter_values(model)
+    shape = (len(kinds), h.size, d.size)
+    riding, coning = np.empty(shape), np.empty(shape)
+    focus, side = np.empty(shape[:2]), np.empty(shape[:2])
+    total, done = riding.size, 0
+    for i, schedule in enumerate(kinds):
+        for j, altitude in enumerate(h):
+            f = scheduled_focus(schedule, altitude, model.laser, p, matched_side)
+            focus[i, j] = f
+            side[i, j] = side_at(model.laser, p, altitude, f)
+            for k, off in enumerate(d):
+                point = climb_point(
+                    model,
+                    altitude,
+                    speed,
+                    offset_L=(off, 0.0),
+                    energy=e,
+                    focus=f,
+                    pulse_map=jac,
+                )
+                modes = multipliers(linearize(model, point, pulse_map=jac))
+                riding[i, j, k] = modes.of_kind(ModeKind.BEAM_RIDING).largest()
+                coning[i, j, k] = modes.of_kind(ModeKind.CONING).largest()
+                done += 1
+                if progress is not None:
+                    progress(done, total)
+    return AltitudeStability(
+        h,
+        d,
+        kinds,
+        focus,
+        side,
+        riding,
+        coning,
+        speed,
+        e,
+        model.laser.size_model,
+        model.name,
+        matched_side,
+    )
+
+
+def _waist_laser(laser: Laser, argument: str) -> None:
+    if laser.size_model is not BeamSizeModel.WAIST:
+        raise ParameterError(
+            argument,
+            f"the focus sets the beam's size only under the 'waist' size model; the laser "
+            f"{laser.name!r} uses {laser.size_model.value!r}",
+        )
+
+
+def reachable_sides(laser: Laser, p: np.ndarray, altitude: float) -> tuple[float, float]:
+    """(smallest, largest) beam side [m] the director can put at ``altitude`` [m] with a
+    focus in its ``focus_range`` (``waist`` size model): the smallest with the waist at the
+    craft (or the nearest reachable focus to it), the largest with the nearest focus."""
+    _waist_laser(laser, "laser")
+    near, far = laser.focus_range
+    smallest = side_at(laser, p, altitude, min(max(altitude, near), far))
+    largest = max(side_at(laser, p, altitude, near), side_at(laser, p, altitude, far))
+    return smallest, largest
+
+
+def focus_for_side(laser: Laser, p: np.ndarray, altitude: float, side: float) -> float:
+    """The geometric focus [m] that puts a beam of ``side`` [m] at ``altitude`` [m]
+    (``waist`` size model), inside the focus range: preferably the focus before the craft
+    (f <= h, the beam diverging past it), else the one beyond it; NaN when no focus in the
+    range makes that side there.
+
+    From (1 - h/f)^2 + (h/z_R)^2 = (side/a0)^2: 1 - h/f = ±q, q = sqrt((side/a0)^2 -
+    (h/z_R)^2), so f = h / (1 + q) or h / (1 - q).
+    """
+    _waist_laser(laser, "laser")
+    a0 = float(PARAMETERS.get("beam_side", p))
+    z_r = float(PARAMETERS.get("beam_rayleigh_range", p))
+    h = float(altitude)
+    q2 = (float(side) / a0) ** 2 - (h / z_r) ** 2
+    if q2 < 0:
+        return float("nan")
+    q = float(np.sqrt(q2))
+    near, far = laser.focus_range
+    candidates = [h / (1 + q)] + ([h / (1 - q)] if q < 1 else [])
+    for f in candidates:
+        if near <= f <= far:
+            return f
+    return float("nan")
+
+
+@dataclass(frozen=True)
+class SideStability:
+    """Largest pulse-to-pulse multipliers over the beam's side at the craft × offset, at one
+    altitude (the focus set for each side, :func:`focus_for_side`).
+
+    Attributes
+    ----------
+    sides : (nsd,) beam side at the craft [m].
+    offsets : (no,) craft offset east of the beam axis [m] (L frame).
+    focus : (nsd,) focus distance flown [m] (NaN: the director cannot make that side there).
+    beam_riding, coning : (nsd, no) max |λ| of the beam-riding and coning modes [-] (NaN
+        where the side is out of reach).
+    altitude, speed, energy : of the climb points [m], [m/s], [J].
+    model_name : which model.
+    """
+
+    sides: np.ndarray
+    offsets: np.ndarray
+    focus: np.ndarray
+    beam_riding: np.ndarray
+    coning: np.ndarray
+    altitude: float
+    speed: float
+    energy: float
+    model_name: str
+
+
+def side_stability(
+    model: Model,
+    sides: Sequence[float] | np.ndarray,
+    offsets: Sequence[float] | np.ndarray,
+    *,
+    altitude: float = 50.0,
+    speed: float = 10.0,
+    energy: float | None = None,
+    pulse_map: PulseMap | None = None,
+    options: PulseMapOptions | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SideStability:
+    """Beam-riding and coning multipliers over the beam's ``sides`` at the craft [m] ×
+    ``offsets`` [m] (east) at ``altitude`` [m], climbing at ``speed`` [m/s] with ``energy``
+    [J] pulses (default the flight's). The laser must use the ``waist`` size model."""
+    _waist_laser(model.laser, "model.laser")
+    a = np.asarray(sides, dtype=float).ravel()
+    d = np.asarray(offsets, dtype=float).ravel()
+    if not (a.size and np.all(np.isfinite(a)) and np.all(a > 0)):
+        raise ParameterError("sides", "need at least one finite side > 0 m")
+    if not (d.size and np.all(np.isfinite(d))):
+        raise ParameterError("offsets", "need at least one finite offset [m]")
+    jac = jacobian_for(model, pulse_map, options)
+    e = model.flight.pulse_energy if energy is None else float(energy)
+    p = parameter_values(model)
+    focus = np.array([focus_for_side(model.laser, p, altitude, side) for side in a])
+    riding = np.full((a.size, d.size), np.nan)
+    coning = np.full((a.size, d.size), np.nan)
+    for i, f in enumerate(focus):
+        for k, off in enumerate(d):
+            if np.isfinite(f):
+                point = climb_point(
+                    model, altitude, speed, offset_L=(off, 0.0), energy=e, focus=f, pulse_map=jac
+                )
+                modes = multipliers(linearize(model, point, pulse_map=jac))
+                riding[i, k] = modes.of_kind(ModeKind.BEAM_RIDING).largest()
+                coning[i, k] = modes.of_kind(ModeKind.CONING).largest()
+            if progress is not None:
+                progress(i * d.size + k + 1, riding.size)
+    return SideStability(a, d, focus, riding, coning, float(altitude), speed, e, model.name)
