@@ -61,6 +61,12 @@ from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOption
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.simulation import SimulationResult, SimulationStatus, simulate
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.reduced_map import (
+    REDUCED_STATE,
+    ReducedMap,
+    ReducedMapOptions,
+    build_reduced_map,
+)
 
 if TYPE_CHECKING:
     from lightcraft_opt import linearize
@@ -89,6 +95,7 @@ __all__ = [
     "CONING",
     "ENGINE",
     "PARAMETERS",
+    "REDUCED_STATE",
     "STATE",
     "CalibrationOptions",
     "CalibrationResult",
@@ -122,6 +129,8 @@ __all__ = [
     "PulseMap",
     "PulseMapOptions",
     "RcsProfile",
+    "ReducedMap",
+    "ReducedMapOptions",
     "SimulationOptions",
     "SimulationResult",
     "SimulationStatus",
@@ -129,6 +138,7 @@ __all__ = [
     "Track",
     "Wind",
     "build_pulse_map",
+    "build_reduced_map",
     "calibrate",
     "campaign_summary",
     "closed_loop",
