@@ -74,6 +74,7 @@ A problem file::
     threads = 1
     print_level = 0
     wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
+    prediction = "full"                    # or "reduced": the coning-aware reduced map
 
     [pulse_map]                            # optional: PulseMapOptions; keys not given
     scheme = "split4"                      # keep OCP_PULSE_MAP's (split4, 8 substeps,
@@ -136,7 +137,13 @@ from lightcraft_opt.files.problem_tables import (
 )
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import initial_state
-from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.options import (
+    OCP_PULSE_MAP,
+    HessianApproximation,
+    OcpOptions,
+    OcpSolver,
+    PredictionMap,
+)
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
@@ -190,6 +197,7 @@ _SOLVER: Mapping[str, Spec] = {
     "threads": INTEGER,
     "print_level": INTEGER,
     "wind_ramp": INTEGER,
+    "prediction": choice(PredictionMap),
 }
 
 

@@ -15,6 +15,7 @@ from lightcraft_opt.ocp.options import (
     HessianApproximation,
     OcpOptions,
     OcpSolver,
+    PredictionMap,
 )
 from lightcraft_opt.ocp.problem import (
     CaptureFraction,
@@ -62,6 +63,7 @@ __all__ = [
     "OcpSolver",
     "OcpStatus",
     "OffsetFrom",
+    "PredictionMap",
     "RcsEnvelope",
     "TerminalAltitude",
     "TerminalState",

@@ -9,7 +9,7 @@ from enum import Enum
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
 
-__all__ = ["OCP_PULSE_MAP", "HessianApproximation", "OcpOptions", "OcpSolver"]
+__all__ = ["OCP_PULSE_MAP", "HessianApproximation", "OcpOptions", "OcpSolver", "PredictionMap"]
 
 
 class OcpSolver(Enum):
@@ -27,6 +27,20 @@ class OcpSolver(Enum):
     SQP_QRQP = "sqp_qrqp"
     SQP_HPIPM = "sqp_hpipm"
     SQP_OSQP = "sqp_osqp"
+
+
+class PredictionMap(Enum):
+    """The pulse map an OCP predicts with.
+
+    ``FULL``: Φ (symbolic/pulse_map.py) with the options' scheme and substeps. ``REDUCED``:
+    the coning-aware reduced map Ψ (symbolic/reduced_map.py) on full states, its slow coast in
+    the options' ``substeps`` RK4 steps: the cone's phase exact at every pulse, 15-20 times
+    closer to Φ than Φ's own Strang map with 2 substeps along coning flights
+    (docs/beam_riding.md#reduced-map); held RCS levels only; derivatives by casadi's AD.
+    """
+
+    FULL = "full"
+    REDUCED = "reduced"
 
 
 class HessianApproximation(Enum):
@@ -76,6 +90,7 @@ class OcpOptions:
         solves the problem in calm air, then with the wind (reference speed and gust)
         scaled by 1/n, 2/n, ... 1, each solve warm-started from the last: a crosswind can
         blow the nominal rollout out of the beam, where Φ gives the solver no gradient.
+    prediction : which pulse map predicts: Φ or the reduced map Ψ (:class:`PredictionMap`).
     chain_derivatives : with IPOPT and the exact Hessian, take the NLP's gradient,
         Jacobian and Hessian from Φ's explicit-chain derivatives over compiled pieces
         (symbolic/pulse_map_derivatives.py; transcription.MultipleShooting.chain_derivatives)
@@ -92,8 +107,14 @@ class OcpOptions:
     print_level: int = 0
     wind_ramp: int = 0
     chain_derivatives: bool = True
+    prediction: PredictionMap = PredictionMap.FULL
 
     def __post_init__(self) -> None:
+        if not isinstance(self.prediction, PredictionMap):
+            allowed = [m.value for m in PredictionMap]
+            raise OptionError(
+                f"OcpOptions.prediction must be one of {allowed}, got {self.prediction!r}"
+            )
         if not isinstance(self.chain_derivatives, bool):
             raise OptionError(
                 "OcpOptions.chain_derivatives must be true or false, got "

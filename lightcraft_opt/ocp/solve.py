@@ -34,12 +34,14 @@ from lightcraft_opt.compiled import (
 )
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
-from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver, PredictionMap
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.transcription import MultipleShooting
+from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.reduced_map import ReducedMapOptions, reduced_pulse_map
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
 
@@ -263,9 +265,19 @@ class CompiledOcp:
             raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
         self.problem, self.options = problem, opts
         # the interpreted map (the NLP differentiates it): the one derivatives_for builds on
-        self.pulse_map = pulse_map or pulse_map_for(
-            problem.model, problem.pulse_map_options(opts.pulse_map), compiled=False
-        )
+        map_options = problem.pulse_map_options(opts.pulse_map)
+        if pulse_map is not None:
+            self.pulse_map = pulse_map
+        elif opts.prediction is PredictionMap.REDUCED:
+            if map_options.rcs_profile is not RcsProfile.HOLD:
+                raise OptionError(
+                    "OcpOptions.prediction 'reduced' takes held RCS levels only; this problem's "
+                    f"RCS profile is {map_options.rcs_profile.value!r}"
+                )
+            reduced = ReducedMapOptions(substeps=map_options.substeps, dense=map_options.dense)
+            self.pulse_map = reduced_pulse_map(problem.model, reduced)
+        else:
+            self.pulse_map = pulse_map_for(problem.model, map_options, compiled=False)
         if self.pulse_map.step.size1_in(1) != problem.inputs.size or (
             self.pulse_map.inputs is not None and self.pulse_map.inputs != problem.inputs
         ):
@@ -277,7 +289,7 @@ class CompiledOcp:
             )
         blocks = opts.blocks(problem.horizon)
         derivatives = None
-        if _uses_chain(opts):
+        if _uses_chain(opts) and self.pulse_map.pieces is not None:
             derivatives = (
                 derivatives_for(problem.model, problem.pulse_map_options(opts.pulse_map))
                 if pulse_map is None

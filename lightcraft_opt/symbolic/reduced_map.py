@@ -59,9 +59,16 @@ from lightcraft_opt.symbolic.gravity import earth_rate_L
 from lightcraft_opt.symbolic.gyrostat import angular_momentum
 from lightcraft_opt.symbolic.mass_properties import mass_properties
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.rotation import cross, dcm, quat_multiply
 
-__all__ = ["REDUCED_STATE", "ReducedMap", "ReducedMapOptions", "build_reduced_map"]
+__all__ = [
+    "REDUCED_STATE",
+    "ReducedMap",
+    "ReducedMapOptions",
+    "build_reduced_map",
+    "reduced_pulse_map",
+]
 
 ENU = ("east", "north", "up")
 
@@ -85,17 +92,24 @@ _UPRIGHT = ca.DM([0.5, -0.5, -0.5, -0.5])  # b1 up, b2 east, b3 north (layout.qu
 
 @dataclass(frozen=True)
 class ReducedMapOptions:
-    """How Ψ coasts: ``substeps`` RK4 steps of the slow dynamics a pulse (>= 1)."""
+    """How Ψ coasts: ``substeps`` RK4 steps of the slow dynamics a pulse (>= 1); ``dense``
+    states a pulse in the full-state form's dense output (:func:`reduced_pulse_map`; divides
+    ``substeps``)."""
 
     substeps: int = 2
+    dense: int = 2
 
     def __post_init__(self) -> None:
-        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int):
+        for name in ("substeps", "dense"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise OptionError(f"ReducedMapOptions.{name} must be an integer, got {v!r}")
+            if v < 1:
+                raise OptionError(f"ReducedMapOptions.{name} must be >= 1, got {v}")
+        if self.substeps % self.dense:
             raise OptionError(
-                f"ReducedMapOptions.substeps must be an integer, got {self.substeps!r}"
+                f"ReducedMapOptions.dense ({self.dense}) must divide substeps ({self.substeps})"
             )
-        if self.substeps < 1:
-            raise OptionError(f"ReducedMapOptions.substeps must be >= 1, got {self.substeps}")
 
 
 @dataclass(frozen=True)
@@ -124,6 +138,7 @@ class ReducedMap:
     period: float
     inputs: VectorLayout
     options: ReducedMapOptions
+    coast: ca.Function
 
 
 def _smallest_rotation_from_up(n: ca.SX) -> ca.SX:
@@ -275,4 +290,41 @@ def build_reduced_map(model: Model, options: ReducedMapOptions | None = None) ->
         ["z", "u", "p", "t"],
         ["z_next", "engine"],
     )
-    return ReducedMap(step, lift, project, jump, substep, period, ulay, opts)
+    coast_f = ca.Function(
+        "reduced_coast_states",
+        [zm, um, pm, tm],
+        [Z, engine],
+        ["z", "u", "p", "t"],
+        ["Z", "engine"],
+    )
+    return ReducedMap(step, lift, project, jump, substep, period, ulay, opts, coast_f)
+
+
+def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) -> PulseMap:
+    """Ψ in Φ's clothes: ``step(x, u, p, t) -> (x_next, engine)`` on full states (STATE),
+    x_next = lift(Ψ(project(x))), and ``dense`` the lifted substep states, so every consumer
+    of a :class:`~lightcraft_opt.symbolic.pulse_map.PulseMap` (the OCP's transcription, its
+    constraints and costs on r_L, v_L, q_LB, the simulator) can predict with Ψ unchanged. The
+    states it returns lie on Ψ's manifold: the body's twist about b1 is the smallest rotation
+    from upright, w_B[b1] = 0. It has no pieces: its derivatives are casadi's AD."""
+    psi = build_reduced_map(model, options)
+    opts = psi.options
+    x = ca.MX.sym("x", STATE.size)
+    u = ca.MX.sym("u", psi.inputs.size)
+    p = ca.MX.sym("p", PARAMETERS.size)
+    t = ca.MX.sym("t")
+    Z, engine = psi.coast(psi.project(x, p), u, p, t)
+    every = opts.substeps // opts.dense
+    columns = [psi.lift(Z[:, j], p) for j in range(every - 1, opts.substeps, every)]
+    names = ["x", "u", "p", "t"]
+    step = ca.Function(
+        "reduced_pulse_map", [x, u, p, t], [columns[-1], engine], names, ["x_next", "engine"]
+    )
+    dense = ca.Function(
+        "reduced_pulse_map_dense",
+        [x, u, p, t],
+        [ca.horzcat(*columns), engine],
+        names,
+        ["X", "engine"],
+    )
+    return PulseMap(step, dense, psi.period, inputs=psi.inputs)
