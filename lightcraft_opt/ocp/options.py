@@ -36,7 +36,8 @@ class PredictionMap(Enum):
     the coning-aware reduced map Ψ (symbolic/reduced_map.py) on full states, its slow coast in
     the options' ``substeps`` RK4 steps: the cone's phase exact at every pulse, 15-20 times
     closer to Φ than Φ's own Strang map with 2 substeps along coning flights
-    (docs/beam_riding.md#reduced-map); held RCS levels only; derivatives by casadi's AD.
+    (docs/beam_riding.md#reduced-map); held RCS levels only. Composed like Φ, so its
+    derivatives come from the same explicit chain over compiled pieces.
     """
 
     FULL = "full"

@@ -291,8 +291,8 @@ class CompiledOcp:
         derivatives = None
         if _uses_chain(opts) and self.pulse_map.pieces is not None:
             derivatives = (
-                derivatives_for(problem.model, problem.pulse_map_options(opts.pulse_map))
-                if pulse_map is None
+                derivatives_for(problem.model, map_options)
+                if pulse_map is None and opts.prediction is PredictionMap.FULL
                 else compile_pulse_map_derivatives(self.pulse_map)
                 if compile_by_default()
                 else build_pulse_map_derivatives(self.pulse_map)

@@ -50,7 +50,13 @@ from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces, build_pulse_map_pieces
 
-__all__ = ["PulseMap", "build_pulse_map", "check_pulse_map_options", "substep_inputs"]
+__all__ = [
+    "PulseMap",
+    "build_pulse_map",
+    "check_pulse_map_options",
+    "compose_pulse_map",
+    "substep_inputs",
+]
 
 
 @dataclass(frozen=True)
@@ -104,8 +110,21 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
     opts = options or PulseMapOptions()
     ulay = check_pulse_map_options(model, opts)
     pieces = build_pulse_map_pieces(model, opts)
-    period = 1.0 / model.flight.pulse_rate
+    return compose_pulse_map(pieces, opts, ulay, 1.0 / model.flight.pulse_rate)
 
+
+def compose_pulse_map(
+    pieces: PulseMapPieces,
+    options: PulseMapOptions,
+    inputs: VectorLayout,
+    period: float,
+    name: str = "pulse_map",
+) -> PulseMap:
+    """Φ's MX composition (module docstring) of ``pieces``: ``<name>(x, u, p, t)`` and
+    ``<name>_dense``; the options' substeps, dense and RCS profile are read, u laid out as
+    ``inputs``, period [s]. Any pieces with the signatures of pulse_map_pieces.py compose
+    (the reduced map's, symbolic/reduced_map.py, too)."""
+    opts, ulay = options, inputs
     x = ca.MX.sym("x", STATE.size)
     u = ca.MX.sym("u", ulay.size)
     p = ca.MX.sym("p", PARAMETERS.size)
@@ -119,10 +138,8 @@ def build_pulse_map(model: Model, options: PulseMapOptions | None = None) -> Pul
     every = opts.substeps // opts.dense
     dense = ca.horzcat(states[:, every - 1 : opts.substeps - 1 : every], x_next)
     names_in = ["x", "u", "p", "t"]
-    step = ca.Function("pulse_map", [x, u, p, t], [x_next, engine], names_in, ["x_next", "engine"])
-    dense_f = ca.Function(
-        "pulse_map_dense", [x, u, p, t], [dense, engine], names_in, ["X", "engine"]
-    )
+    step = ca.Function(name, [x, u, p, t], [x_next, engine], names_in, ["x_next", "engine"])
+    dense_f = ca.Function(f"{name}_dense", [x, u, p, t], [dense, engine], names_in, ["X", "engine"])
     return PulseMap(step, dense_f, period, inputs=ulay, options=opts, pieces=pieces)
 
 

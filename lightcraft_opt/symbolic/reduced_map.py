@@ -51,15 +51,17 @@ from lightcraft_opt.layout import (
     input_layout,
     map_input_layout,
 )
-from lightcraft_opt.options import RcsProfile
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.assemble import assemble
+from lightcraft_opt.symbolic.coast import coning_rate_B
 from lightcraft_opt.symbolic.coast_rhs import coast_terms
 from lightcraft_opt.symbolic.gravity import earth_rate_L
 from lightcraft_opt.symbolic.gyrostat import angular_momentum
 from lightcraft_opt.symbolic.mass_properties import mass_properties
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.pulse_map import PulseMap, compose_pulse_map
+from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
 from lightcraft_opt.symbolic.rotation import cross, dcm, quat_multiply
 
 __all__ = [
@@ -138,7 +140,6 @@ class ReducedMap:
     period: float
     inputs: VectorLayout
     options: ReducedMapOptions
-    coast: ca.Function
 
 
 def _smallest_rotation_from_up(n: ca.SX) -> ca.SX:
@@ -290,41 +291,65 @@ def build_reduced_map(model: Model, options: ReducedMapOptions | None = None) ->
         ["z", "u", "p", "t"],
         ["z_next", "engine"],
     )
-    coast_f = ca.Function(
-        "reduced_coast_states",
-        [zm, um, pm, tm],
-        [Z, engine],
-        ["z", "u", "p", "t"],
-        ["Z", "engine"],
-    )
-    return ReducedMap(step, lift, project, jump, substep, period, ulay, opts, coast_f)
+    return ReducedMap(step, lift, project, jump, substep, period, ulay, opts)
 
 
 def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) -> PulseMap:
-    """Ψ in Φ's clothes: ``step(x, u, p, t) -> (x_next, engine)`` on full states (STATE),
-    x_next = lift(Ψ(project(x))), and ``dense`` the lifted substep states, so every consumer
-    of a :class:`~lightcraft_opt.symbolic.pulse_map.PulseMap` (the OCP's transcription, its
-    constraints and costs on r_L, v_L, q_LB, the simulator) can predict with Ψ unchanged. The
-    states it returns lie on Ψ's manifold: the body's twist about b1 is the smallest rotation
-    from upright, w_B[b1] = 0. It has no pieces: its derivatives are casadi's AD."""
+    """Ψ in Φ's clothes: a :class:`~lightcraft_opt.symbolic.pulse_map.PulseMap` on full states
+    (STATE), ``reduced_pulse_map(x, u, p, t) -> (x_next, engine)`` with x_next =
+    lift(Ψ(project(x))) and ``dense`` the lifted substep states, so every consumer of Φ (the
+    OCP's transcription, its costs and constraints on r_L, v_L, q_LB, the simulator) can
+    predict with Ψ unchanged. It is composed like Φ (:func:`compose_pulse_map`) of pieces on
+    full states: the jump ``reduced_pulse_jump`` = Φ's jump at lift(project(x)), the substep
+    ``reduced_coast_substep`` = lift ∘ Ψ's substep ∘ project, and the identity for Φ's
+    normalisation; so Φ's explicit-chain derivatives and their compilation
+    (pulse_map_derivatives.py, compiled.py) serve it as they are. The states it returns lie on
+    Ψ's manifold: the body's twist about b1 is the smallest rotation from upright, w_B[b1] = 0.
+    Its ``options`` carry the substeps, dense and the HOLD profile (the scheme is not read)."""
     psi = build_reduced_map(model, options)
     opts = psi.options
-    x = ca.MX.sym("x", STATE.size)
-    u = ca.MX.sym("u", psi.inputs.size)
-    p = ca.MX.sym("p", PARAMETERS.size)
-    t = ca.MX.sym("t")
-    Z, engine = psi.coast(psi.project(x, p), u, p, t)
-    every = opts.substeps // opts.dense
-    columns = [psi.lift(Z[:, j], p) for j in range(every - 1, opts.substeps, every)]
-    names = ["x", "u", "p", "t"]
-    step = ca.Function(
-        "reduced_pulse_map", [x, u, p, t], [columns[-1], engine], names, ["x_next", "engine"]
+    craft = model.craft
+    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    wlay = input_layout(n_thr, craft.has_carrier)
+    x = ca.SX.sym("x", STATE.size)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    t = ca.SX.sym("t")
+    w = ca.SX.sym("w", wlay.size)
+    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
+    on_manifold = psi.lift(psi.project(x, p), p)
+    identity = ca.Function("reduced_identity", [x], [x], ["x"], ["x_unit"])
+    x_plus, eng = pulse_jump(on_manifold, pulse, p, model)
+    jump = ca.Function(
+        "reduced_pulse_jump",
+        [x, pulse, p],
+        [x_plus, ca.vertcat(*(eng[name] for name in ENGINE.names))],
+        ["x", "pulse", "p"],
+        ["x_plus", "engine"],
+        _SX_OPTIONS,
     )
-    dense = ca.Function(
-        "reduced_pulse_map_dense",
-        [x, u, p, t],
-        [ca.horzcat(*columns), engine],
-        names,
-        ["X", "engine"],
+    substep = ca.Function(
+        "reduced_coast_substep",
+        [x, w, p, t],
+        [psi.lift(psi.substep(psi.project(x, p), w, p, t), p)],
+        ["x", "w", "p", "t"],
+        ["x_next"],
+        _SX_OPTIONS,
     )
-    return PulseMap(step, dense, psi.period, inputs=psi.inputs)
+    coning_rate = ca.Function(
+        "coning_rate", [x, p], [coning_rate_B(x, p)], ["x", "p"], ["omega"], _SX_OPTIONS
+    )
+    pieces = PulseMapPieces(
+        identity,
+        jump,
+        substep,
+        coning_rate,
+        opts.substeps,
+        psi.period / opts.substeps,
+        wlay,
+        n_thr,
+        craft.has_carrier,
+    )
+    map_options = PulseMapOptions(
+        substeps=opts.substeps, dense=opts.dense, rcs_profile=RcsProfile.HOLD
+    )
+    return compose_pulse_map(pieces, map_options, psi.inputs, psi.period, "reduced_pulse_map")
