@@ -43,9 +43,8 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.linearize.modes import ModeKind, multipliers
-from lightcraft_opt.linearize.operating_points import climb_point, jacobian_for
-from lightcraft_opt.linearize.state_space import linearize
+from lightcraft_opt.linearize.operating_points import jacobian_for
+from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import BeamSizeModel, Laser, Model
 from lightcraft_opt.symbolic.beam import beam_side
@@ -173,12 +172,8 @@ def altitude_stability(
     Jacobian chained over its pieces, built once). ``progress(done, total)`` after each
     cell.
     """
-    h = np.asarray(altitudes, dtype=float).ravel()
-    d = np.asarray(offsets, dtype=float).ravel()
-    if not (h.size and np.all(np.isfinite(h)) and np.all(h > 0)):
-        raise ParameterError("altitudes", "need at least one finite altitude > 0 m")
-    if not (d.size and np.all(np.isfinite(d))):
-        raise ParameterError("offsets", "need at least one finite offset [m]")
+    h = grid(altitudes, "altitudes", positive=True)
+    d = grid(offsets, "offsets")
     try:
         kinds = tuple(FocusSchedule(s) for s in schedules)
     except ValueError:
@@ -197,18 +192,9 @@ def altitude_stability(
             focus[i, j] = f
             side[i, j] = side_at(model.laser, p, altitude, f)
             for k, off in enumerate(d):
-                point = climb_point(
-                    model,
-                    altitude,
-                    speed,
-                    offset_L=(off, 0.0),
-                    energy=e,
-                    focus=f,
-                    pulse_map=jac,
+                riding[i, j, k], coning[i, j, k] = climb_multipliers(
+                    model, jac, altitude, speed, off, energy=e, focus=f
                 )
-                modes = multipliers(linearize(model, point, pulse_map=jac))
-                riding[i, j, k] = modes.of_kind(ModeKind.BEAM_RIDING).largest()
-                coning[i, j, k] = modes.of_kind(ModeKind.CONING).largest()
                 done += 1
                 if progress is not None:
                     progress(done, total)
@@ -316,12 +302,8 @@ def side_stability(
     ``offsets`` [m] (east) at ``altitude`` [m], climbing at ``speed`` [m/s] with ``energy``
     [J] pulses (default the flight's). The laser must use the ``waist`` size model."""
     _waist_laser(model.laser, "model.laser")
-    a = np.asarray(sides, dtype=float).ravel()
-    d = np.asarray(offsets, dtype=float).ravel()
-    if not (a.size and np.all(np.isfinite(a)) and np.all(a > 0)):
-        raise ParameterError("sides", "need at least one finite side > 0 m")
-    if not (d.size and np.all(np.isfinite(d))):
-        raise ParameterError("offsets", "need at least one finite offset [m]")
+    a = grid(sides, "sides", positive=True)
+    d = grid(offsets, "offsets")
     jac = jacobian_for(model, pulse_map, options)
     e = model.flight.pulse_energy if energy is None else float(energy)
     p = parameter_values(model)
@@ -331,12 +313,9 @@ def side_stability(
     for i, f in enumerate(focus):
         for k, off in enumerate(d):
             if np.isfinite(f):
-                point = climb_point(
-                    model, altitude, speed, offset_L=(off, 0.0), energy=e, focus=f, pulse_map=jac
+                riding[i, k], coning[i, k] = climb_multipliers(
+                    model, jac, altitude, speed, off, energy=e, focus=f
                 )
-                modes = multipliers(linearize(model, point, pulse_map=jac))
-                riding[i, k] = modes.of_kind(ModeKind.BEAM_RIDING).largest()
-                coning[i, k] = modes.of_kind(ModeKind.CONING).largest()
             if progress is not None:
                 progress(i * d.size + k + 1, riding.size)
     return SideStability(a, d, focus, riding, coning, float(altitude), speed, e, model.name)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.linearize.modes import ModeKind, multipliers
 from lightcraft_opt.linearize.operating_points import PulseMapJacobian, climb_point, jacobian_for
 from lightcraft_opt.linearize.state_space import linearize
@@ -53,6 +54,45 @@ class StabilityMap:
         return np.fmax(self.beam_riding, self.coning)
 
 
+def climb_multipliers(
+    model: Model,
+    jacobian: PulseMapJacobian,
+    altitude: float,
+    speed: float,
+    offset: float,
+    *,
+    energy: float,
+    spin: float | None = None,
+    focus: float | None = None,
+) -> tuple[float, float]:
+    """(beam-riding, coning) largest |λ| at a climb point (:func:`climb_point`: ``altitude``
+    [m], ``speed`` [m/s] up, ``offset`` [m] east of the beam axis, ``spin`` [rad/s],
+    ``energy`` [J], ``focus`` [m]), linearised with ``jacobian``; coning NaN where no mode
+    is mostly transverse rate."""
+    point = climb_point(
+        model,
+        altitude,
+        speed,
+        offset_L=(offset, 0.0),
+        spin=spin,
+        energy=energy,
+        focus=focus,
+        pulse_map=jacobian,
+    )
+    modes = multipliers(linearize(model, point, pulse_map=jacobian))
+    return modes.of_kind(ModeKind.BEAM_RIDING).largest(), modes.of_kind(ModeKind.CONING).largest()
+
+
+def grid(values: Sequence[float] | np.ndarray, name: str, positive: bool = False) -> np.ndarray:
+    """``values`` as a 1-D float array; ParameterError naming ``name`` when empty, not finite
+    or (``positive``) not all > 0."""
+    v = np.asarray(values, dtype=float).ravel()
+    if not (v.size and np.all(np.isfinite(v)) and (not positive or np.all(v > 0))):
+        need = "finite values > 0" if positive else "finite values"
+        raise ParameterError(name, f"needs at least one value, all {need}; got {values!r}")
+    return v
+
+
 def stability_map(
     model: Model,
     spins: Sequence[float] | np.ndarray,
@@ -78,12 +118,9 @@ def stability_map(
     coning = np.empty((s.size, d.size))
     for i, spin in enumerate(s):
         for j, off in enumerate(d):
-            pt = climb_point(
-                model, altitude, speed, offset_L=(off, 0.0), spin=spin, energy=e, pulse_map=jac
+            riding[i, j], coning[i, j] = climb_multipliers(
+                model, jac, altitude, speed, off, energy=e, spin=spin
             )
-            modes = multipliers(linearize(model, pt, pulse_map=jac))
-            riding[i, j] = modes.of_kind(ModeKind.BEAM_RIDING).largest()
-            coning[i, j] = modes.of_kind(ModeKind.CONING).largest()
             if progress is not None:
                 progress(i * d.size + j + 1, s.size * d.size)
     return StabilityMap(s, d, riding, coning, altitude, speed, e, model.name)
