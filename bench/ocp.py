@@ -1,7 +1,8 @@
 """Benchmark: problem (a), the crosswind climb, over 260 pulses: cold and warm solve times
 per solver (on demand, not in CI).
 
-For each solver in ``--solvers`` (``name:hessian``, e.g. ``ipopt:exact``), in one process:
+For each solver in ``--solvers`` (``name:hessian[:prediction]``, e.g. ``ipopt:exact`` or
+``ipopt:exact:reduced`` for the coning-aware reduced map Ψ as the prediction), in one process:
 
 * **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.solve.CompiledOcp`;
   the pulse map Φ is built once and shared, so only the first build pays for casadi's
@@ -22,7 +23,8 @@ against the targets set for problem (a) over 260 pulses (<= 1 s cold, <= 100 ms 
 ``s/it`` is the cold solve's wall time per iteration; Φ is evaluated on ``--threads`` threads
 (default 2).
 
-``--wind`` sets the reference wind speed [m/s] in place of the file's 3 m/s. At 260 pulses
+``--wind`` sets the reference wind speed [m/s] in place of the file's 3 m/s; ``--wind-ramp``
+the continuation steps (0: none) in place of the file's 12. At 260 pulses
 in 3 m/s no solver has converged (bench/README.md has the measurements): the run prints the
 failing statuses after an hour or more. ``--wind 1`` is the 260-pulse problem measured to
 converge (IPOPT, exact Hessian: 432 iterations, about 11 min cold); ``--horizon 130`` is the
@@ -43,7 +45,7 @@ import numpy as np
 
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.ocp.options import HessianApproximation, OcpSolver
+from lightcraft_opt.ocp.options import HessianApproximation, OcpSolver, PredictionMap
 from lightcraft_opt.ocp.problem import TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.ocp.solve import CompiledOcp
@@ -57,7 +59,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--problem", default=str(ROOT / "problems" / "crosswind_climb.toml"))
     parser.add_argument("--horizon", type=int, default=260, help="pulses (default 260)")
-    parser.add_argument("--solvers", default=DEFAULT_SOLVERS, help="name:hessian,...")
+    parser.add_argument(
+        "--solvers",
+        default=DEFAULT_SOLVERS,
+        help="name:hessian[:prediction],... (prediction full or reduced, default full)",
+    )
+    parser.add_argument(
+        "--wind-ramp", type=int, default=None, help="continuation steps instead of the file's"
+    )
     parser.add_argument("--max-iter", type=int, default=300, help="per solve (each ramp step)")
     parser.add_argument(
         "--threads", type=int, default=2, help="Φ evaluated over the horizon on this many threads"
@@ -80,6 +89,8 @@ def main() -> None:
         parameters = {**(problem.parameters or {}), "wind_speed_ref": args.wind}
         problem = replace(problem, parameters=parameters)
     base = replace(loaded.options, max_iter=args.max_iter, threads=args.threads)
+    if args.wind_ramp is not None:
+        base = replace(base, wind_ramp=args.wind_ramp)
     start = time.perf_counter()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(base.pulse_map))
     wind = float(PARAMETERS.get("wind_speed_ref", problem.p))
@@ -97,14 +108,17 @@ def main() -> None:
     first: OcpResult | None = None
     rows = []
     for spec in args.solvers.split(","):
-        name, _, hessian = spec.partition(":")
+        name, _, rest = spec.partition(":")
+        hessian, _, prediction = rest.partition(":")
         options = replace(
             base,
             solver=OcpSolver(name),
             hessian=HessianApproximation(hessian or "exact"),
+            prediction=PredictionMap(prediction or "full"),
         )
         start = time.perf_counter()
-        compiled = CompiledOcp(problem, options, pulse_map=phi)
+        full = options.prediction is PredictionMap.FULL
+        compiled = CompiledOcp(problem, options, pulse_map=phi if full else None)
         build = time.perf_counter() - start
         cold = compiled.solve()
         warm = compiled.solve(x0=moved, warm_start=cold)
