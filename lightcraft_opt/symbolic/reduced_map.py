@@ -9,14 +9,14 @@ along b1. Ψ keeps exactly that (layout :data:`REDUCED_STATE`, frames in docs/fr
 - r_L, v_L (3 each) [m, m/s], L frame;
 - H_L (3) [kg m²/s]: the system angular momentum about the mass centre, L frame (its
   direction is the averaged axis, its size the spin);
-- c (2) [-]: the coning offset, b1's components across Ĥ in the frame T_H = R(up → Ĥ) (east,
-  north) turned by the smallest rotation that takes up to Ĥ: b1 = sqrt(1 - |c|²) Ĥ + c₁ e₁ +
-  c₂ e₂ (|c| = sin of the coning angle);
+- c (2) [-]: the coning offset, b1's components across Ĥ along e₁, e₂, the L east and north
+  axes turned by the smallest rotation that takes up onto Ĥ (the frame T_H = [e₁ e₂ Ĥ]):
+  b1 = sqrt(1 - |c|²) Ĥ + c₁ e₁ + c₂ e₂, |c| the sine of the coning angle;
 - liner_mass, rcs_mass, pulses: Φ's bookkeeping.
 
-The pulse is Φ's own jump (pulse_jump.py) at the full state :func:`lift` builds from z (the
+The pulse is Φ's own jump (pulse_jump.py) at the full state ``lift`` builds from z (the
 attitude from b1 with the twist about it of the smallest rotation from upright, the body rates
-from H in the gauge w_B[b1] = 0), read back by :func:`project`: the same engine, beam and
+from H in the gauge w_B[b1] = 0), read back by ``project``: the same engine, beam and
 optic. The coast splits as Φ's does, but averaged over the cone:
 
 - slow (RK4, ``substeps`` steps a pulse): r, v, H and the propellant under gravity, the
