@@ -43,7 +43,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.linearize.operating_points import jacobian_for
+from lightcraft_opt.linearize.operating_points import PulseMapJacobian, jacobian_for
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import BeamSizeModel, Laser, Model
@@ -159,7 +159,7 @@ def altitude_stability(
     speed: float = 10.0,
     energy: float | None = None,
     matched_side: float | None = None,
-    pulse_map: PulseMap | None = None,
+    pulse_map: PulseMap | PulseMapJacobian | None = None,
     options: PulseMapOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> AltitudeStability:
@@ -169,8 +169,9 @@ def altitude_stability(
     keeps ``matched_side`` [m] at the craft (default the launch side).
 
     One Jacobian of Φ per cell (``options`` default: :class:`PulseMapOptions`, Φ's
-    Jacobian chained over its pieces, built once). ``progress(done, total)`` after each
-    cell.
+    Jacobian chained over its pieces, built once per call; pass a
+    :class:`~.operating_points.PulseMapJacobian` to reuse it across calls).
+    ``progress(done, total)`` after each cell.
     """
     h = grid(altitudes, "altitudes", positive=True)
     d = grid(offsets, "offsets")
@@ -294,7 +295,7 @@ def side_stability(
     altitude: float = 50.0,
     speed: float = 10.0,
     energy: float | None = None,
-    pulse_map: PulseMap | None = None,
+    pulse_map: PulseMap | PulseMapJacobian | None = None,
     options: PulseMapOptions | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> SideStability:

@@ -21,7 +21,7 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, parameter_values
-from lightcraft_opt.linearize import error_state, trim_hover
+from lightcraft_opt.linearize import error_state, pulse_map_jacobian, trim_hover
 from lightcraft_opt.linearize.beam_riding import (
     FocusSchedule,
     altitude_stability,
@@ -52,9 +52,9 @@ def flight5() -> Model:
 def maps(flight5):
     """Φ (8 substeps) of Flight 5 under the shipped linear beam and under the waist model."""
     waist = with_waist(flight5)
-    return {
-        "linear": (flight5, build_pulse_map(flight5, OPTIONS)),
-        "waist": (waist, build_pulse_map(waist, OPTIONS)),
+    return {  # Φ with its chained Jacobian, built once for the module
+        "linear": (flight5, pulse_map_jacobian(build_pulse_map(flight5, OPTIONS))),
+        "waist": (waist, pulse_map_jacobian(build_pulse_map(waist, OPTIONS))),
     }
 
 
@@ -140,12 +140,13 @@ def _growth_a_pulse(model, phi, altitude):
     )
     u = point.u.copy()
     u[PULSE_INPUT.slot("focus").start] = cell.focus[0, 0]
+    step, period = phi.pulse_map.step, phi.pulse_map.period
     x, moved = point.x.copy(), point.x.copy()
     moved[STATE.slot("r_L").start] += 1e-7
     offsets = []
     for k in range(40):
-        x = np.asarray(phi.step(x, u, point.p, k * phi.period)[0]).ravel()
-        moved = np.asarray(phi.step(moved, u, point.p, k * phi.period)[0]).ravel()
+        x = np.asarray(step(x, u, point.p, k * period)[0]).ravel()
+        moved = np.asarray(step(moved, u, point.p, k * period)[0]).ravel()
         offsets.append(np.linalg.norm(error_state(x, moved, ["r_L"])[:2]))
     growth = (offsets[19] / offsets[9]) ** 0.1
     return cell.beam_riding[0, 0, 0], growth, offsets[-1] / 1e-7
