@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 from lightcraft_opt.files.model import load_model
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import (
     Aerodynamics,
     Carrier,
@@ -66,3 +67,16 @@ def flight5_rcs_coarse() -> Model:
     """models/flight5-rcs.toml (Flight 5 with its four rim thrusters) with :data:`COARSE_OPTIC`."""
     model = load_model(MODELS / "flight5-rcs.toml")
     return replace(model, craft=replace(model.craft, engine=COARSE_OPTIC))
+
+
+#: Options of Φ for the RCS profiles whose substep inputs differ from the coast inputs: the
+#: coning rate ω(x_+) feeds every substep (PHASE_LOCKED), substeps read different levels of u
+#: (SUBINTERVALS). Shared by the tests of Φ's derivative chains.
+RCS_PHASE_LOCKED_MAP = PulseMapOptions(substeps=4, dense=2, rcs_profile=RcsProfile.PHASE_LOCKED)
+RCS_SUBINTERVALS_MAP = PulseMapOptions(
+    scheme=CoastScheme.SPLIT,
+    substeps=4,
+    dense=2,
+    rcs_profile=RcsProfile.SUBINTERVALS,
+    rcs_subintervals=2,
+)

@@ -18,11 +18,17 @@ import casadi as ca
 import numpy as np
 import pytest
 from support.jacobian_check import state_step_scale
-from support.models import COARSE_OPTIC, flight5_rcs_coarse, table1_flight5
+from support.models import (
+    COARSE_OPTIC,
+    RCS_PHASE_LOCKED_MAP,
+    RCS_SUBINTERVALS_MAP,
+    flight5_rcs_coarse,
+    table1_flight5,
+)
 
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import ENGINE, STATE, initial_state, nominal_inputs, parameter_values
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
@@ -36,20 +42,8 @@ CASES = {
         lambda: table1_flight5(engine=COARSE_OPTIC),
         PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=2, dense=2),
     ),
-    "rcs-phase-locked": (
-        flight5_rcs_coarse,
-        PulseMapOptions(substeps=4, dense=2, rcs_profile=RcsProfile.PHASE_LOCKED),
-    ),
-    "rcs-subintervals": (
-        flight5_rcs_coarse,
-        PulseMapOptions(
-            scheme=CoastScheme.SPLIT,
-            substeps=4,
-            dense=2,
-            rcs_profile=RcsProfile.SUBINTERVALS,
-            rcs_subintervals=2,
-        ),
-    ),
+    "rcs-phase-locked": (flight5_rcs_coarse, RCS_PHASE_LOCKED_MAP),
+    "rcs-subintervals": (flight5_rcs_coarse, RCS_SUBINTERVALS_MAP),
 }
 
 
