@@ -1,8 +1,9 @@
 """Benchmark: problem (a), the crosswind climb, over 260 pulses: cold and warm solve times
 per solver (on demand, not in CI).
 
-For each solver in ``--solvers`` (``name:hessian[:prediction]``, e.g. ``ipopt:exact`` or
-``ipopt:exact:reduced`` for the coning-aware reduced map Ψ as the prediction), in one process:
+For each solver in ``--solvers`` (``name:hessian[:reduced][:ad]``, e.g. ``ipopt:exact``,
+``ipopt:exact:reduced`` for the coning-aware reduced map Ψ as the prediction, ``:ad`` for
+casadi's AD through the map instead of the chain over compiled pieces), in one process:
 
 * **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.solve.CompiledOcp`;
   the pulse map Φ is built once and shared, so only the first build pays for casadi's
@@ -62,7 +63,8 @@ def main() -> None:
     parser.add_argument(
         "--solvers",
         default=DEFAULT_SOLVERS,
-        help="name:hessian[:prediction],... (prediction full or reduced, default full)",
+        help="name:hessian[:reduced][:ad],... (reduced: the reduced map predicts; ad: casadi's "
+        "AD instead of the compiled chain)",
     )
     parser.add_argument(
         "--wind-ramp", type=int, default=None, help="continuation steps instead of the file's"
@@ -108,13 +110,18 @@ def main() -> None:
     first: OcpResult | None = None
     rows = []
     for spec in args.solvers.split(","):
-        name, _, rest = spec.partition(":")
-        hessian, _, prediction = rest.partition(":")
+        name, *rest = spec.split(":")
+        hessian = rest[0] if rest else "exact"
+        flags = set(rest[1:])
+        unknown = flags - {"reduced", "full", "ad"}
+        if unknown:
+            parser.error(f"--solvers {spec!r}: unknown {sorted(unknown)}; use reduced, full, ad")
         options = replace(
             base,
             solver=OcpSolver(name),
             hessian=HessianApproximation(hessian or "exact"),
-            prediction=PredictionMap(prediction or "full"),
+            prediction=PredictionMap.REDUCED if "reduced" in flags else PredictionMap.FULL,
+            chain_derivatives="ad" not in flags,
         )
         start = time.perf_counter()
         full = options.prediction is PredictionMap.FULL
