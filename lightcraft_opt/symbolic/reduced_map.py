@@ -54,7 +54,7 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.coast import coning_rate_B
+from lightcraft_opt.symbolic.coast import coning_rate_B, rk4_coast
 from lightcraft_opt.symbolic.coast_rhs import coast_terms
 from lightcraft_opt.symbolic.gravity import earth_rate_L
 from lightcraft_opt.symbolic.gyrostat import angular_momentum
@@ -256,11 +256,7 @@ def build_reduced_map(model: Model, options: ReducedMapOptions | None = None) ->
             },
         )
 
-    k1 = slow(t, z)
-    k2 = slow(t + h / 2, z + h / 2 * k1)
-    k3 = slow(t + h / 2, z + h / 2 * k2)
-    k4 = slow(t + h, z + h * k3)
-    z_slow = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    z_slow = rk4_coast(slow, t, z, h, 1)[-1]
     # the fast part: b1 turns about Ĥ by |H| h / A (A: the transverse moment, mid-step H)
     mp = mass_properties(_lift(z, p), p)
     A = mp.I_B[1, 1] + mp.I
