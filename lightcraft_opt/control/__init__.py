@@ -8,6 +8,8 @@ and the closed loop that flies them on the full pulse map Φ.
 - :mod:`.controllers`: the ``step(x)`` interface, :class:`OpenLoopController`,
   :class:`LqrController`, and the coning frame and phase tracker they share;
 - :mod:`.mpc_qp`: the stage-structured QP (HPIPM, ...); :mod:`.mpc`: :class:`MpcController`;
+- :mod:`.director_qp`, :mod:`.director`: :class:`DirectorController`, beam tracking by a
+  real-time iteration on the reduced map Ψ (beam pointing, focus, pulse energy);
 - :mod:`.closed_loop`: :func:`closed_loop`, ``u = controller.step(x); x = Φ(x, u, p)``;
 - :mod:`.result`: :class:`ClosedLoopResult` with the controller's log and step statistics.
 
@@ -24,6 +26,8 @@ from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
     ControlWeights,
+    DirectorOptions,
+    DirectorWeights,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
@@ -45,6 +49,7 @@ if TYPE_CHECKING:
         StageWeights,
         stage_weights,
     )
+    from lightcraft_opt.control.director import DirectorController
     from lightcraft_opt.control.mpc import MpcController
     from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
     from lightcraft_opt.control.prediction_model import (
@@ -72,6 +77,7 @@ _LAZY = {
         ),
         "controllers",
     ),
+    "DirectorController": "director",
     "MpcController": "mpc",
     "NutationQp": "mpc_qp",
     "QpStatus": "mpc_qp",
@@ -102,6 +108,9 @@ __all__ = [
     "ControllerFault",
     "ControllerLog",
     "ControllerStatus",
+    "DirectorController",
+    "DirectorOptions",
+    "DirectorWeights",
     "LqrController",
     "Measurement",
     "MeasurementNoise",

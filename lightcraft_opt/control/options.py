@@ -10,9 +10,12 @@ from lightcraft_opt.errors import OptionError
 from lightcraft_opt.options import checked_int, checked_nonnegative, checked_number
 
 __all__ = [
+    "FOCUS_SCHEDULES",
     "ClosedLoopOptions",
     "ControlWeights",
     "ControllerFault",
+    "DirectorOptions",
+    "DirectorWeights",
     "MeasurementNoise",
     "MpcOptions",
     "MpcSolver",
@@ -139,6 +142,157 @@ class MpcOptions:
             raise OptionError(
                 f"MpcOptions.warm_start must be true or false, got {self.warm_start!r}"
             )
+
+
+#: The director's focus references (linearize.beam_riding.FocusSchedule's values): "far" the
+#: far end of the focus range, "at_craft" the craft's height, "matched" the launch side at
+#: the craft (docs/beam_riding.md).
+FOCUS_SCHEDULES = ("far", "at_craft", "matched")
+
+
+@dataclass(frozen=True)
+class DirectorWeights:
+    """The director's objective per pulse (control/director.py), Bryson's rule: each weight
+    is 1 / tolerance^2; the defaults are the tolerances below.
+
+    Attributes
+    ----------
+    offset : beam offset |r - pointing| (the optic at the mass centre), 1 cm [1/m^2].
+    drift : lateral position |r| off the pad axis, 5 cm [1/m^2]: the beam reaches 10 cm.
+    velocity : lateral velocity |v|, 0.1 m/s [s^2/m^2].
+    coning : |c|, the sine of the coning angle, 2 degrees [1/rad^2].
+    tilt : of the angular momentum from the vertical, 2 degrees [1/rad^2].
+    pointing : beam axis off the pad axis, 10 cm [1/m^2].
+    vergence : the focus's vergence 1/f off the schedule's, 0.002 1/m [m^2] (at 50 m the
+        beam's side moves by ~10 % for it).
+    energy : pulse energy off the flight's, 100 J [1/J^2].
+    move : the pointing's step from the plan it linearises about, 2 cm [1/m^2]: a proximal
+        term that keeps each real-time iteration where its linearisation holds (the
+        engine's push is far from linear across the beam's edge).
+    terminal : factor on the state terms at the end of the horizon, >= 1.
+
+    All >= 0; vergence and energy > 0 (they keep the QP's input weight positive definite).
+    """
+
+    offset: float = 1.0 / 0.01**2
+    drift: float = 1.0 / 0.05**2
+    velocity: float = 1.0 / 0.1**2
+    coning: float = 1.0 / math.radians(2.0) ** 2
+    tilt: float = 1.0 / math.radians(2.0) ** 2
+    pointing: float = 1.0 / 0.1**2
+    vergence: float = 1.0 / 0.002**2
+    energy: float = 1.0 / 100.0**2
+    move: float = 1.0 / 0.02**2
+    terminal: float = 5.0
+
+    def __post_init__(self) -> None:
+        for name in ("offset", "drift", "velocity", "coning", "tilt", "pointing", "move"):
+            checked_nonnegative("DirectorWeights", name, getattr(self, name))
+        for name in ("vergence", "energy"):
+            checked_number("DirectorWeights", name, getattr(self, name), 0.0)
+        checked_nonnegative("DirectorWeights", "terminal", self.terminal)
+        if self.terminal < 1:
+            raise OptionError(f"DirectorWeights.terminal must be >= 1, got {self.terminal!r}")
+
+
+@dataclass(frozen=True)
+class DirectorOptions:
+    """How the director (control/director.py) plans every pulse.
+
+    Attributes
+    ----------
+    horizon : pulses predicted on the reduced map Ψ, >= 2.
+    weights : the objective (:class:`DirectorWeights`).
+    solver : QP solver (:class:`MpcSolver`); HPIPM on the stage structure.
+    max_iter : QP iteration cap, >= 1.
+    tol : QP tolerance on the residuals, in (0, 1).
+    time_budget : wall time the QP may take [s], > 0; a later answer is discarded and the
+        shifted plan flies (not applied to IPOPT, the reference).
+    relinearize : stages whose Jacobians are computed afresh each pulse, in [1, horizon]:
+        the first (at the measured state), the new last one and the others in turn; the
+        rest are the previous pulses' Jacobians, shifted (a multi-level real-time
+        iteration). ``horizon``: all, the plain real-time iteration.
+    focus_schedule : the focus reference, one of :data:`FOCUS_SCHEDULES`.
+    energy_range : (lowest, highest) pulse energy as fractions of the flight's, 0 <= low
+        <= high; the highest is capped at the laser's maximum.
+    quadrature : (radial, azimuthal) points of the optic quadrature of the director's
+        model of the engine, each >= 2 (coarser than the plant's: the planner's belief).
+    disturbance_gain : in [0, 1): how fast the lateral velocity the prediction misses each
+        pulse (wind, model error) is learnt and added to the prediction; 0 never.
+    nutation : on a craft with RCS, fly the nutation MPC's thrusters alongside (its beam
+        pointing replaced by the director's); False leaves the RCS off.
+    warm_start : start each QP from the previous one shifted by a pulse.
+    """
+
+    horizon: int = 10
+    weights: DirectorWeights = DirectorWeights()
+    solver: MpcSolver = MpcSolver.HPIPM
+    max_iter: int = 30
+    tol: float = 1e-6
+    time_budget: float = 20e-3
+    relinearize: int = 3
+    focus_schedule: str = "matched"
+    energy_range: tuple[float, float] = (0.5, 1.0)
+    quadrature: tuple[int, int] = (4, 16)
+    disturbance_gain: float = 0.05
+    nutation: bool = True
+    warm_start: bool = True
+
+    def __post_init__(self) -> None:
+        checked_int("DirectorOptions", "horizon", self.horizon, 2)
+        if not isinstance(self.weights, DirectorWeights):
+            raise OptionError(
+                f"DirectorOptions.weights must be a DirectorWeights, got {self.weights!r}"
+            )
+        if not isinstance(self.solver, MpcSolver):
+            allowed = [s.value for s in MpcSolver]
+            raise OptionError(
+                f"DirectorOptions.solver must be one of {allowed}, got {self.solver!r}"
+            )
+        checked_int("DirectorOptions", "max_iter", self.max_iter, 1)
+        checked_number("DirectorOptions", "tol", self.tol, 0.0, 1.0)
+        checked_number("DirectorOptions", "time_budget", self.time_budget, 0.0)
+        checked_int("DirectorOptions", "relinearize", self.relinearize, 1)
+        if self.relinearize > self.horizon:
+            raise OptionError(
+                f"DirectorOptions.relinearize must be <= horizon ({self.horizon}), "
+                f"got {self.relinearize}"
+            )
+        if self.focus_schedule not in FOCUS_SCHEDULES:
+            raise OptionError(
+                f"DirectorOptions.focus_schedule must be one of {list(FOCUS_SCHEDULES)}, "
+                f"got {self.focus_schedule!r}"
+            )
+        e = self.energy_range
+        if not (
+            isinstance(e, tuple)
+            and len(e) == 2
+            and all(isinstance(v, int | float) and not isinstance(v, bool) for v in e)
+            and all(math.isfinite(v) for v in e)
+            and 0 <= e[0] <= e[1]
+        ):
+            raise OptionError(
+                f"DirectorOptions.energy_range must be (low, high) with 0 <= low <= high, got {e!r}"
+            )
+        q = self.quadrature
+        if not (
+            isinstance(q, tuple)
+            and len(q) == 2
+            and all(isinstance(v, int) and not isinstance(v, bool) and v >= 2 for v in q)
+        ):
+            raise OptionError(
+                f"DirectorOptions.quadrature must be (radial, azimuthal) integers >= 2, got {q!r}"
+            )
+        checked_nonnegative("DirectorOptions", "disturbance_gain", self.disturbance_gain)
+        if self.disturbance_gain >= 1:
+            raise OptionError(
+                f"DirectorOptions.disturbance_gain must be in [0, 1), got {self.disturbance_gain!r}"
+            )
+        for name in ("nutation", "warm_start"):
+            if not isinstance(getattr(self, name), bool):
+                raise OptionError(
+                    f"DirectorOptions.{name} must be true or false, got {getattr(self, name)!r}"
+                )
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,391 @@
+"""The director: receding-horizon beam tracking at pulse rate on the reduced map Ψ.
+
+Every pulse, ``u = director.step(x)`` (docs/director.md):
+
+1. read the measured state as Ψ's z (symbolic/reduced_map.py: position, velocity, angular
+   momentum, the body axis's coning offset, the mass bookkeeping);
+2. take the previous plan shifted by a pulse as the trajectory (z̄_j, ū_j), with z̄_0 the
+   measured state; evaluate Ψ along it (the defects d_j) and Ψ's Jacobians at the first
+   stage, the new last stage and ``relinearize - 2`` others in turn (the rest are the last
+   pulses' Jacobians, shifted: a multi-level real-time iteration; ``relinearize = horizon``
+   is the plain one) by the explicit chain over compiled pieces
+   (symbolic/reduced_map_derivatives.py);
+3. solve one QP on the stage structure (director_qp.py, HPIPM), warm-started by shifting:
+   Gauss-Newton least squares on the beam offset (the optic at the mass centre), the drift
+   from the pad axis, the lateral velocity, the coning, the tilt of H, the pointing, the
+   focus's vergence 1/f against the focus schedule (linearize.beam_riding.scheduled_focus:
+   by default the launch side matched at the craft's height) and the pulse energy against
+   the flight's; the pointing inside ±pointing_limit, the focus inside the laser's range,
+   the energy inside ``energy_range``; a proximal term on the pointing's step keeps each
+   iteration where its linearisation holds;
+4. fly the first input and keep the plan. A solve that fails or overruns the budget is
+   discarded and the plan's next input flies (status ``fallback_*``); once the plan is used
+   up, the schedule's focus and the flight's energy with the beam on the craft.
+
+The focus is decided in its vergence κ = 1/f: the beam's side at height z is
+a0 sqrt((1 - z κ)² + (z/z_R)²), affine in κ inside the root, so the QP sees a nearly linear
+lever where f itself (2-500 m) would be badly scaled.
+
+Wind and model error. Ψ's prediction misses what the director does not know (the wind, the
+plant's dispersion): each pulse the lateral velocity the last plan predicted for now is
+compared with the measured one and ``disturbance_gain`` of the difference is added to a
+per-pulse velocity increment that every predicted stage then carries (an integrating
+disturbance estimate: offset-free tracking in a steady crosswind).
+
+On a craft with RCS the nutation MPC (mpc.py) flies alongside (``options.nutation``): it
+fires the thrusters against the coning and the tilt as it does alone, and its beam pointing
+is replaced by the director's. Ψ carries only held RCS levels, which average out over a
+coning turn (mpc.py, "Actuators"): the thrusters are the MPC's, the beam the director's.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from lightcraft_opt.compiled import reduced_derivatives_for
+from lightcraft_opt.control.controllers import Controller
+from lightcraft_opt.control.director_qp import DirectorQp, DirectorSolution
+from lightcraft_opt.control.mpc_qp import QpStatus
+from lightcraft_opt.control.options import ControllerFault, DirectorOptions, MpcSolver
+from lightcraft_opt.control.result import ControllerStatus, StepStats
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.layout import (
+    PULSE_INPUT,
+    VectorLayout,
+    initial_state,
+    nominal_inputs,
+    parameter_values,
+)
+from lightcraft_opt.linearize.beam_riding import FocusSchedule, scheduled_focus
+from lightcraft_opt.params import Model
+from lightcraft_opt.symbolic.reduced_map import REDUCED_STATE, build_reduced_map
+
+__all__ = ["DirectorController", "director_model"]
+
+_R = REDUCED_STATE.index("r_L")
+_V = REDUCED_STATE.index("v_L")
+_H = REDUCED_STATE.index("H_L")
+_C = REDUCED_STATE.index("coning")
+NU = 4  # the QP's inputs: pointing_L east, north [m], vergence κ [1/m], energy [J]
+
+
+def director_model(model: Model, options: DirectorOptions) -> Model:
+    """The director's model of ``model``: the same craft with the optic quadrature of
+    ``options.quadrature`` (the planner's coarser belief of the engine)."""
+    engine = model.craft.engine
+    radial, azimuthal = options.quadrature
+    coarse = replace(engine, quadrature_radial=radial, quadrature_azimuthal=azimuthal)
+    return replace(model, craft=replace(model.craft, engine=coarse))
+
+
+def _outputs(nominal_h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(C_z (14, nz), C_u (14, NU), C_terminal (8, nz), names): the objective's outputs,
+    linear in z and the QP's inputs (rows: offset 2, drift 2, velocity 2, coning 2, tilt 2,
+    pointing 2, vergence, energy)."""
+    nz = REDUCED_STATE.size
+    Cz, Cu = np.zeros((14, nz)), np.zeros((14, NU))
+    for k in range(2):
+        Cz[k, _R.start + k], Cu[k, k] = 1.0, -1.0  # offset r - pointing
+        Cz[2 + k, _R.start + k] = 1.0  # drift
+        Cz[4 + k, _V.start + k] = 1.0  # lateral velocity
+        Cz[6 + k, _C.start + k] = 1.0  # coning
+        Cz[8 + k, _H.start + k] = 1.0 / nominal_h  # tilt of H
+        Cu[10 + k, k] = 1.0  # pointing
+    Cu[12, 2] = 1.0
+    Cu[13, 3] = 1.0
+    Ct = np.zeros((8, nz))
+    for k in range(2):
+        Ct[k, _R.start + k] = 1.0  # offset and drift at the end: the craft's position
+        Ct[2 + k, _V.start + k] = 1.0
+        Ct[4 + k, _C.start + k] = 1.0
+        Ct[6 + k, _H.start + k] = 1.0 / nominal_h
+    return Cz, Cu, Ct, np.arange(14)
+
+
+class DirectorController:
+    """The director (module docstring), built once per model.
+
+    Parameters
+    ----------
+    model : the controller's model (its numbers are what it believes).
+    inputs : the plant Φ's map-input layout (the director's input is laid out as it).
+    options : :class:`~lightcraft_opt.control.options.DirectorOptions`.
+    nutation : the nutation MPC flown alongside on a craft with RCS (None: RCS off).
+    p : the controller's parameter vector (default its model's).
+    compiled : compile Ψ's pieces (None: ``compiled.compile_by_default``).
+
+    Attributes
+    ----------
+    last : :class:`StepStats` of the latest step.
+    plan : (z (N + 1, 14), u (N, 4)) the latest plan (QP inputs: pointing, κ, energy).
+    disturbance : (2,) the learnt lateral velocity increment a pulse [m/s, L east/north].
+    build_time : [s].
+    """
+
+    name = "director"
+
+    def __init__(
+        self,
+        model: Model,
+        inputs: VectorLayout,
+        options: DirectorOptions | None = None,
+        *,
+        nutation: Controller | None = None,
+        p: np.ndarray | None = None,
+        compiled: bool | None = None,
+    ) -> None:
+        start = time.perf_counter()
+        self.options = opts = options or DirectorOptions()
+        if not isinstance(opts, DirectorOptions):
+            raise ParameterError("options", f"must be DirectorOptions, got {opts!r}")
+        self.model = director_model(model, opts)
+        self.inputs = inputs
+        self.p = parameter_values(self.model) if p is None else np.asarray(p, dtype=float)
+        self.nutation = nutation
+        psi = build_reduced_map(self.model)
+        self._project = psi.project
+        self._psi_inputs = psi.inputs
+        self.period = psi.period
+        d = reduced_derivatives_for(self.model, psi.options, compiled=compiled)
+        self._value, self._stage = d.value, d.stage
+        N = opts.horizon
+        self._values = d.value.map(N)
+        laser = self.model.laser
+        self.laser = laser
+        self.schedule = FocusSchedule(opts.focus_schedule)
+        self.energy = model.flight.pulse_energy
+        low, high = opts.energy_range
+        self.u_lower = np.array(
+            [
+                -laser.pointing_limit,
+                -laser.pointing_limit,
+                1 / laser.focus_range[1],
+                low * self.energy,
+            ]
+        )
+        self.u_upper = np.array(
+            [
+                laser.pointing_limit,
+                laser.pointing_limit,
+                1 / laser.focus_range[0],
+                min(high * self.energy, laser.pulse_energy_max),
+            ]
+        )
+        z_nom = np.asarray(self._project(initial_state(model), self.p)).ravel()
+        self._h_nominal = float(np.linalg.norm(z_nom[_H]))
+        w = opts.weights
+        Cz, Cu, Ct, _ = _outputs(self._h_nominal)
+        W = np.array(
+            [w.offset] * 2
+            + [w.drift] * 2
+            + [w.velocity] * 2
+            + [w.coning] * 2
+            + [w.tilt] * 2
+            + [w.pointing] * 2
+            + [w.vergence, w.energy]
+        )
+        Wt = w.terminal * np.array(
+            [w.offset + w.drift] * 2 + [w.velocity] * 2 + [w.coning] * 2 + [w.tilt] * 2
+        )
+        C = np.hstack([Cz, Cu])
+        self._C, self._W, self._Ct, self._Wt = C, W, Ct, Wt
+        H_stage = 2 * C.T @ (W[:, None] * C)
+        nz = Cz.shape[1]
+        H_stage[nz : nz + 2, nz : nz + 2] += 2 * w.move * np.eye(2)  # proximal, no gradient
+        self.qp = DirectorQp(
+            H_stage,
+            2 * Ct.T @ (Wt[:, None] * Ct),
+            N,
+            opts.solver,
+            opts.max_iter,
+            opts.tol,
+        )
+        self._u_full = nominal_inputs(self.model, psi.inputs)
+        self._u_plant = nominal_inputs(model, inputs)
+        n_pulse = PULSE_INPUT.size
+        if inputs.names[:3] != ("pointing_L", "focus", "energy") or inputs.size < n_pulse:
+            raise ParameterError(
+                "inputs", "must start with the pulse input (pointing, focus, energy)"
+            )
+        self.reset()
+        self.build_time = time.perf_counter() - start
+
+    # ----------------------------------------------------------------- interface
+    def reset(self) -> None:
+        """Forget the plan, the Jacobians, the warm start and the disturbance (a new flight)."""
+        self.plan: tuple[np.ndarray, np.ndarray] | None = None
+        self._A: np.ndarray | None = None
+        self._B: np.ndarray | None = None
+        self._start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._age = 0
+        self._turn = 0
+        self.disturbance = np.zeros(2)
+        self.last = StepStats(ControllerStatus.SOLVED)
+        if self.nutation is not None:
+            self.nutation.reset()
+
+    def step(
+        self, x: np.ndarray, t: float = 0.0, *, fault: ControllerFault | None = None
+    ) -> np.ndarray:
+        """The map input of the pulse fired now, from the (measured) full state ``x`` (STATE)
+        at pulse time ``t`` [s]; ``fault`` injects a solver failure (closed_loop.py)."""
+        start = time.perf_counter()
+        opts = self.options
+        z0 = np.asarray(self._project(np.asarray(x, dtype=float), self.p)).ravel()
+        Z, U = self._trajectory(z0, t)
+        sol = self._solve(Z, U, t, fault)
+        late = fault is ControllerFault.LATE or (
+            sol.solve_time > opts.time_budget and opts.solver is not MpcSolver.IPOPT
+        )
+        if sol.status is QpStatus.SOLVED and not late:
+            self.plan = (Z + sol.dz, U + sol.du)
+            self._start = self.qp.shifted(sol) if opts.warm_start else None
+            self._age = 0
+            v = self.plan[1][0]
+            status, message = ControllerStatus.SOLVED, sol.message
+        else:
+            v = self._fallback(z0)
+            if late and sol.status is QpStatus.SOLVED:
+                status = ControllerStatus.FALLBACK_LATE
+                message = f"late: {sol.solve_time * 1e3:.3f} ms > budget"
+            else:
+                status, message = ControllerStatus.FALLBACK_FAILED, sol.message
+        u = self._map_input(v)
+        if self.nutation is not None:
+            u_rcs = self.nutation.step(x, t, fault=fault)
+            u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]
+        self.last = StepStats(
+            status, sol.solve_time, time.perf_counter() - start, sol.iterations, message
+        )
+        return u
+
+    # ----------------------------------------------------------------- the iteration
+    def _trajectory(self, z0: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(Z (N + 1, nz), U (N, NU)): the previous plan shifted, z̄_0 the measurement; or,
+        without a plan, the rollout of the schedule's input with the beam on the craft."""
+        N = self.options.horizon
+        if self.plan is None or self._A is None:
+            u0 = np.array(
+                [
+                    *np.clip(z0[_R][:2], self.u_lower[:2], self.u_upper[:2]),
+                    self._vergence(z0[_R][2]),
+                    np.clip(self.energy, self.u_lower[3], self.u_upper[3]),
+                ]
+            )
+            Z, U = np.zeros((N + 1, z0.size)), np.tile(u0, (N, 1))
+            Z[0] = z0
+            self._A = np.zeros((N, z0.size, z0.size))
+            self._B = np.zeros((N, z0.size, NU))
+            for j in range(N):
+                U[j, 2] = self._vergence(Z[j, _R][2])
+                z_next, _, A, B = self._stage(Z[j], self._full(U[j]), self.p, t + j * self.period)
+                Z[j + 1] = np.asarray(z_next).ravel()
+                self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
+            self._start = None
+            return Z, U
+        # observe what the last plan missed: the lateral velocity now against its prediction
+        zp, up = self.plan
+        gain = self.options.disturbance_gain
+        if gain and self._age == 0:
+            miss = z0[_V][:2] - zp[1, _V][:2]
+            self.disturbance = self.disturbance + gain * miss
+        Z = np.vstack([z0, zp[2:], 2 * zp[-1] - zp[-2]])
+        U = np.vstack([up[1:], up[-1:]])
+        A, B = self._A, self._B
+        assert B is not None  # set with A
+        self._A = np.concatenate([A[1:], A[-1:]])
+        self._B = np.concatenate([B[1:], B[-1:]])
+        return Z, U
+
+    def _solve(
+        self, Z: np.ndarray, U: np.ndarray, t: float, fault: ControllerFault | None
+    ) -> DirectorSolution:
+        N, nz = self.options.horizon, Z.shape[1]
+        assert self._A is not None and self._B is not None
+        times = t + self.period * np.arange(N)
+        full = np.array([self._full(u) for u in U])
+        Zn, _ = self._values(Z[:N].T, full.T, self.p, times)
+        Zn = np.asarray(Zn).T
+        refresh = {0, N - 1}
+        others = N - 2
+        for _ in range(max(0, min(self.options.relinearize, N) - len(refresh))):
+            refresh.add(1 + self._turn % others)
+            self._turn += 1
+        for j in sorted(refresh):
+            _, _, A, B = self._stage(Z[j], full[j], self.p, times[j])
+            self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
+        d = Zn - Z[1:]
+        d[:, _V.start : _V.start + 2] += self.disturbance
+        d[:, _R.start : _R.start + 2] += 0.5 * self.period * self.disturbance
+        # Gauss-Newton gradients: 2 C'W (C x̄ - y_ref)
+        X = np.hstack([Z[:N], U])
+        ref = np.zeros((N, 14))
+        ref[:, 12] = [self._vergence(z[_R][2]) for z in Z[:N]]
+        ref[:, 13] = self.energy
+        res = X @ self._C.T - ref
+        g_stage = 2 * (res * self._W) @ self._C
+        g_term = 2 * ((self._Ct @ Z[N]) * self._Wt) @ self._Ct
+        g = np.concatenate([g_stage.ravel(), g_term])
+        return self.qp.solve(
+            self._A,
+            self._B,
+            d,
+            g,
+            np.zeros(nz),
+            self.u_lower - U,
+            self.u_upper - U,
+            self._start,
+            fault,
+        )
+
+    # ----------------------------------------------------------------- helpers
+    def _vergence(self, altitude: float) -> float:
+        """κ_ref = 1 / the schedule's focus at ``altitude`` [m] (above the director)."""
+        f = scheduled_focus(self.schedule, max(float(altitude), 0.0), self.laser, self.p)
+        return 1.0 / f
+
+    def _full(self, v: np.ndarray) -> np.ndarray:
+        """Ψ's map input of the QP's input v (pointing, κ, energy): focus 1/κ, RCS off."""
+        u = self._u_full.copy()
+        u[0:2] = v[0:2]
+        u[2] = 1.0 / v[2]
+        u[3] = v[3]
+        return u
+
+    def _qp_columns(self, B: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Ψ's input Jacobian in the QP's inputs: ∂/∂κ = -f² ∂/∂f at f = 1/κ."""
+        f = 1.0 / v[2]
+        return np.column_stack([B[:, 0], B[:, 1], -(f**2) * B[:, 2], B[:, 3]])
+
+    def _map_input(self, v: np.ndarray) -> np.ndarray:
+        """The plant's map input of the QP input v, inside the laser's ranges."""
+        v = np.clip(v, self.u_lower, self.u_upper)
+        u = self._u_plant.copy()
+        u[0:2] = v[0:2]
+        u[2] = 1.0 / v[2]
+        u[3] = v[3]
+        return u
+
+    def _fallback(self, z0: np.ndarray) -> np.ndarray:
+        """The plan's next input, or (used up, or none) the beam on the craft with the
+        schedule's focus and the flight's energy. The plan is kept, one pulse older."""
+        self._age += 1
+        if self.plan is not None and self._age < self.options.horizon:
+            zp, up = self.plan
+            self.plan = (np.vstack([zp[1:], zp[-1:]]), np.vstack([up[1:], up[-1:]]))
+            if self._A is not None and self._B is not None:
+                self._A = np.concatenate([self._A[1:], self._A[-1:]])
+                self._B = np.concatenate([self._B[1:], self._B[-1:]])
+            self._start = None
+            return up[1].copy()
+        self.plan = None
+        return np.array(
+            [
+                *np.clip(z0[_R][:2], self.u_lower[:2], self.u_upper[:2]),
+                self._vergence(z0[_R][2]),
+                self.energy,
+            ]
+        )
