@@ -12,7 +12,7 @@ from pathlib import Path
 
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
-from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
+from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.errors import LightcraftError, ParameterError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.campaign import load_campaign
@@ -114,7 +114,7 @@ def _optimize(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
-CONTROLLERS = ("mpc", "lqr", "none")
+CONTROLLERS = ("mpc", "lqr", "director", "none")
 
 
 def _closed_loop(args: argparse.Namespace) -> int:
@@ -129,11 +129,19 @@ def _closed_loop(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("runs") / f"{source.stem}-{args.controller}"
     out.mkdir(parents=True, exist_ok=True)
     print(f"building the plant and the {args.controller} controller for {problem.title!r} ...")
-    plant = build_pulse_map(model, PLANT_MAP)
+    plant = build_pulse_map(model, plant_options(model))
     assert plant.inputs is not None  # build_pulse_map always records it
     controller: Controller
     if args.controller == "none":
         controller = OpenLoopController(model, plant.inputs)
+    elif args.controller == "director":
+        from lightcraft_opt.control.director import DirectorController
+
+        nutation = None
+        if model.craft.rcs is not None and problem.director.nutation:
+            prediction = coning_model(model, pulse_map=plant, cache=True)
+            nutation = MpcController(model, problem.mpc, prediction=prediction)
+        controller = DirectorController(model, plant.inputs, problem.director, nutation=nutation)
     else:
         # linearised once per model structure and numbers, then read from the disk cache
         prediction = coning_model(model, pulse_map=plant, cache=True)
@@ -159,7 +167,9 @@ def _closed_loop(args: argparse.Namespace) -> int:
         result,
         title=problem.title,
         capture_radius=model.craft.engine.capture_radius,
-        budget=problem.mpc.time_budget if args.controller == "mpc" else None,
+        budget={"mpc": problem.mpc.time_budget, "director": problem.director.time_budget}.get(
+            args.controller
+        ),
     )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)

@@ -38,14 +38,13 @@ from lightcraft_opt.campaign.spec import (
     CampaignController,
 )
 from lightcraft_opt.compiled import pulse_map_for
-from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
+from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import (
     STATE,
     parameter_values,
     tilted_attitude,
 )
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 
@@ -138,7 +137,7 @@ class _Flyer:
     def __init__(self, campaign: Campaign) -> None:
         self.campaign = c = campaign
         # the closed loop's plant; a craft without RCS: Φ's defaults (no RCS profile)
-        options = PLANT_MAP if c.model.craft.rcs else PulseMapOptions()
+        options = plant_options(c.model)
         interpreted = pulse_map_for(c.model, options, compiled=False)
         assert interpreted.inputs is not None  # build_pulse_map always records it
         self.controller = _controller(c, interpreted)
@@ -182,6 +181,18 @@ def _controller(c: Campaign, plant: PulseMap) -> Controller:
     from lightcraft_opt.control.mpc import MpcController
     from lightcraft_opt.control.prediction_model import coning_model
 
+    if c.controller is CampaignController.DIRECTOR:
+        from lightcraft_opt.control.director import DirectorController
+
+        nutation = None
+        if c.model.craft.rcs is not None and c.director.nutation:
+            prediction = coning_model(c.model, pulse_map=plant, cache=True)
+            mpc = dataclasses.replace(c.mpc, time_budget=CAMPAIGN_TIME_BUDGET)
+            nutation = MpcController(c.model, mpc, prediction=prediction)
+        director = dataclasses.replace(c.director, time_budget=CAMPAIGN_TIME_BUDGET)
+        return DirectorController(
+            c.model, plant.inputs, director, nutation=nutation, compiled=c.compiled
+        )
     prediction = coning_model(c.model, pulse_map=plant, cache=True)
     if c.controller is CampaignController.MPC:
         options = dataclasses.replace(c.mpc, time_budget=CAMPAIGN_TIME_BUDGET)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.campaign.dispersions import Dispersions
-from lightcraft_opt.control.options import ClosedLoopOptions, MpcOptions
+from lightcraft_opt.control.options import ClosedLoopOptions, DirectorOptions, MpcOptions
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import STATE, checked_vector, initial_state
 from lightcraft_opt.params import Model
@@ -76,10 +76,11 @@ DISPERSED_PARAMETER = {
 
 
 class CampaignController(Enum):
-    """Who flies the runs: the MPC, the LQR, or nobody (the open loop)."""
+    """Who flies the runs: the MPC, the LQR, the director, or nobody (the open loop)."""
 
     MPC = "mpc"
     LQR = "lqr"
+    DIRECTOR = "director"
     NONE = "none"
 
 
@@ -95,6 +96,8 @@ class Campaign:
     x0 : (STATE.size,) state at the first pulse (default: on the pad, upright).
     mpc : the MPC's options (the LQR takes their weights); ``time_budget`` is replaced
         by :data:`CAMPAIGN_TIME_BUDGET` in runs.
+    director : the director's options (with the MPC's for the RCS of a craft that has
+        one); ``time_budget`` is replaced by :data:`CAMPAIGN_TIME_BUDGET` in runs.
     loop : the closed loop's noise, relative dispersion, drop-outs and injected faults;
         its ``seed`` is replaced by each run's (:func:`.dispersions.loop_seed`).
     plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not
@@ -110,6 +113,7 @@ class Campaign:
     controller: CampaignController = CampaignController.NONE
     x0: np.ndarray | None = None
     mpc: MpcOptions = field(default_factory=MpcOptions)
+    director: DirectorOptions = field(default_factory=DirectorOptions)
     loop: ClosedLoopOptions = field(default_factory=ClosedLoopOptions)
     plant_parameters: Mapping[str, Any] = field(default_factory=dict)
     dispersions: Dispersions = field(default_factory=Dispersions)
@@ -140,6 +144,7 @@ class Campaign:
             self.controller.value,
             repr(np.asarray(self.x0).tolist()),
             repr(self.mpc),
+            repr(self.director),
             repr(self.loop),
             repr(p),
             repr(self.dispersions),

@@ -56,10 +56,16 @@ from lightcraft_opt.symbolic.pulse_map import PulseMap
 if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
     from lightcraft_opt.control.controllers import Controller
 
-__all__ = ["closed_loop", "disperse", "measured"]
+__all__ = ["closed_loop", "disperse", "measured", "plant_options"]
 
 #: Map of the plant unless given: Φ's defaults with the phase-locked RCS profile.
 PLANT_MAP = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED)
+
+
+def plant_options(model: Model) -> PulseMapOptions:
+    """The plant's map options for ``model``: :data:`PLANT_MAP` on a craft with RCS, Φ's
+    defaults (held levels, no thrusters to phase-lock) without."""
+    return PLANT_MAP if model.craft.rcs is not None else PulseMapOptions()
 
 
 def disperse(p: np.ndarray, dispersion: PlantDispersion, rng: np.random.Generator) -> np.ndarray:
@@ -139,7 +145,7 @@ def closed_loop(
     opts = options or ClosedLoopOptions()
     if not (np.isfinite(duration) and duration > 0):
         raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
-    phi = pulse_map or pulse_map_for(model, PLANT_MAP)
+    phi = pulse_map or pulse_map_for(model, plant_options(model))
     lay = phi.inputs
     if lay is None:
         raise ParameterError("pulse_map", "needs its input layout (build_pulse_map gives it)")

@@ -5,7 +5,7 @@ A campaign file is a closed-loop file (files/closed_loop.py: the model, ``[initi
 wind) with two more tables::
 
     [campaign]
-    controller = "mpc"                     # "lqr", or "none": the open loop (default)
+    controller = "mpc"                     # "lqr", "director", or "none": the open loop (default)
     compiled = false                       # optional: Φ interpreted (default: compiled to C
                                            # where gcc works, compiled.py)
 
@@ -107,6 +107,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
             controller=table.values.get("controller", CampaignController.NONE),
             x0=problem.x0,
             mpc=problem.mpc,
+            director=problem.director,
             loop=problem.loop,
             plant_parameters=problem.plant_parameters,
             dispersions=dispersions,

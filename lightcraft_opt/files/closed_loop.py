@@ -38,6 +38,26 @@ A closed-loop file::
     pointing_cm = 20.0
     rcs_n = 0.5
 
+    [director]                             # DirectorOptions (lightcraft closed-loop
+    horizon_pulses = 10                    #   --controller director); all optional
+    relinearize = 3                        # stages linearised afresh a pulse
+    focus_schedule = "matched"             # "far", "at_craft"
+    energy_range = [0.5, 1.0]              # fractions of the flight's pulse energy
+    disturbance_gain = 0.05
+    nutation = true                        # the nutation MPC fires the RCS alongside
+    time_budget_ms = 20.0                  # also solver, max_iter, tol, warm_start
+
+    [director.tolerances]                  # weight = 1 / tolerance^2
+    offset_cm = 1.0
+    drift_cm = 5.0
+    velocity_mps = 0.1
+    coning_deg = 2.0
+    tilt_deg = 2.0
+    pointing_cm = 10.0
+    move_cm = 2.0
+    vergence = 0.002                       # [1/m] on the focus's 1/f against the schedule
+    energy_j = 100.0
+
     [plant]                                # what the controller does not know
     dropout_rate = 0.05
     seed = 0
@@ -80,6 +100,8 @@ from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
     ControlWeights,
+    DirectorOptions,
+    DirectorWeights,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
@@ -101,7 +123,7 @@ from lightcraft_opt.layout import PARAMETERS, STATE
 
 __all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
-_TABLES = ("model_overrides", "initial", "controller", "plant")
+_TABLES = ("model_overrides", "initial", "controller", "director", "plant")
 _TOP: dict[str, Spec] = {"title": TEXT, "model": TEXT, "duration": quantity("time")}
 _CONING: dict[str, Spec] = {"coning": quantity("angle"), "coning_azimuth": quantity("angle")}
 _SWITCH = Spec("switch")
@@ -125,6 +147,31 @@ _TOLERANCES: dict[str, Spec] = {
     "velocity": quantity("speed"),
     "pointing": quantity("length"),
     "rcs": quantity("force"),
+}
+_DIRECTOR: dict[str, Spec] = {
+    "horizon_pulses": INTEGER,
+    "solver": choice(MpcSolver),
+    "max_iter": INTEGER,
+    "tol": NUMBER,
+    "time_budget": quantity("time"),
+    "relinearize": INTEGER,
+    "focus_schedule": TEXT,
+    "energy_range": NUMBERS,
+    "disturbance_gain": NUMBER,
+    "nutation": _SWITCH,
+    "warm_start": _SWITCH,
+}
+#: ``[director.tolerances]``: DirectorWeights field -> quantity of its tolerance.
+_DIRECTOR_TOLERANCES: dict[str, Spec] = {
+    "offset": quantity("length"),
+    "drift": quantity("length"),
+    "velocity": quantity("speed"),
+    "coning": quantity("angle"),
+    "tilt": quantity("angle"),
+    "pointing": quantity("length"),
+    "move": quantity("length"),
+    "vergence": NUMBER,
+    "energy": quantity("energy"),
 }
 _PLANT: dict[str, Spec] = {
     "dropout_rate": NUMBER,
@@ -163,6 +210,7 @@ class ClosedLoopProblem:
     x0 : (STATE.size,) state at the first pulse.
     duration : [s].
     mpc : the MPC's options (the LQR takes their weights).
+    director : the director's options (``[director]``).
     loop : noise, dispersion, drop-outs, injected faults, seed.
     plant_parameters : {PARAMETERS slot: value} the plant has and the controller does
         not (its wind).
@@ -174,6 +222,7 @@ class ClosedLoopProblem:
     x0: np.ndarray
     duration: float
     mpc: MpcOptions
+    director: DirectorOptions
     loop: ClosedLoopOptions
     plant_parameters: dict[str, Any]
     title: str
@@ -218,6 +267,7 @@ def closed_loop_from_tables(
         x0=x0,
         duration=float(t_end),
         mpc=_mpc_options(src, controller),
+        director=_director_options(src, data.get("director", {})),
         loop=_loop_options(src, plant),
         plant_parameters=_plant_wind(src, plant),
         title=top.values.get("title", file.stem),
@@ -264,6 +314,33 @@ def _mpc_options(src: str, raw: Any) -> MpcOptions:
         return MpcOptions(**kwargs, weights=ControlWeights(**weights))
     except OptionError as err:
         raise ProblemFileError(src, _option_key(str(err), table, tol), str(err)) from err
+
+
+def _director_options(src: str, raw: Any) -> DirectorOptions:
+    if not isinstance(raw, dict):
+        raise ProblemFileError(src, "director", f"must be a table [director], got {raw!r}")
+    table = read_table(src, raw, "director", _DIRECTOR, tables=("tolerances",))
+    tol = read_table(src, raw.get("tolerances", {}), "director.tolerances", _DIRECTOR_TOLERANCES)
+    weights: dict[str, float] = {}
+    for name, v in tol.values.items():
+        if not (math.isfinite(v) and v > 0):
+            raise ProblemFileError(src, tol.key(name), f"a tolerance must be positive, got {v}")
+        weights[name] = 1.0 / v**2
+    kwargs = {("horizon" if k == "horizon_pulses" else k): v for k, v in table.values.items()}
+    if "energy_range" in kwargs:
+        kwargs["energy_range"] = tuple(float(v) for v in kwargs["energy_range"])
+    try:
+        return DirectorOptions(**kwargs, weights=DirectorWeights(**weights))
+    except OptionError as err:
+        message = str(err)
+        key = "director"
+        for name in _DIRECTOR_TOLERANCES:
+            if f"DirectorWeights.{name} " in message:
+                key = tol.key(name)
+        for name in (*_DIRECTOR, "horizon"):
+            if f"DirectorOptions.{name} " in message:
+                key = table.key("horizon_pulses" if name == "horizon" else name)
+        raise ProblemFileError(src, key, message) from err
 
 
 def _option_key(message: str, table: Table, tol: Table) -> str:

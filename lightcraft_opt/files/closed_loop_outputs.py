@@ -94,6 +94,7 @@ def write_closed_loop_summary(
         "max_tilt_deg": math.degrees(float(np.max(result.tilt))),
         "final_tilt_deg": math.degrees(result.tilt[-1]),
         "max_offset_cm": float(np.max(result.offset)) * 100 if result.offset.size else None,
+        "max_altitude_m": float(np.max(result.flight.state("r_L")[:, 2])),
         "rcs_used_g": float(result.rcs_used[-1]) * 1e3,
         "pulses_dropped": int(np.sum(result.dropped)),
         "final_position_m": result.flight.state("r_L")[-1].tolist(),

@@ -38,7 +38,8 @@ from lightcraft_opt.control.options import (
     MpcSolver,
 )
 from lightcraft_opt.control.result import ControllerStatus
-from lightcraft_opt.errors import OptionError
+from lightcraft_opt.errors import OptionError, ProblemFileError
+from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.options import PulseMapOptions
@@ -166,3 +167,19 @@ def test_bad_weight_names_its_field():
     with pytest.raises(OptionError, match=r"DirectorWeights\.vergence"):
         DirectorWeights(vergence=0.0)
     assert "wind_speed_ref" in PARAMETERS.names  # the wind the director may be told
+
+
+def test_director_table_of_a_closed_loop_file(tmp_path):
+    problem = load_closed_loop(REPO_ROOT / "problems" / "director_crosswind.toml")
+    assert problem.director.horizon == 10
+    assert problem.director.nutation is False
+    assert problem.model.laser.size_model is BeamSizeModel.WAIST
+    text = (REPO_ROOT / "problems" / "director_crosswind.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(
+        text.replace('model = "../models/', f'model = "{REPO_ROOT}/models/').replace(
+            "relinearize = 3", "relinearize = 30"
+        )
+    )
+    with pytest.raises(ProblemFileError, match=r"director\.relinearize"):
+        load_closed_loop(bad)
