@@ -138,7 +138,7 @@ def _closed_loop(args: argparse.Namespace) -> int:
         from lightcraft_opt.control.director import DirectorController
 
         nutation = None
-        if model.craft.rcs is not None and problem.director.nutation:
+        if model.craft.rcs is not None and problem.director.rcs == "nutation":
             prediction = coning_model(model, pulse_map=plant, cache=True)
             nutation = MpcController(model, problem.mpc, prediction=prediction)
         controller = DirectorController(model, plant.inputs, problem.director, nutation=nutation)

@@ -185,7 +185,7 @@ def _controller(c: Campaign, plant: PulseMap) -> Controller:
         from lightcraft_opt.control.director import DirectorController
 
         nutation = None
-        if c.model.craft.rcs is not None and c.director.nutation:
+        if c.model.craft.rcs is not None and c.director.rcs == "nutation":
             prediction = coning_model(c.model, pulse_map=plant, cache=True)
             mpc = dataclasses.replace(c.mpc, time_budget=CAMPAIGN_TIME_BUDGET)
             nutation = MpcController(c.model, mpc, prediction=prediction)

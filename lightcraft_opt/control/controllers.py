@@ -242,7 +242,7 @@ def stage_weights(weights: ControlWeights, inputs: tuple[str, ...]) -> StageWeig
 
 
 class OpenLoopController:
-    """"none": the nominal input every pulse (beam on the pad axis, focus at the far end,
+    """ "none": the nominal input every pulse (beam on the pad axis, focus at the far end,
     the flight's pulse energy, RCS off: ``layout.nominal_inputs``).
 
     Parameters

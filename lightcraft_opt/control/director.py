@@ -26,11 +26,12 @@ The focus is decided in its vergence κ = 1/f: the beam's side at height z is
 a0 sqrt((1 - z κ)² + (z/z_R)²), affine in κ inside the root, so the QP sees a nearly linear
 lever where f itself (2-500 m) would be badly scaled.
 
-Wind and model error. Ψ's prediction misses what the director does not know (the wind, the
-plant's dispersion): each pulse the lateral velocity the last plan predicted for now is
-compared with the measured one and ``disturbance_gain`` of the difference is added to a
-per-pulse velocity increment that every predicted stage then carries (an integrating
-disturbance estimate: offset-free tracking in a steady crosswind).
+Wind and model error. Ψ's prediction misses what the director does not know (gusts, the
+plant's dispersion): each pulse the lateral velocity and the lateral angular momentum the
+last plan predicted for now are compared with the measured ones and ``disturbance_gain`` of
+the difference is added to per-pulse increments that every predicted stage then carries (an
+integrating disturbance estimate of a lateral force and a tipping torque: offset-free
+tracking under a steady error).
 
 On a craft with RCS the nutation MPC (mpc.py) flies alongside (``options.nutation``): it
 fires the thrusters against the coning and the tilt as it does alone, and its beam pointing
@@ -50,10 +51,12 @@ from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.director_qp import DirectorQp, DirectorSolution
 from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.control.options import ControllerFault, DirectorOptions, MpcSolver
+from lightcraft_opt.control.rcs_allocation import TorqueAllocation
 from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     PULSE_INPUT,
+    STATE,
     VectorLayout,
     initial_state,
     nominal_inputs,
@@ -69,7 +72,9 @@ _R = REDUCED_STATE.index("r_L")
 _V = REDUCED_STATE.index("v_L")
 _H = REDUCED_STATE.index("H_L")
 _C = REDUCED_STATE.index("coning")
-NU = 4  # the QP's inputs: pointing_L east, north [m], vergence κ [1/m], energy [J]
+#: The QP's inputs: pointing_L east, north [m], vergence κ [1/m], energy [J], the RCS's held
+#: transverse torque along b2, b3 [N m] (bounded to zero without ``rcs = "tilt"``).
+NU = 6
 
 
 def director_model(model: Model, options: DirectorOptions) -> Model:
@@ -81,12 +86,12 @@ def director_model(model: Model, options: DirectorOptions) -> Model:
     return replace(model, craft=replace(model.craft, engine=coarse))
 
 
-def _outputs(nominal_h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(C_z (14, nz), C_u (14, NU), C_terminal (8, nz), names): the objective's outputs,
-    linear in z and the QP's inputs (rows: offset 2, drift 2, velocity 2, coning 2, tilt 2,
-    pointing 2, vergence, energy)."""
+def _outputs(nominal_h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(C_z (16, nz), C_u (16, NU), C_terminal (8, nz)): the objective's outputs, linear in
+    z and the QP's inputs (rows: offset 2, drift 2, velocity 2, coning 2, tilt 2, pointing 2,
+    vergence, energy, torque 2)."""
     nz = REDUCED_STATE.size
-    Cz, Cu = np.zeros((14, nz)), np.zeros((14, NU))
+    Cz, Cu = np.zeros((16, nz)), np.zeros((16, NU))
     for k in range(2):
         Cz[k, _R.start + k], Cu[k, k] = 1.0, -1.0  # offset r - pointing
         Cz[2 + k, _R.start + k] = 1.0  # drift
@@ -96,13 +101,14 @@ def _outputs(nominal_h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
         Cu[10 + k, k] = 1.0  # pointing
     Cu[12, 2] = 1.0
     Cu[13, 3] = 1.0
+    Cu[14, 4] = Cu[15, 5] = 1.0
     Ct = np.zeros((8, nz))
     for k in range(2):
         Ct[k, _R.start + k] = 1.0  # offset and drift at the end: the craft's position
         Ct[2 + k, _V.start + k] = 1.0
         Ct[4 + k, _C.start + k] = 1.0
         Ct[6 + k, _H.start + k] = 1.0 / nominal_h
-    return Cz, Cu, Ct, np.arange(14)
+    return Cz, Cu, Ct
 
 
 class DirectorController:
@@ -120,8 +126,10 @@ class DirectorController:
     Attributes
     ----------
     last : :class:`StepStats` of the latest step.
-    plan : (z (N + 1, 14), u (N, 4)) the latest plan (QP inputs: pointing, κ, energy).
-    disturbance : (2,) the learnt lateral velocity increment a pulse [m/s, L east/north].
+    plan : (z (N + 1, 14), u (N, 6)) the latest plan (QP inputs: pointing, κ, energy,
+        torque).
+    disturbance : (4,) the learnt increments a pulse of the lateral velocity [m/s] and of
+        the lateral angular momentum [kg m²/s], L east/north.
     build_time : [s].
     """
 
@@ -158,26 +166,25 @@ class DirectorController:
         self.schedule = FocusSchedule(opts.focus_schedule)
         self.energy = model.flight.pulse_energy
         low, high = opts.energy_range
+        self.allocation = (
+            TorqueAllocation(model) if model.craft.rcs is not None and opts.rcs == "tilt" else None
+        )
+        # a box inside the disc every direction reaches, in L at any twist of B
+        tau = 0.0 if self.allocation is None else self.allocation.torque_limit / np.sqrt(2)
+        lim = laser.pointing_limit
+        e_high = min(high * self.energy, laser.pulse_energy_max)
         self.u_lower = np.array(
-            [
-                -laser.pointing_limit,
-                -laser.pointing_limit,
-                1 / laser.focus_range[1],
-                low * self.energy,
-            ]
+            [-lim, -lim, 1 / laser.focus_range[1], low * self.energy, -tau, -tau]
         )
-        self.u_upper = np.array(
-            [
-                laser.pointing_limit,
-                laser.pointing_limit,
-                1 / laser.focus_range[0],
-                min(high * self.energy, laser.pulse_energy_max),
-            ]
-        )
+        self.u_upper = np.array([lim, lim, 1 / laser.focus_range[0], e_high, tau, tau])
+        # a torque held over the interval adds τ T to H_L (first order: it tips H within the
+        # interval, the thrust's direction follows from the next pulse on)
+        self._B_torque = np.zeros((REDUCED_STATE.size, 2))
+        self._B_torque[_H.start, 0] = self._B_torque[_H.start + 1, 1] = psi.period
         z_nom = np.asarray(self._project(initial_state(model), self.p)).ravel()
         self._h_nominal = float(np.linalg.norm(z_nom[_H]))
         w = opts.weights
-        Cz, Cu, Ct, _ = _outputs(self._h_nominal)
+        Cz, Cu, Ct = _outputs(self._h_nominal)
         W = np.array(
             [w.offset] * 2
             + [w.drift] * 2
@@ -186,6 +193,7 @@ class DirectorController:
             + [w.tilt] * 2
             + [w.pointing] * 2
             + [w.vergence, w.energy]
+            + [w.torque] * 2
         )
         Wt = w.terminal * np.array(
             [w.offset + w.drift] * 2 + [w.velocity] * 2 + [w.coning] * 2 + [w.tilt] * 2
@@ -195,6 +203,7 @@ class DirectorController:
         H_stage = 2 * C.T @ (W[:, None] * C)
         nz = Cz.shape[1]
         H_stage[nz : nz + 2, nz : nz + 2] += 2 * w.move * np.eye(2)  # proximal, no gradient
+        H_stage[nz + 2, nz + 2] += 2 * w.move_vergence
         self.qp = DirectorQp(
             H_stage,
             2 * Ct.T @ (Wt[:, None] * Ct),
@@ -222,7 +231,7 @@ class DirectorController:
         self._start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._age = 0
         self._turn = 0
-        self.disturbance = np.zeros(2)
+        self.disturbance = np.zeros(4)
         self.last = StepStats(ControllerStatus.SOLVED)
         if self.nutation is not None:
             self.nutation.reset()
@@ -234,7 +243,10 @@ class DirectorController:
         at pulse time ``t`` [s]; ``fault`` injects a solver failure (closed_loop.py)."""
         start = time.perf_counter()
         opts = self.options
-        z0 = np.asarray(self._project(np.asarray(x, dtype=float), self.p)).ravel()
+        x = np.asarray(x, dtype=float)
+        z0 = np.asarray(self._project(x, self.p)).ravel()
+        q = x[STATE.index("q_LB")]
+        self._B_torque = self._torque_columns(_dcm(q / np.linalg.norm(q)))
         Z, U = self._trajectory(z0, t)
         sol = self._solve(Z, U, t, fault)
         late = fault is ControllerFault.LATE or (
@@ -253,8 +265,8 @@ class DirectorController:
                 message = f"late: {sol.solve_time * 1e3:.3f} ms > budget"
             else:
                 status, message = ControllerStatus.FALLBACK_FAILED, sol.message
-        u = self._map_input(v)
-        if self.nutation is not None:
+        u = self._map_input(v, np.asarray(x, dtype=float))
+        if self.nutation is not None and self.allocation is None:
             u_rcs = self.nutation.step(x, t, fault=fault)
             u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]
         self.last = StepStats(
@@ -273,6 +285,8 @@ class DirectorController:
                     *np.clip(z0[_R][:2], self.u_lower[:2], self.u_upper[:2]),
                     self._vergence(z0[_R][2]),
                     np.clip(self.energy, self.u_lower[3], self.u_upper[3]),
+                    0.0,
+                    0.0,
                 ]
             )
             Z, U = np.zeros((N + 1, z0.size)), np.tile(u0, (N, 1))
@@ -290,8 +304,9 @@ class DirectorController:
         zp, up = self.plan
         gain = self.options.disturbance_gain
         if gain and self._age == 0:
-            miss = z0[_V][:2] - zp[1, _V][:2]
-            self.disturbance = self.disturbance + gain * miss
+            miss_v = z0[_V][:2] - zp[1, _V][:2]
+            miss_h = z0[_H][:2] - zp[1, _H][:2]
+            self.disturbance = self.disturbance + gain * np.r_[miss_v, miss_h]
         Z = np.vstack([z0, zp[2:], 2 * zp[-1] - zp[-2]])
         U = np.vstack([up[1:], up[-1:]])
         A, B = self._A, self._B
@@ -308,7 +323,7 @@ class DirectorController:
         times = t + self.period * np.arange(N)
         full = np.array([self._full(u) for u in U])
         Zn, _ = self._values(Z[:N].T, full.T, self.p, times)
-        Zn = np.asarray(Zn).T
+        Zn = np.asarray(Zn).T + U[:, 4:] @ self._B_torque.T
         refresh = {0, N - 1}
         others = N - 2
         for _ in range(max(0, min(self.options.relinearize, N) - len(refresh))):
@@ -318,11 +333,12 @@ class DirectorController:
             _, _, A, B = self._stage(Z[j], full[j], self.p, times[j])
             self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
         d = Zn - Z[1:]
-        d[:, _V.start : _V.start + 2] += self.disturbance
-        d[:, _R.start : _R.start + 2] += 0.5 * self.period * self.disturbance
+        d[:, _V.start : _V.start + 2] += self.disturbance[:2]
+        d[:, _R.start : _R.start + 2] += 0.5 * self.period * self.disturbance[:2]
+        d[:, _H.start : _H.start + 2] += self.disturbance[2:]
         # Gauss-Newton gradients: 2 C'W (C x̄ - y_ref)
         X = np.hstack([Z[:N], U])
-        ref = np.zeros((N, 14))
+        ref = np.zeros((N, 16))
         ref[:, 12] = [self._vergence(z[_R][2]) for z in Z[:N]]
         ref[:, 13] = self.energy
         res = X @ self._C.T - ref
@@ -358,15 +374,27 @@ class DirectorController:
     def _qp_columns(self, B: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Ψ's input Jacobian in the QP's inputs: ∂/∂κ = -f² ∂/∂f at f = 1/κ."""
         f = 1.0 / v[2]
-        return np.column_stack([B[:, 0], B[:, 1], -(f**2) * B[:, 2], B[:, 3]])
+        return np.column_stack([B[:, 0], B[:, 1], -(f**2) * B[:, 2], B[:, 3], self._B_torque])
 
-    def _map_input(self, v: np.ndarray) -> np.ndarray:
-        """The plant's map input of the QP input v, inside the laser's ranges."""
+    def _torque_columns(self, R_LB: np.ndarray) -> np.ndarray:
+        """(nz, 2) Ψ's response to the QP's torque (b2, b3) [N m] held over a pulse, with B at
+        R_LB: H_L gains T (b2, b3 in L) τ (first order: the torque tips H within the
+        interval, the thrust's direction follows from the next pulse on). B's slow twist
+        about b1 over the horizon is neglected: it is measured again every pulse."""
+        out = np.zeros((REDUCED_STATE.size, 2))
+        out[_H] = self.period * R_LB[:, 1:3]
+        return out
+
+    def _map_input(self, v: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """The plant's map input of the QP input v, inside the laser's ranges; the torque
+        (B frame) allocated to held thrusts."""
         v = np.clip(v, self.u_lower, self.u_upper)
         u = self._u_plant.copy()
         u[0:2] = v[0:2]
         u[2] = 1.0 / v[2]
         u[3] = v[3]
+        if self.allocation is not None:
+            u[self.inputs.index("rcs_thrust")] = self.allocation.thrusts(v[4:6])
         return u
 
     def _fallback(self, z0: np.ndarray) -> np.ndarray:
@@ -387,5 +415,19 @@ class DirectorController:
                 *np.clip(z0[_R][:2], self.u_lower[:2], self.u_upper[:2]),
                 self._vergence(z0[_R][2]),
                 self.energy,
+                0.0,
+                0.0,
             ]
         )
+
+
+def _dcm(q: np.ndarray) -> np.ndarray:
+    """R_LB of the unit quaternion q_LB (w, x, y, z), as symbolic/rotation.dcm."""
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )

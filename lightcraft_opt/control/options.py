@@ -10,6 +10,7 @@ from lightcraft_opt.errors import OptionError
 from lightcraft_opt.options import checked_int, checked_nonnegative, checked_number
 
 __all__ = [
+    "DIRECTOR_RCS",
     "FOCUS_SCHEDULES",
     "ClosedLoopOptions",
     "ControlWeights",
@@ -149,6 +150,11 @@ class MpcOptions:
 #: the craft (docs/beam_riding.md).
 FOCUS_SCHEDULES = ("far", "at_craft", "matched")
 
+#: Who fires the RCS of a craft that has one while the director flies: "tilt" the director
+#: itself, held torques against the tilt of H (control/rcs_allocation.py); "nutation" the
+#: nutation MPC alongside (mpc.py); "off" nobody.
+DIRECTOR_RCS = ("tilt", "nutation", "off")
+
 
 @dataclass(frozen=True)
 class DirectorWeights:
@@ -166,12 +172,15 @@ class DirectorWeights:
     vergence : the focus's vergence 1/f off the schedule's, 0.002 1/m [m^2] (at 50 m the
         beam's side moves by ~10 % for it).
     energy : pulse energy off the flight's, 100 J [1/J^2].
+    torque : the RCS's held transverse torque, 10 mN m [1/(N m)^2] (with ``rcs = "tilt"``).
     move : the pointing's step from the plan it linearises about, 2 cm [1/m^2]: a proximal
         term that keeps each real-time iteration where its linearisation holds (the
         engine's push is far from linear across the beam's edge).
+    move_vergence : likewise on the vergence's step, 0.001 1/m [m^2].
     terminal : factor on the state terms at the end of the horizon, >= 1.
 
-    All >= 0; vergence and energy > 0 (they keep the QP's input weight positive definite).
+    All >= 0; vergence, energy and torque > 0 (they keep the QP's input weight positive
+    definite).
     """
 
     offset: float = 1.0 / 0.01**2
@@ -182,13 +191,24 @@ class DirectorWeights:
     pointing: float = 1.0 / 0.1**2
     vergence: float = 1.0 / 0.002**2
     energy: float = 1.0 / 100.0**2
+    torque: float = 1.0 / 0.01**2
     move: float = 1.0 / 0.02**2
+    move_vergence: float = 1.0 / 0.001**2
     terminal: float = 5.0
 
     def __post_init__(self) -> None:
-        for name in ("offset", "drift", "velocity", "coning", "tilt", "pointing", "move"):
+        for name in (
+            "offset",
+            "drift",
+            "velocity",
+            "coning",
+            "tilt",
+            "pointing",
+            "move",
+            "move_vergence",
+        ):
             checked_nonnegative("DirectorWeights", name, getattr(self, name))
-        for name in ("vergence", "energy"):
+        for name in ("vergence", "energy", "torque"):
             checked_number("DirectorWeights", name, getattr(self, name), 0.0)
         checked_nonnegative("DirectorWeights", "terminal", self.terminal)
         if self.terminal < 1:
@@ -217,10 +237,12 @@ class DirectorOptions:
         <= high; the highest is capped at the laser's maximum.
     quadrature : (radial, azimuthal) points of the optic quadrature of the director's
         model of the engine, each >= 2 (coarser than the plant's: the planner's belief).
-    disturbance_gain : in [0, 1): how fast the lateral velocity the prediction misses each
-        pulse (wind, model error) is learnt and added to the prediction; 0 never.
-    nutation : on a craft with RCS, fly the nutation MPC's thrusters alongside (its beam
-        pointing replaced by the director's); False leaves the RCS off.
+    disturbance_gain : in [0, 1): how fast the lateral velocity and the lateral angular
+        momentum the prediction misses each pulse (gusts, model error) are learnt and added
+        to the prediction; 0 never.
+    rcs : on a craft with RCS, who fires it, one of :data:`DIRECTOR_RCS`: "tilt" (default)
+        the director, held torques in its QP against the tilt of H; "nutation" the nutation
+        MPC alongside (its beam pointing replaced by the director's); "off".
     warm_start : start each QP from the previous one shifted by a pulse.
     """
 
@@ -235,7 +257,7 @@ class DirectorOptions:
     energy_range: tuple[float, float] = (0.5, 1.0)
     quadrature: tuple[int, int] = (4, 16)
     disturbance_gain: float = 0.05
-    nutation: bool = True
+    rcs: str = "tilt"
     warm_start: bool = True
 
     def __post_init__(self) -> None:
@@ -288,11 +310,14 @@ class DirectorOptions:
             raise OptionError(
                 f"DirectorOptions.disturbance_gain must be in [0, 1), got {self.disturbance_gain!r}"
             )
-        for name in ("nutation", "warm_start"):
-            if not isinstance(getattr(self, name), bool):
-                raise OptionError(
-                    f"DirectorOptions.{name} must be true or false, got {getattr(self, name)!r}"
-                )
+        if self.rcs not in DIRECTOR_RCS:
+            raise OptionError(
+                f"DirectorOptions.rcs must be one of {list(DIRECTOR_RCS)}, got {self.rcs!r}"
+            )
+        if not isinstance(self.warm_start, bool):
+            raise OptionError(
+                f"DirectorOptions.warm_start must be true or false, got {self.warm_start!r}"
+            )
 
 
 @dataclass(frozen=True)

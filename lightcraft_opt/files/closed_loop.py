@@ -44,7 +44,7 @@ A closed-loop file::
     focus_schedule = "matched"             # "far", "at_craft"
     energy_range = [0.5, 1.0]              # fractions of the flight's pulse energy
     disturbance_gain = 0.05
-    nutation = true                        # the nutation MPC fires the RCS alongside
+    rcs = "tilt"                           # the director's torques; "nutation": the MPC's
     time_budget_ms = 20.0                  # also solver, max_iter, tol, warm_start
 
     [director.tolerances]                  # weight = 1 / tolerance^2
@@ -55,8 +55,10 @@ A closed-loop file::
     tilt_deg = 2.0
     pointing_cm = 10.0
     move_cm = 2.0
+    move_vergence = 0.001                  # [1/m]
     vergence = 0.002                       # [1/m] on the focus's 1/f against the schedule
     energy_j = 100.0
+    torque_nm = 0.01                       # the RCS's held transverse torque
 
     [plant]                                # what the controller does not know
     dropout_rate = 0.05
@@ -158,7 +160,7 @@ _DIRECTOR: dict[str, Spec] = {
     "focus_schedule": TEXT,
     "energy_range": NUMBERS,
     "disturbance_gain": NUMBER,
-    "nutation": _SWITCH,
+    "rcs": TEXT,
     "warm_start": _SWITCH,
 }
 #: ``[director.tolerances]``: DirectorWeights field -> quantity of its tolerance.
@@ -170,8 +172,10 @@ _DIRECTOR_TOLERANCES: dict[str, Spec] = {
     "tilt": quantity("angle"),
     "pointing": quantity("length"),
     "move": quantity("length"),
+    "move_vergence": NUMBER,
     "vergence": NUMBER,
     "energy": quantity("energy"),
+    "torque": quantity("torque"),
 }
 _PLANT: dict[str, Spec] = {
     "dropout_rate": NUMBER,

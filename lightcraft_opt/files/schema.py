@@ -62,6 +62,7 @@ QUANTITIES: Mapping[str, Mapping[str, float | str]] = {
     "speed": {"mps": "1", "kmh": 1.0 / 3.6},
     "energy": {"j": "1", "kj": "1e3"},
     "force": {"n": "1"},
+    "torque": {"nm": "1", "n_m": "1", "mnm": "1e-3"},
     "impulse": {"ns": "1", "n_s": "1"},
     "mass per energy": {"kg_per_j": "1", "mg_per_j": "1e-6", "ug_per_j": "1e-9"},
     "impulse per energy": {"ns_per_j": "1", "n_per_mw": "1e-6"},

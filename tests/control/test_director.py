@@ -7,6 +7,7 @@ References:
 - the same QP solved by HPIPM (interior point, Riccati recursion on the stage structure)
   and by qrqp (casadi's active-set method, exact on its active set): the same minimiser,
   with some input bounds active, and the dynamics hold along it;
+- the thruster allocation of a wanted torque against the pairs' geometry (0.2 N x 55 mm);
 - the closed loop on the full map Φ (the plant, its own 32-substep coast and 8 x 32 optic,
   not Ψ): a craft launched 3 cm off the pad axis is caught by the steered beam within a few
   pulses, while the unsteered beam leaves it off-centre; an injected solver failure flies
@@ -37,6 +38,7 @@ from lightcraft_opt.control.options import (
     DirectorWeights,
     MpcSolver,
 )
+from lightcraft_opt.control.rcs_allocation import TorqueAllocation
 from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.files.closed_loop import load_closed_loop
@@ -172,7 +174,7 @@ def test_bad_weight_names_its_field():
 def test_director_table_of_a_closed_loop_file(tmp_path):
     problem = load_closed_loop(REPO_ROOT / "problems" / "director_crosswind.toml")
     assert problem.director.horizon == 10
-    assert problem.director.nutation is False
+    assert problem.director.rcs == "tilt"
     assert problem.model.laser.size_model is BeamSizeModel.WAIST
     text = (REPO_ROOT / "problems" / "director_crosswind.toml").read_text()
     bad = tmp_path / "bad.toml"
@@ -183,3 +185,18 @@ def test_director_table_of_a_closed_loop_file(tmp_path):
     )
     with pytest.raises(ProblemFileError, match=r"director\.relinearize"):
         load_closed_loop(bad)
+
+
+def test_torque_allocation_of_opposed_pairs():
+    """Flight 5's RCS: pairs at ±55 mm on b2 and b3 firing along b1, 0.2 N each: 11 mN m
+    about either axis, made by one thruster of a pair; beyond it, the nearest reachable."""
+    allocation = TorqueAllocation(load_model(REPO_ROOT / "models" / "flight5-rcs.toml"))
+    assert np.allclose(allocation.axis_limit, 0.2 * 0.055, rtol=1e-12)
+    assert allocation.torque_limit == pytest.approx(0.2 * 0.055, rel=1e-12)
+    for torque in ([0.005, 0.0], [0.0, -0.004], [0.003, 0.007], [-0.011, 0.011]):
+        thrusts = allocation.thrusts(np.array(torque))
+        assert np.all(thrusts >= 0) and np.all(thrusts <= allocation.max_thrust + 1e-12)
+        assert np.allclose(allocation.G @ thrusts, torque, atol=1e-8)
+        assert np.count_nonzero(thrusts > 1e-6) <= 2  # one of each pair
+    far = allocation.thrusts(np.array([0.05, 0.0]))
+    assert np.allclose(allocation.G @ far, [0.011, 0.0], atol=1e-8)
