@@ -360,7 +360,13 @@ class DirectorController:
     # ----------------------------------------------------------------- helpers
     def _vergence(self, altitude: float) -> float:
         """κ_ref = 1 / the schedule's focus at ``altitude`` [m] (above the director)."""
-        f = scheduled_focus(self.schedule, max(float(altitude), 0.0), self.laser, self.p)
+        f = scheduled_focus(
+            self.schedule,
+            max(float(altitude), 0.0),
+            self.laser,
+            self.p,
+            matched_side=self.options.matched_side,
+        )
         return 1.0 / f
 
     def _full(self, v: np.ndarray) -> np.ndarray:

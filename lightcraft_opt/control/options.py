@@ -233,6 +233,8 @@ class DirectorOptions:
         rest are the previous pulses' Jacobians, shifted (a multi-level real-time
         iteration). ``horizon``: all, the plain real-time iteration.
     focus_schedule : the focus reference, one of :data:`FOCUS_SCHEDULES`.
+    matched_side : the beam's side the "matched" schedule puts at the craft [m], > 0; None
+        (default) the launch side a0 (docs/beam_riding.md: 8.5 cm for the record craft).
     energy_range : (lowest, highest) pulse energy as fractions of the flight's, 0 <= low
         <= high; the highest is capped at the laser's maximum.
     quadrature : (radial, azimuthal) points of the optic quadrature of the director's
@@ -254,6 +256,7 @@ class DirectorOptions:
     time_budget: float = 20e-3
     relinearize: int = 3
     focus_schedule: str = "matched"
+    matched_side: float | None = None
     energy_range: tuple[float, float] = (0.5, 1.0)
     quadrature: tuple[int, int] = (4, 16)
     disturbance_gain: float = 0.05
@@ -285,6 +288,8 @@ class DirectorOptions:
                 f"DirectorOptions.focus_schedule must be one of {list(FOCUS_SCHEDULES)}, "
                 f"got {self.focus_schedule!r}"
             )
+        if self.matched_side is not None:
+            checked_number("DirectorOptions", "matched_side", self.matched_side, 0.0)
         e = self.energy_range
         if not (
             isinstance(e, tuple)

@@ -42,6 +42,7 @@ A closed-loop file::
     horizon_pulses = 10                    #   --controller director); all optional
     relinearize = 3                        # stages linearised afresh a pulse
     focus_schedule = "matched"             # "far", "at_craft"
+    matched_side_cm = 7.2                  # the side "matched" keeps (default: the launch side)
     energy_range = [0.5, 1.0]              # fractions of the flight's pulse energy
     disturbance_gain = 0.05
     rcs = "tilt"                           # the director's torques; "nutation": the MPC's
@@ -158,6 +159,7 @@ _DIRECTOR: dict[str, Spec] = {
     "time_budget": quantity("time"),
     "relinearize": INTEGER,
     "focus_schedule": TEXT,
+    "matched_side": quantity("length"),
     "energy_range": NUMBERS,
     "disturbance_gain": NUMBER,
     "rcs": TEXT,

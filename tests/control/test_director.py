@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 from support.paths import REPO_ROOT
 
+from lightcraft_opt.campaign.spec import CampaignController
 from lightcraft_opt.compiled import reduced_derivatives_for
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.controllers import OpenLoopController
@@ -41,6 +42,7 @@ from lightcraft_opt.control.options import (
 from lightcraft_opt.control.rcs_allocation import TorqueAllocation
 from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.errors import OptionError, ProblemFileError
+from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
@@ -200,3 +202,13 @@ def test_torque_allocation_of_opposed_pairs():
         assert np.count_nonzero(thrusts > 1e-6) <= 2  # one of each pair
     far = allocation.thrusts(np.array([0.05, 0.0]))
     assert np.allclose(allocation.G @ far, [0.011, 0.0], atol=1e-8)
+
+
+def test_director_problem_files_load():
+    record = load_closed_loop(REPO_ROOT / "problems" / "director_record.toml")
+    assert record.director.matched_side == pytest.approx(0.085)
+    assert record.model.laser.size_model is BeamSizeModel.WAIST
+    assert record.model.craft.rcs is None
+    campaign = load_campaign(REPO_ROOT / "problems" / "montecarlo_director.toml")
+    assert campaign.controller is CampaignController.DIRECTOR
+    assert campaign.director.rcs == "tilt"
