@@ -13,7 +13,9 @@ substeps resolves the 216 Hz forcing) with its own parameters: the model's, with
 problem's overrides (wind, gusts) and the dispersion of
 :class:`~lightcraft_opt.control.options.PlantDispersion` on top; the controller keeps
 the undispersed model and calm air. Flights end as :func:`lightcraft_opt.simulate`'s do (duration,
-landing, leaving the beam, a non-finite state), by the same bookkeeping.
+landing, leaving the beam, a non-finite state), by the same bookkeeping; pulses the laser
+drops before the first one fires leave a craft at rest on the pad where it is (the pad holds
+it up: without this a drop-out at launch "landed" the craft at t = 0).
 
 A controller whose input does not depend on what it is told (its ``fixed_input`` is not
 None: the open loop, "none") is flown as :func:`lightcraft_opt.simulate` flies open-loop
@@ -161,6 +163,9 @@ def closed_loop(
     steps: list[StepStats] = []
     commanded: list[np.ndarray] = []
     nodes = [x]
+    # drop-outs before the first fired pulse leave a craft at rest on the pad where it is
+    on_pad = x[STATE.slot("r_L").start + 2] <= 0.0 and x[STATE.slot("v_L").start + 2] <= 0.0
+    resting = int(np.argmin(dropped)) if on_pad and not np.all(dropped) else 0
     fixed = getattr(controller, "fixed_input", None)
     if fixed is not None:  # open loop: no measurement, no faults to inject
         u = checked_vector("controller input", fixed, lay.size)
@@ -168,7 +173,9 @@ def closed_loop(
         steps = [controller.last] * n
         applied = np.tile(u, (n, 1))
         applied[dropped, i_energy] = 0.0
-        nodes = step_in_chunks(phi, applied, x, p, flight)
+        for k in range(resting):
+            flight.rest(k * phi.period, applied[k], x, ENGINE.size)
+        nodes = [x] * resting + step_in_chunks(phi, applied[resting:], x, p, flight, resting)
     else:
         for k in range(n):
             t = k * phi.period
@@ -182,6 +189,10 @@ def closed_loop(
             applied = u.copy()
             if dropped[k]:
                 applied[i_energy] = 0.0
+            if k < resting:
+                flight.rest(t, applied, x, ENGINE.size)
+                nodes.append(x)
+                continue
             X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
             if flight.ended_by(t, applied, X, eng.ravel()):
                 break

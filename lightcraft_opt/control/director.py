@@ -169,18 +169,13 @@ class DirectorController:
         self.allocation = (
             TorqueAllocation(model) if model.craft.rcs is not None and opts.rcs == "tilt" else None
         )
-        # a box inside the disc every direction reaches, in L at any twist of B
-        tau = 0.0 if self.allocation is None else self.allocation.torque_limit / np.sqrt(2)
+        # the torque in B (b2, b3), inside the thrusters' box along the two axes
+        tau = np.zeros(2) if self.allocation is None else self.allocation.axis_limit
         lim = laser.pointing_limit
         e_high = min(high * self.energy, laser.pulse_energy_max)
-        self.u_lower = np.array(
-            [-lim, -lim, 1 / laser.focus_range[1], low * self.energy, -tau, -tau]
-        )
-        self.u_upper = np.array([lim, lim, 1 / laser.focus_range[0], e_high, tau, tau])
-        # a torque held over the interval adds τ T to H_L (first order: it tips H within the
-        # interval, the thrust's direction follows from the next pulse on)
-        self._B_torque = np.zeros((REDUCED_STATE.size, 2))
-        self._B_torque[_H.start, 0] = self._B_torque[_H.start + 1, 1] = psi.period
+        self.u_lower = np.array([-lim, -lim, 1 / laser.focus_range[1], low * self.energy, *-tau])
+        self.u_upper = np.array([lim, lim, 1 / laser.focus_range[0], e_high, *tau])
+        self._B_torque = self._torque_columns(np.eye(3))
         z_nom = np.asarray(self._project(initial_state(model), self.p)).ravel()
         self._h_nominal = float(np.linalg.norm(z_nom[_H]))
         w = opts.weights

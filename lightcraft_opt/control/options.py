@@ -165,7 +165,8 @@ class DirectorWeights:
     ----------
     offset : beam offset |r - pointing| (the optic at the mass centre), 1 cm [1/m^2].
     drift : lateral position |r| off the pad axis, 5 cm [1/m^2]: the beam reaches 10 cm.
-    velocity : lateral velocity |v|, 0.1 m/s [s^2/m^2].
+    velocity : lateral velocity |v|, 5 cm/s [s^2/m^2]: the damping that keeps a dropped
+        pulse or a gust from setting the craft drifting.
     coning : |c|, the sine of the coning angle, 2 degrees [1/rad^2].
     tilt : of the angular momentum from the vertical, 2 degrees [1/rad^2].
     pointing : beam axis off the pad axis, 10 cm [1/m^2].
@@ -185,7 +186,7 @@ class DirectorWeights:
 
     offset: float = 1.0 / 0.01**2
     drift: float = 1.0 / 0.05**2
-    velocity: float = 1.0 / 0.1**2
+    velocity: float = 1.0 / 0.05**2
     coning: float = 1.0 / math.radians(2.0) ** 2
     tilt: float = 1.0 / math.radians(2.0) ** 2
     pointing: float = 1.0 / 0.1**2

@@ -51,7 +51,7 @@ A closed-loop file::
     [director.tolerances]                  # weight = 1 / tolerance^2
     offset_cm = 1.0
     drift_cm = 5.0
-    velocity_mps = 0.1
+    velocity_mps = 0.05
     coning_deg = 2.0
     tilt_deg = 2.0
     pointing_cm = 10.0

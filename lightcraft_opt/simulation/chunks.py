@@ -35,11 +35,16 @@ def chunk_pulses(phi: PulseMap) -> int:
 
 
 def step_in_chunks(
-    phi: PulseMap, U: np.ndarray, x0: np.ndarray, p: np.ndarray, flight: FlightLog
+    phi: PulseMap,
+    U: np.ndarray,
+    x0: np.ndarray,
+    p: np.ndarray,
+    flight: FlightLog,
+    first: int = 0,
 ) -> list[np.ndarray]:
     """Step Φ over the rows of ``U`` (n, map-input size) from ``x0`` (STATE layout) with
     parameters ``p``, checking each pulse in order with ``flight`` and stopping at the
-    first that ends it.
+    first that ends it; row 0 is pulse number ``first`` (at ``first`` periods).
 
     Returns
     -------
@@ -51,7 +56,7 @@ def step_in_chunks(
     xk = x0
     for k0 in range(0, len(U), chunk):
         m = min(chunk, len(U) - k0)
-        ts = np.arange(k0, k0 + m) * phi.period  # the same floats as k * period
+        ts = np.arange(first + k0, first + k0 + m) * phi.period  # the same floats as k * period
         x_next, X, E = (
             np.asarray(v) for v in _chunk_map(phi, m)(xk, U[k0 : k0 + m].T, p, ts[None, :])
         )

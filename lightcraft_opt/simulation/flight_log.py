@@ -37,6 +37,16 @@ class FlightLog:
         self.status, self.message = SimulationStatus.DURATION_REACHED, ""
         self.weak = 0
 
+    def rest(self, t: float, u: np.ndarray, x: np.ndarray, n_engine: int) -> None:
+        """Record a pulse the laser dropped at ``t`` [s] (map input ``u``, energy 0) while the
+        craft sits on the pad before its first fired pulse: it stays at ``x`` (STATE.size,)
+        for the interval, held up by the pad; the engine outputs are zeros (``n_engine``)."""
+        self.pulse_t.append(t)
+        self.pulse_u.append(u)
+        self.pulse_e.append(np.zeros(n_engine))
+        self.times.append(t + self.period)
+        self.states.append(np.array(x, dtype=float))
+
     def ended_by(self, t: float, u: np.ndarray, X: np.ndarray, eng: np.ndarray) -> bool:
         """Record the pulse fired at ``t`` [s] with map input ``u``: ``X`` (STATE.size,
         dense) states after it, ``eng`` (11,) engine outputs. True when the flight ends."""

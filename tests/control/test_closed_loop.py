@@ -291,3 +291,41 @@ def test_open_loop_in_chunks_flies_the_pulse_by_pulse_flight(plant, tilt_deg, st
         np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name))
     np.testing.assert_array_equal(fast.flight.pulses.engine, slow.flight.pulses.engine)
     assert list(fast.log.status) == list(slow.log.status)
+
+
+class _NominalFeedback:
+    """The open loop's input, but through the feedback path (no ``fixed_input``)."""
+
+    name = "nominal"
+
+    def __init__(self, model: Model, inputs) -> None:  # type: ignore[no-untyped-def]
+        self._open = OpenLoopController(model, inputs)
+        self.last = self._open.last
+
+    def reset(self) -> None:
+        self._open.reset()
+
+    def step(self, x, t=0.0, *, fault=None):  # type: ignore[no-untyped-def]
+        return self._open.fixed_input
+
+
+def test_dropouts_before_the_first_pulse_leave_the_craft_on_the_pad():
+    """Seed 2 at a 30 % drop-out rate drops pulses 0 and 1: the craft waits on the pad, then
+    flies the calm flight two pulses late; the open loop (chunked) and the feedback path fly
+    it alike to round-off, and neither "lands" at t = 0."""
+    model = load_model(REPO_ROOT / "models" / "flight5.toml")
+    phi = build_pulse_map(model)
+    options = ClosedLoopOptions(dropout_rate=0.3, seed=2)
+    chunked = closed_loop(
+        model, OpenLoopController(model, phi.inputs), 0.4, pulse_map=phi, options=options
+    )
+    stepped = closed_loop(
+        model, _NominalFeedback(model, phi.inputs), 0.4, pulse_map=phi, options=options
+    )
+    for result in (chunked, stepped):
+        assert result.flight.status is SimulationStatus.DURATION_REACHED
+        assert list(result.dropped[:3]) == [True, True, False]
+        x = result.flight.x
+        assert np.array_equal(x[0], x[1]) and np.array_equal(x[1], x[2])  # at rest, 2 pulses
+        assert x[-1, 2] > 0.5  # then it climbs
+    assert np.allclose(chunked.flight.x, stepped.flight.x, rtol=0, atol=1e-12)
