@@ -12,7 +12,12 @@
 # ---
 
 # %% [markdown]
-# # Beam tracking in a crosswind: optimal laser pointing
+# # Beam tracking in a crosswind: fixed pointing, the optimal plan, the director
+#
+# Three ways to keep a lightcraft in the beam through a crosswind, side by side: the beam held
+# on the pad's vertical, the optimal pointing planned open loop (problem (a)), and the director
+# flying closed loop (`problems/director_crosswind.toml`, docs/director.md); then the
+# beam-riding stability map that says how high any of them can go (docs/beam_riding.md).
 #
 # Problem (a), `problems/crosswind_climb.toml`: the Flight 5 craft climbs under the PLVTS
 # beam through a 3 m/s crosswind from the east, to 50 m in 130 pulses (5 s). With the beam held
@@ -122,3 +127,73 @@ for name, flight in (("optimal pointing", steered), ("fixed pointing", fixed)):
 ax.set_xlabel("t [s]")
 ax.set_ylabel("altitude r_L[up] [m]")
 ax.legend()
+
+
+# %% [markdown]
+# ## The director in closed loop
+#
+# `problems/director_crosswind.toml`: Flight 5 with its RCS through the same 3 m/s crosswind,
+# under the beam the director can make (the waist model, z_R = 72 m: the plan above flew the
+# linear beam, whose growth stops beam riding near 30 m). Each pulse the director solves one QP
+# on the reduced map Ψ (10 pulses ahead) for the beam's pointing and focus, the pulse energy and
+# the RCS's held torque, and the plant (the full Φ, with noise, drop-outs, a dispersed craft and
+# a gust the director does not know) flies its first input. The fixed beam flies the same plant.
+# `LIGHTCRAFT_QUICK=1` flies the first second.
+
+# %%
+from lightcraft_opt.control import DirectorController, OpenLoopController, closed_loop
+from lightcraft_opt.control.closed_loop import plant_options
+from lightcraft_opt.files.closed_loop import load_closed_loop
+from lightcraft_opt.plots.closed_loop import plot_closed_loop_offset
+
+loop = load_closed_loop("problems/director_crosswind.toml", duration=1.0 if QUICK else None)
+plant = lc.build_pulse_map(loop.model, plant_options(loop.model))
+director = DirectorController(loop.model, plant.inputs, loop.director)
+flights = {}
+for name, controller in (("director", director),
+                         ("fixed beam", OpenLoopController(loop.model, plant.inputs))):
+    flights[name] = closed_loop(loop.model, controller, loop.duration, x0=loop.x0,
+                                parameters=loop.plant_parameters, pulse_map=plant,
+                                options=loop.loop)
+    f = flights[name].flight
+    print(f"{name:10s}: {f.status.value:16s} t_end {f.t[-1]:.2f} s, highest "
+          f"{f.state('r_L')[:, 2].max():5.1f} m, largest offset "
+          f"{100 * flights[name].offset.max():5.1f} cm")
+steps = 1e3 * flights["director"].log.step_time
+print(f"director step: median {np.median(steps):.1f} ms, max {steps.max():.1f} ms")
+
+# %%
+fig, axes = plt.subplots(1, 3, figsize=(13, 3.5), layout="constrained")
+for name, result_cl in flights.items():
+    axes[0].plot(result_cl.flight.t, result_cl.flight.state("r_L")[:, 2], label=name)
+    plot_closed_loop_offset(result_cl, ax=axes[1], capture_radius=loop.model.craft.engine.capture_radius)
+commanded = flights["director"].commanded
+axes[2].plot(flights["director"].pulse_t, commanded[:, 2], label="focus [m]")
+axes[2].set_yscale("log")
+axes[2].set_xlabel("t [s]")
+axes[2].set_title("the director's focus")
+axes[0].set_xlabel("t [s]")
+axes[0].set_ylabel("altitude [m]")
+axes[0].legend()
+
+# %% [markdown]
+# ## How high can the beam hold a craft: the stability map
+#
+# The largest beam-riding multiplier of Φ, linearised about an upright 10 m/s climb 1 cm off the
+# beam axis, against altitude, for the director's beam with the far focus and with the focus
+# matched to keep the launch side at the craft (docs/beam_riding.md; `|λ| > 1` grows an offset
+# every pulse). `LIGHTCRAFT_QUICK=1` takes two altitudes.
+
+# %%
+from dataclasses import replace
+
+from lightcraft_opt.linearize import altitude_stability
+from lightcraft_opt.plots.stability import plot_altitude_stability
+
+waist = replace(lc.load_model("models/flight5.toml"), laser=loop.model.laser)
+altitudes = [20.0, 60.0] if QUICK else [10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0]
+study = altitude_stability(waist, altitudes, [0.01], ["far", "matched"],
+                           options=lc.PulseMapOptions(substeps=8))
+fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
+plot_altitude_stability(study, ax=ax)
+print(np.round(study.beam_riding[:, :, 0], 4))

@@ -115,6 +115,19 @@ def test_mpc_through_the_gust_counts_the_injected_late_answers(tmp_path, model_c
     assert summary["solve_time_ms"]["max"] == pytest.approx(solve.max(), rel=5e-6)
 
 
+def test_director_flies_its_crosswind_problem(tmp_path):
+    """director_crosswind's first half second under the director: every pulse solved, the
+    craft in the beam, the summary reports the altitude and the step times."""
+    out = tmp_path / "director"
+    args = ["closed-loop", str(PROBLEMS / "director_crosswind.toml"), "--controller", "director"]
+    assert main([*args, "--duration", "0.5", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller"] == "director" and summary["pulses"] == 13
+    assert summary["status"] == "duration_reached" and summary["max_offset_cm"] < 5.0
+    assert summary["max_altitude_m"] > 1.0
+    assert summary["steps_by_status"] == {"solved": 13}
+
+
 @pytest.mark.parametrize(
     ("text", "key"),
     [
