@@ -164,6 +164,7 @@ class DirectorController:
         laser = self.model.laser
         self.laser = laser
         self.schedule = FocusSchedule(opts.focus_schedule)
+        self._vergence_table()
         self.energy = model.flight.pulse_energy
         low, high = opts.energy_range
         self.allocation = (
@@ -334,7 +335,7 @@ class DirectorController:
         # Gauss-Newton gradients: 2 C'W (C x̄ - y_ref)
         X = np.hstack([Z[:N], U])
         ref = np.zeros((N, 16))
-        ref[:, 12] = [self._vergence(z[_R][2]) for z in Z[:N]]
+        ref[:, 12] = self._vergence(Z[:N, _R.start + 2])
         ref[:, 13] = self.energy
         res = X @ self._C.T - ref
         g_stage = 2 * (res * self._W) @ self._C
@@ -353,16 +354,29 @@ class DirectorController:
         )
 
     # ----------------------------------------------------------------- helpers
-    def _vergence(self, altitude: float) -> float:
-        """κ_ref = 1 / the schedule's focus at ``altitude`` [m] (above the director)."""
-        f = scheduled_focus(
-            self.schedule,
-            max(float(altitude), 0.0),
-            self.laser,
-            self.p,
-            matched_side=self.options.matched_side,
+    def _vergence(self, altitude: float | np.ndarray) -> float | np.ndarray:
+        """κ_ref = 1 / the schedule's focus at ``altitude`` [m] (above the director): the
+        table built once (:meth:`_vergence_table`), interpolated."""
+        return np.interp(altitude, self._h_table, self._kappa_table)
+
+    def _vergence_table(self, top: float = 400.0, step: float = 0.25) -> None:
+        """The schedule's vergence every ``step`` m up to ``top`` m (linearize.beam_riding
+        evaluates the beam's side through casadi: 0.4 ms a call, 4 ms a pulse for a
+        horizon's stages; the table answers in microseconds)."""
+        self._h_table = np.arange(0.0, top + step / 2, step)
+        self._kappa_table = np.array(
+            [
+                1.0
+                / scheduled_focus(
+                    self.schedule,
+                    float(h),
+                    self.laser,
+                    self.p,
+                    matched_side=self.options.matched_side,
+                )
+                for h in self._h_table
+            ]
         )
-        return 1.0 / f
 
     def _full(self, v: np.ndarray) -> np.ndarray:
         """Ψ's map input of the QP's input v (pointing, κ, energy): focus 1/κ, RCS off."""
