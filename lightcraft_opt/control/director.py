@@ -31,7 +31,8 @@ plant's dispersion): each pulse the lateral velocity and the lateral angular mom
 last plan predicted for now are compared with the measured ones and ``disturbance_gain`` of
 the difference is added to per-pulse increments that every predicted stage then carries (an
 integrating disturbance estimate of a lateral force and a tipping torque: offset-free
-tracking under a steady error).
+tracking under a steady error). A pulse the laser dropped (the climb short by over half a
+pulse's kick) teaches it nothing.
 
 On a craft with RCS the nutation MPC (mpc.py) flies alongside (``options.nutation``): it
 fires the thrusters against the coning and the tilt as it does alone, and its beam pointing
@@ -166,6 +167,7 @@ class DirectorController:
         self.schedule = FocusSchedule(opts.focus_schedule)
         self._vergence_table()
         self.energy = model.flight.pulse_energy
+        self._kick = model.flight.impulse_per_pulse / model.craft.mass  # m/s, a pulse's Δv
         low, high = opts.energy_range
         self.allocation = (
             TorqueAllocation(model) if model.craft.rcs is not None and opts.rcs == "tilt" else None
@@ -299,7 +301,10 @@ class DirectorController:
         # observe what the last plan missed: the lateral velocity now against its prediction
         zp, up = self.plan
         gain = self.options.disturbance_gain
-        if gain and self._age == 0:
+        # a pulse the laser dropped shows as a climb short by a pulse's kick: it is no
+        # disturbance to learn (the prediction assumed the pulse fired)
+        dropped = z0[_V][2] - zp[1, _V][2] < -0.5 * self._kick
+        if gain and self._age == 0 and not dropped:
             miss_v = z0[_V][:2] - zp[1, _V][:2]
             miss_h = z0[_H][:2] - zp[1, _H][:2]
             self.disturbance = self.disturbance + gain * np.r_[miss_v, miss_h]

@@ -168,7 +168,10 @@ class DirectorWeights:
     velocity : lateral velocity |v|, 5 cm/s [s^2/m^2]: the damping that keeps a dropped
         pulse or a gust from setting the craft drifting.
     coning : |c|, the sine of the coning angle, 2 degrees [1/rad^2].
-    tilt : of the angular momentum from the vertical, 2 degrees [1/rad^2].
+    tilt : of the angular momentum from the vertical, 10 degrees [1/rad^2]: loose, since in a
+        crosswind the craft must lean into the wind (its thrust then balances the drag: 7-12
+        degrees in 3 m/s); at 2 degrees the director fought that lean and lost the craft
+        after dropped pulses (docs/director.md).
     pointing : beam axis off the pad axis, 10 cm [1/m^2].
     vergence : the focus's vergence 1/f off the schedule's, 0.002 1/m [m^2] (at 50 m the
         beam's side moves by ~10 % for it).
@@ -188,7 +191,7 @@ class DirectorWeights:
     drift: float = 1.0 / 0.05**2
     velocity: float = 1.0 / 0.05**2
     coning: float = 1.0 / math.radians(2.0) ** 2
-    tilt: float = 1.0 / math.radians(2.0) ** 2
+    tilt: float = 1.0 / math.radians(10.0) ** 2
     pointing: float = 1.0 / 0.1**2
     vergence: float = 1.0 / 0.002**2
     energy: float = 1.0 / 100.0**2

@@ -53,7 +53,7 @@ A closed-loop file::
     drift_cm = 5.0
     velocity_mps = 0.05
     coning_deg = 2.0
-    tilt_deg = 2.0
+    tilt_deg = 10.0
     pointing_cm = 10.0
     move_cm = 2.0
     move_vergence = 0.001                  # [1/m]
