@@ -76,6 +76,11 @@ _C = REDUCED_STATE.index("coning")
 #: The QP's inputs: pointing_L east, north [m], vergence κ [1/m], energy [J], the RCS's held
 #: transverse torque along b2, b3 [N m] (bounded to zero without ``rcs = "tilt"``).
 NU = 6
+#: The QP's states: r_L, v_L, H_L and the coning offset (the first 11 of Ψ's 14). The mass
+#: bookkeeping (liner, RCS propellant, pulse count) is no decision: it follows Ψ's own
+#: prediction, and leaving it out of the QP makes each Riccati step (cubic in the states)
+#: about half as dear.
+NQ = 11
 
 
 def director_model(model: Model, options: DirectorOptions) -> Model:
@@ -196,12 +201,12 @@ class DirectorController:
         Wt = w.terminal * np.array(
             [w.offset + w.drift] * 2 + [w.velocity] * 2 + [w.coning] * 2 + [w.tilt] * 2
         )
-        C = np.hstack([Cz, Cu])
+        C = np.hstack([Cz[:, :NQ], Cu])
+        Ct = Ct[:, :NQ]
         self._C, self._W, self._Ct, self._Wt = C, W, Ct, Wt
         H_stage = 2 * C.T @ (W[:, None] * C)
-        nz = Cz.shape[1]
-        H_stage[nz : nz + 2, nz : nz + 2] += 2 * w.move * np.eye(2)  # proximal, no gradient
-        H_stage[nz + 2, nz + 2] += 2 * w.move_vergence
+        H_stage[NQ : NQ + 2, NQ : NQ + 2] += 2 * w.move * np.eye(2)  # proximal, no gradient
+        H_stage[NQ + 2, NQ + 2] += 2 * w.move_vergence
         self.qp = DirectorQp(
             H_stage,
             2 * Ct.T @ (Wt[:, None] * Ct),
@@ -251,7 +256,10 @@ class DirectorController:
             sol.solve_time > opts.time_budget and opts.solver is not MpcSolver.IPOPT
         )
         if sol.status is QpStatus.SOLVED and not late:
-            self.plan = (Z + sol.dz, U + sol.du)
+            planned = Z.copy()
+            planned[:, :NQ] += sol.dz
+            planned[1:, NQ:] = self._bookkeeping  # Ψ's own prediction of the masses
+            self.plan = (planned, U + sol.du)
             self._start = self.qp.shifted(sol) if opts.warm_start else None
             self._age = 0
             v = self.plan[1][0]
@@ -319,7 +327,7 @@ class DirectorController:
     def _solve(
         self, Z: np.ndarray, U: np.ndarray, t: float, fault: ControllerFault | None
     ) -> DirectorSolution:
-        N, nz = self.options.horizon, Z.shape[1]
+        N = self.options.horizon
         assert self._A is not None and self._B is not None
         times = t + self.period * np.arange(N)
         full = np.array([self._full(u) for u in U])
@@ -333,25 +341,26 @@ class DirectorController:
         for j in sorted(refresh):
             _, _, A, B = self._stage(Z[j], full[j], self.p, times[j])
             self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
+        self._bookkeeping = Zn[:, NQ:]
         d = Zn - Z[1:]
         d[:, _V.start : _V.start + 2] += self.disturbance[:2]
         d[:, _R.start : _R.start + 2] += 0.5 * self.period * self.disturbance[:2]
         d[:, _H.start : _H.start + 2] += self.disturbance[2:]
         # Gauss-Newton gradients: 2 C'W (C x̄ - y_ref)
-        X = np.hstack([Z[:N], U])
+        X = np.hstack([Z[:N, :NQ], U])
         ref = np.zeros((N, 16))
         ref[:, 12] = self._vergence(Z[:N, _R.start + 2])
         ref[:, 13] = self.energy
         res = X @ self._C.T - ref
         g_stage = 2 * (res * self._W) @ self._C
-        g_term = 2 * ((self._Ct @ Z[N]) * self._Wt) @ self._Ct
+        g_term = 2 * ((self._Ct @ Z[N, :NQ]) * self._Wt) @ self._Ct
         g = np.concatenate([g_stage.ravel(), g_term])
         return self.qp.solve(
-            self._A,
-            self._B,
-            d,
+            self._A[:, :NQ, :NQ],
+            self._B[:, :NQ],
+            d[:, :NQ],
             g,
-            np.zeros(nz),
+            np.zeros(NQ),
             self.u_lower - U,
             self.u_upper - U,
             self._start,
