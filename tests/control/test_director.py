@@ -210,6 +210,7 @@ def test_torque_allocation_of_opposed_pairs():
 def test_director_problem_files_load():
     record = load_closed_loop(REPO_ROOT / "problems" / "director_record.toml")
     assert record.director.matched_side == pytest.approx(0.085)
+    assert record.director.relinearize == record.director.horizon  # the plain RTI
     assert record.model.laser.size_model is BeamSizeModel.WAIST
     assert record.model.craft.rcs is None
     campaign = load_campaign(REPO_ROOT / "problems" / "montecarlo_director.toml")
