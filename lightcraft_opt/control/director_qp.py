@@ -19,12 +19,17 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.control.mpc_qp import QpStatus, shift_stages
+from lightcraft_opt.control.mpc_qp import (
+    QpCall,
+    QpStatus,
+    call_qp,
+    conic_options,
+    shift_stages,
+)
 from lightcraft_opt.control.options import ControllerFault, MpcSolver
 from lightcraft_opt.errors import OptionError
 
@@ -143,9 +148,13 @@ class DirectorQp:
             outs = [sol["x"], sol["f"], sol["lam_x"], sol["lam_g"]]
         else:
             qp = {"h": self._H.sparsity(), "a": assemble.sparsity_out(0)}
-            conic = ca.conic(
-                "director_qp_solver", solver.value, qp, _conic_options(solver, max_iter, tol)
-            )
+            try:
+                # relative residuals: "speed_abs" stops 1e-3 off the minimiser of
+                # tests/control/test_director.py's QP at tol 1e-6, "speed" 5e-10 off
+                opts = conic_options(solver, max_iter, tol, hpipm_mode="speed")
+            except OptionError as err:
+                raise OptionError(f"DirectorOptions.{err}") from None
+            conic = ca.conic("director_qp_solver", solver.value, qp, opts)
             sol = conic(
                 h=self._H,
                 g=g_in,
@@ -205,110 +214,32 @@ class DirectorQp:
             if start is not None
             else (np.zeros(self.n_w), np.zeros(self.n_w), np.zeros(self.n_a))
         )
-        t0 = time.perf_counter()
         if not all(np.all(np.isfinite(v)) for v in (A, B, d, g, dz0)):
             nan = np.full(self.n_w, np.nan)
             message = "non-finite linearisation (the plan left Ψ's domain)"
-            return self._solution(QpStatus.NON_FINITE, message, nan, np.nan, lx0, la0, 0, 0.0)
-        try:
-            if fault is ControllerFault.RAISE:
-                raise RuntimeError("injected solver failure")
-            w_dm, cost_dm, lx_dm, la_dm = self.function(
-                np.concatenate(list(A), axis=1),
-                np.concatenate(list(B), axis=1),
-                g,
-                np.ravel(d),
-                lbx,
-                ubx,
-                w0,
-                lx0,
-                la0,
+            return self._solution(
+                QpCall(QpStatus.NON_FINITE, message, nan, np.nan, lx0, la0, 0, 0.0)
             )
-        except RuntimeError as err:
-            solve_time = time.perf_counter() - t0
-            nan = np.full(self.n_w, np.nan)
-            return self._solution(QpStatus.FAILED, str(err), nan, np.nan, lx0, la0, 0, solve_time)
-        solve_time = time.perf_counter() - t0
-        w = np.asarray(w_dm, dtype=float).ravel()
-        if fault is ControllerFault.NON_FINITE:
-            w = np.full(self.n_w, np.nan)
-        stats = self.function.stats()
-        iterations = int(stats.get("iter_count", -1))
-        if stats.get("success", False):
-            status = QpStatus.SOLVED
-        elif "maximum" in str(stats.get("return_status", "")).lower():
-            status = QpStatus.MAX_ITER
-        else:
-            status = QpStatus.FAILED
-        if not np.all(np.isfinite(w)):
-            status = QpStatus.NON_FINITE
-        message = f"{self.solver.value}: {stats.get('return_status', 'unknown')}"
-        return self._solution(
-            status,
-            message,
-            w,
-            float(cost_dm),
-            np.asarray(lx_dm, dtype=float).ravel(),
-            np.asarray(la_dm, dtype=float).ravel(),
-            iterations,
-            solve_time,
+        inputs = (
+            np.concatenate(list(A), axis=1),
+            np.concatenate(list(B), axis=1),
+            g,
+            np.ravel(d),
+            lbx,
+            ubx,
+            w0,
+            lx0,
+            la0,
         )
+        return self._solution(call_qp(self.function, inputs, self.solver, (w0, lx0, la0), fault))
 
-    def _solution(
-        self,
-        status: QpStatus,
-        message: str,
-        w: np.ndarray,
-        cost: float,
-        lam_x: np.ndarray,
-        lam_a: np.ndarray,
-        iterations: int,
-        solve_time: float,
-    ) -> DirectorSolution:
+    def _solution(self, c: QpCall) -> DirectorSolution:
+        """The solution laid out by stage, from a call's raw vectors."""
+        status, message, w, cost = c.status, c.message, c.w, c.cost
+        lam_x, lam_a, iterations, solve_time = c.lam_x, c.lam_a, c.iterations, c.solve_time
         N, nz, nu = self.horizon, self.nz, self.nu
         body = w[: N * (nz + nu)].reshape(N, nz + nu)
         dz = np.vstack([body[:, :nz], w[None, N * (nz + nu) :]])
         return DirectorSolution(
             status, message, dz, body[:, nz:].copy(), cost, iterations, solve_time, w, lam_x, lam_a
         )
-
-
-def _conic_options(solver: MpcSolver, max_iter: int, tol: float) -> dict[str, Any]:
-    common: dict[str, Any] = {"error_on_fail": False}
-    if not ca.has_conic(solver.value):
-        raise OptionError(f"DirectorOptions.solver {solver.value!r}: not in this casadi build")
-    if solver is MpcSolver.HPIPM:
-        return {
-            **common,
-            "hpipm": {
-                "iter_max": max_iter,
-                # relative residuals: "speed_abs" stops 1e-3 off the minimiser of
-                # tests/control/test_director.py's QP at tol 1e-6, "speed" 5e-10 off
-                "mode": "speed",
-                "res_g_max": tol,
-                "res_b_max": tol,
-                "res_d_max": tol,
-                "res_m_max": tol,
-                "warm_start": 1,
-            },
-        }
-    if solver is MpcSolver.QRQP:
-        return {
-            **common,
-            "max_iter": max_iter,
-            "constr_viol_tol": tol,
-            "dual_inf_tol": tol,
-            "print_iter": False,
-            "print_header": False,
-            "print_info": False,
-        }
-    return {
-        **common,
-        "osqp": {
-            "verbose": False,
-            "max_iter": max_iter,
-            "eps_abs": tol,
-            "eps_rel": tol,
-            "polish": True,
-        },
-    }

@@ -29,7 +29,16 @@ import numpy as np
 from lightcraft_opt.control.options import ControllerFault, MpcSolver
 from lightcraft_opt.errors import OptionError, ParameterError
 
-__all__ = ["NutationQp", "QpData", "QpSolution", "QpStatus", "shift_stages"]
+__all__ = [
+    "NutationQp",
+    "QpCall",
+    "QpData",
+    "QpSolution",
+    "QpStatus",
+    "call_qp",
+    "conic_options",
+    "shift_stages",
+]
 
 
 class QpStatus(Enum):
@@ -119,6 +128,113 @@ def shift_stages(v: np.ndarray, block: int, tail: int) -> np.ndarray:
     body = v[block:-tail] if tail else v[block:]
     last = v[(n_blocks - 1) * block : n_blocks * block]
     return np.concatenate([body, last, v[v.size - tail :]]) if tail else np.r_[body, last]
+
+
+@dataclass(frozen=True)
+class QpCall:
+    """What one protected call of a compiled QP Function gave (:func:`call_qp`).
+
+    Attributes
+    ----------
+    status, message : how it ended; w, cost, lam_x, lam_a : the primal and dual solution (NaN
+    primal on a failure, the start's duals); iterations : of the solver (-1 when it does not
+    say); solve_time : wall time of the call [s].
+    """
+
+    status: QpStatus
+    message: str
+    w: np.ndarray
+    cost: float
+    lam_x: np.ndarray
+    lam_a: np.ndarray
+    iterations: int
+    solve_time: float
+
+
+def call_qp(
+    function: ca.Function,
+    inputs: tuple[Any, ...],
+    solver: MpcSolver,
+    start: tuple[np.ndarray, np.ndarray, np.ndarray],
+    fault: ControllerFault | None,
+) -> QpCall:
+    """Call a QP Function ``function(*inputs) -> (w, cost, lam_x, lam_a)`` with ``start`` =
+    (w0, lam_x0, lam_a0) its warm start, never raising for a failed solve: RAISE (``fault``)
+    raises inside the protection, NON_FINITE replaces the answer by NaN, LATE is left to the
+    caller's wall-time check."""
+    w0, lx0, la0 = start
+    t0 = time.perf_counter()
+    try:
+        if fault is ControllerFault.RAISE:
+            raise RuntimeError("injected solver failure")
+        w_dm, cost_dm, lx_dm, la_dm = function(*inputs)
+    except RuntimeError as err:
+        nan = np.full(w0.size, np.nan)
+        return QpCall(QpStatus.FAILED, str(err), nan, np.nan, lx0, la0, 0, time.perf_counter() - t0)
+    solve_time = time.perf_counter() - t0
+    w = np.asarray(w_dm, dtype=float).ravel()
+    if fault is ControllerFault.NON_FINITE:
+        w = np.full(w.size, np.nan)
+    stats = function.stats()
+    status = _status(stats)
+    if not np.all(np.isfinite(w)):
+        status = QpStatus.NON_FINITE
+    return QpCall(
+        status,
+        f"{solver.value}: {stats.get('return_status', 'unknown')}",
+        w,
+        float(cost_dm),
+        np.asarray(lx_dm, dtype=float).ravel(),
+        np.asarray(la_dm, dtype=float).ravel(),
+        int(stats.get("iter_count", -1)),
+        solve_time,
+    )
+
+
+def _status(stats: dict[str, Any]) -> QpStatus:
+    if stats.get("success", False):
+        return QpStatus.SOLVED
+    unified = str(stats.get("unified_return_status", ""))
+    raw = str(stats.get("return_status", "")).lower()
+    if "maximum" in raw or unified == "SOLVER_RET_LIMITED":
+        return QpStatus.MAX_ITER
+    return QpStatus.FAILED
+
+
+def conic_options(
+    solver: MpcSolver, max_iter: int, tol: float, hpipm_mode: str = "speed_abs"
+) -> dict[str, Any]:
+    """casadi ``conic`` options of ``solver`` (not IPOPT) with its iteration cap and residual
+    tolerance; ``hpipm_mode`` HPIPM's mode ("speed_abs" absolute residuals, "speed"
+    relative ones). Raises OptionError when the casadi build lacks the solver."""
+    if not ca.has_conic(solver.value):
+        raise OptionError(f"solver {solver.value!r}: not in this casadi build")
+    common: dict[str, Any] = {"error_on_fail": False}
+    if solver is MpcSolver.HPIPM:
+        return {
+            **common,
+            "hpipm": {
+                "iter_max": max_iter,
+                "mode": hpipm_mode,
+                "res_g_max": tol,
+                "res_b_max": tol,
+                "res_d_max": tol,
+                "res_m_max": tol,
+                "warm_start": 1,
+            },
+        }
+    if solver is MpcSolver.QRQP:
+        return {
+            **common,
+            "max_iter": max_iter,
+            "constr_viol_tol": tol,
+            "dual_inf_tol": tol,
+            "print_iter": False,
+            "print_header": False,
+            "print_info": False,
+        }
+    osqp = {"verbose": False, "max_iter": max_iter, "eps_abs": tol, "eps_rel": tol, "polish": True}
+    return {**common, "osqp": osqp}
 
 
 class NutationQp:
@@ -247,43 +363,7 @@ class NutationQp:
         return j * (self.nx + self.nv) + self.nx
 
     def _qp_solver(self, a_sparsity: ca.Sparsity, max_iter: int, tol: float) -> ca.Function:
-        common: dict[str, Any] = {"error_on_fail": False}
-        name = self.solver.value
-        if self.solver is MpcSolver.HPIPM:
-            opts = {
-                **common,
-                "hpipm": {
-                    "iter_max": max_iter,
-                    "mode": "speed_abs",
-                    "res_g_max": tol,
-                    "res_b_max": tol,
-                    "res_d_max": tol,
-                    "res_m_max": tol,
-                    "warm_start": 1,
-                },
-            }
-        elif self.solver is MpcSolver.QRQP:
-            opts = {
-                **common,
-                "max_iter": max_iter,
-                "constr_viol_tol": tol,
-                "dual_inf_tol": tol,
-                "print_iter": False,
-                "print_header": False,
-                "print_info": False,
-            }
-        elif self.solver is MpcSolver.OSQP:
-            opts = {
-                **common,
-                "osqp": {
-                    "verbose": False,
-                    "max_iter": max_iter,
-                    "eps_abs": tol,
-                    "eps_rel": tol,
-                    "polish": True,
-                },
-            }
-        else:  # IPOPT on the QP written as an NLP
+        if self.solver is MpcSolver.IPOPT:  # the QP written as an NLP
             w = ca.SX.sym("w", self.n_w)
             pa = ca.SX.sym("A", self.nx, self.nx * self.horizon)
             pb = ca.SX.sym("B", self.nx, self.nu * self.horizon)
@@ -300,12 +380,17 @@ class NutationQp:
                 "jac_d_constant": "yes",
             }
             return ca.nlpsol(
-                "mpc_qp_ipopt", "ipopt", nlp, {**common, "print_time": False, "ipopt": ipopt}
+                "mpc_qp_ipopt",
+                "ipopt",
+                nlp,
+                {"error_on_fail": False, "print_time": False, "ipopt": ipopt},
             )
-        if not ca.has_conic(name):
-            raise OptionError(f"MpcOptions.solver {name!r}: not in this casadi build")
+        try:
+            opts = conic_options(self.solver, max_iter, tol)
+        except OptionError as err:
+            raise OptionError(f"MpcOptions.{err}") from None
         qp = {"h": self._H.sparsity(), "a": a_sparsity}
-        return ca.conic("mpc_qp_solver", name, qp, opts)
+        return ca.conic("mpc_qp_solver", self.solver.value, qp, opts)
 
     def _assemble_symbolic(self, pa: ca.SX, pb: ca.SX) -> ca.SX:
         """The constraint matrix (dynamics and stage rows) of symbolic stage matrices."""
@@ -360,56 +445,13 @@ class NutationQp:
         w0, lx0, la0 = start if start is not None else self.cold_start()
         A_side = np.concatenate(list(A), axis=1)
         B_side = np.concatenate(list(B), axis=1)
-        t0 = time.perf_counter()
-        try:
-            if fault is ControllerFault.RAISE:
-                raise RuntimeError("injected solver failure")
-            w_dm, cost_dm, lx_dm, la_dm = self.function(z0, A_side, B_side, w0, lx0, la0)
-        except RuntimeError as err:
-            solve_time = time.perf_counter() - t0
-            nan = np.full(self.n_w, np.nan)
-            return self._solution(QpStatus.FAILED, str(err), nan, np.nan, lx0, la0, 0, solve_time)
-        solve_time = time.perf_counter() - t0
-        w = np.asarray(w_dm, dtype=float).ravel()
-        if fault is ControllerFault.NON_FINITE:
-            w = np.full(self.n_w, np.nan)
-        stats = self.function.stats()
-        iterations = int(stats.get("iter_count", -1))
-        status = self._status(stats, iterations)
-        message = f"{self.solver.value}: {stats.get('return_status', 'unknown')}"
-        if not np.all(np.isfinite(w)):
-            status = QpStatus.NON_FINITE
-        return self._solution(
-            status,
-            message,
-            w,
-            float(cost_dm),
-            np.asarray(lx_dm, dtype=float).ravel(),
-            np.asarray(la_dm, dtype=float).ravel(),
-            iterations,
-            solve_time,
-        )
+        inputs = (z0, A_side, B_side, w0, lx0, la0)
+        return self._solution(call_qp(self.function, inputs, self.solver, (w0, lx0, la0), fault))
 
-    def _status(self, stats: dict[str, Any], iterations: int) -> QpStatus:
-        if stats.get("success", False):
-            return QpStatus.SOLVED
-        unified = str(stats.get("unified_return_status", ""))
-        raw = str(stats.get("return_status", "")).lower()
-        if "maximum" in raw or unified == "SOLVER_RET_LIMITED":
-            return QpStatus.MAX_ITER
-        return QpStatus.FAILED
-
-    def _solution(
-        self,
-        status: QpStatus,
-        message: str,
-        w: np.ndarray,
-        cost: float,
-        lam_x: np.ndarray,
-        lam_a: np.ndarray,
-        iterations: int,
-        solve_time: float,
-    ) -> QpSolution:
+    def _solution(self, c: QpCall) -> QpSolution:
+        """The solution laid out by stage, from a call's raw vectors."""
+        status, message, w, cost = c.status, c.message, c.w, c.cost
+        lam_x, lam_a, iterations, solve_time = c.lam_x, c.lam_a, c.iterations, c.solve_time
         N, nx, nv = self.horizon, self.nx, self.nv
         if w.size != self.n_w:
             w = np.full(self.n_w, np.nan)

@@ -122,14 +122,7 @@ class MpcOptions:
 
     def __post_init__(self) -> None:
         checked_int("MpcOptions", "horizon", self.horizon, 1)
-        if not isinstance(self.weights, ControlWeights):
-            raise OptionError(f"MpcOptions.weights must be a ControlWeights, got {self.weights!r}")
-        if not isinstance(self.solver, MpcSolver):
-            allowed = [s.value for s in MpcSolver]
-            raise OptionError(f"MpcOptions.solver must be one of {allowed}, got {self.solver!r}")
-        checked_int("MpcOptions", "max_iter", self.max_iter, 1)
-        checked_number("MpcOptions", "tol", self.tol, 0.0, 1.0)
-        checked_number("MpcOptions", "time_budget", self.time_budget, 0.0)
+        _checked_qp_options("MpcOptions", self, ControlWeights)
         checked_int("MpcOptions", "envelope_directions", self.envelope_directions, 2)
         c = self.capture_fraction
         if not (
@@ -269,18 +262,7 @@ class DirectorOptions:
 
     def __post_init__(self) -> None:
         checked_int("DirectorOptions", "horizon", self.horizon, 2)
-        if not isinstance(self.weights, DirectorWeights):
-            raise OptionError(
-                f"DirectorOptions.weights must be a DirectorWeights, got {self.weights!r}"
-            )
-        if not isinstance(self.solver, MpcSolver):
-            allowed = [s.value for s in MpcSolver]
-            raise OptionError(
-                f"DirectorOptions.solver must be one of {allowed}, got {self.solver!r}"
-            )
-        checked_int("DirectorOptions", "max_iter", self.max_iter, 1)
-        checked_number("DirectorOptions", "tol", self.tol, 0.0, 1.0)
-        checked_number("DirectorOptions", "time_budget", self.time_budget, 0.0)
+        _checked_qp_options("DirectorOptions", self, DirectorWeights)
         checked_int("DirectorOptions", "relinearize", self.relinearize, 1)
         if self.relinearize > self.horizon:
             raise OptionError(
@@ -327,6 +309,20 @@ class DirectorOptions:
             raise OptionError(
                 f"DirectorOptions.warm_start must be true or false, got {self.warm_start!r}"
             )
+
+
+def _checked_qp_options(owner: str, options: MpcOptions | DirectorOptions, weights: type) -> None:
+    """Raise OptionError naming the field unless ``options`` (an MpcOptions or
+    DirectorOptions) has weights of class ``weights``, an MpcSolver, an iteration cap >= 1,
+    a tolerance in (0, 1) and a positive time budget."""
+    if not isinstance(options.weights, weights):
+        raise OptionError(f"{owner}.weights must be a {weights.__name__}, got {options.weights!r}")
+    if not isinstance(options.solver, MpcSolver):
+        allowed = [s.value for s in MpcSolver]
+        raise OptionError(f"{owner}.solver must be one of {allowed}, got {options.solver!r}")
+    checked_int(owner, "max_iter", options.max_iter, 1)
+    checked_number(owner, "tol", options.tol, 0.0, 1.0)
+    checked_number(owner, "time_budget", options.time_budget, 0.0)
 
 
 @dataclass(frozen=True)
