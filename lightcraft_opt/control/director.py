@@ -14,9 +14,10 @@ Every pulse, ``u = director.step(x)`` (docs/director.md):
    Gauss-Newton least squares on the beam offset (the optic at the mass centre), the drift
    from the pad axis, the lateral velocity, the coning, the tilt of H, the pointing, the
    focus's vergence 1/f against the focus schedule (linearize.beam_riding.scheduled_focus:
-   by default the launch side matched at the craft's height) and the pulse energy against
-   the flight's; the pointing inside ±pointing_limit, the focus inside the laser's range,
-   the energy inside ``energy_range``; a proximal term on the pointing's step keeps each
+   by default the launch side matched at the craft's height, tabulated at build), the pulse
+   energy against the flight's and the RCS's torque; the pointing inside ±pointing_limit,
+   the focus inside the laser's range, the energy inside ``energy_range``, the torque inside
+   the thrusters' reach; proximal terms on the pointing's and the vergence's steps keep each
    iteration where its linearisation holds;
 4. fly the first input and keep the plan. A solve that fails or overruns the budget is
    discarded and the plan's next input flies (status ``fallback_*``); once the plan is used
@@ -34,10 +35,14 @@ integrating disturbance estimate of a lateral force and a tipping torque: offset
 tracking under a steady error). A pulse the laser dropped (the climb short by over half a
 pulse's kick) teaches it nothing.
 
-On a craft with RCS the nutation MPC (mpc.py) flies alongside (``options.nutation``): it
-fires the thrusters against the coning and the tilt as it does alone, and its beam pointing
-is replaced by the director's. Ψ carries only held RCS levels, which average out over a
-coning turn (mpc.py, "Actuators"): the thrusters are the MPC's, the beam the director's.
+The RCS (``options.rcs``). "tilt" (the default on a craft with one): the QP holds a
+transverse torque (b2, b3) over the pulse interval, which Ψ sees as T τ added to H (B does
+not spin about b1, so a torque held in B is held in L up to B's slow twist, read from the
+measured attitude every pulse); rcs_allocation.py turns it into held thrusts. It steers the
+angular momentum, the slow lean the crosswind needs, not the 216 Hz coning, which held levels
+cannot follow (mpc.py, "Actuators"). "nutation": the nutation MPC (mpc.py) flies the
+thrusters alongside, phase-locked against the coning and the tilt, its beam pointing replaced
+by the director's. "off": the thrusters rest.
 """
 
 from __future__ import annotations
@@ -125,7 +130,8 @@ class DirectorController:
     model : the controller's model (its numbers are what it believes).
     inputs : the plant Φ's map-input layout (the director's input is laid out as it).
     options : :class:`~lightcraft_opt.control.options.DirectorOptions`.
-    nutation : the nutation MPC flown alongside on a craft with RCS (None: RCS off).
+    nutation : the nutation MPC whose thrusters fly alongside when ``options.rcs`` is
+        "nutation" (None then leaves them off; ignored otherwise).
     p : the controller's parameter vector (default its model's).
     compiled : compile Ψ's pieces (None: ``compiled.compile_by_default``).
 
@@ -161,10 +167,9 @@ class DirectorController:
         self.nutation = nutation
         psi = build_reduced_map(self.model)
         self._project = psi.project
-        self._psi_inputs = psi.inputs
         self.period = psi.period
         d = reduced_derivatives_for(self.model, psi.options, compiled=compiled)
-        self._value, self._stage = d.value, d.stage
+        self._stage = d.stage
         N = opts.horizon
         self._values = d.value.map(N)
         laser = self.model.laser
@@ -272,7 +277,7 @@ class DirectorController:
             else:
                 status, message = ControllerStatus.FALLBACK_FAILED, sol.message
         u = self._map_input(v, np.asarray(x, dtype=float))
-        if self.nutation is not None and self.allocation is None:
+        if self.nutation is not None and self.options.rcs == "nutation":
             u_rcs = self.nutation.step(x, t, fault=fault)
             u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]
         self.last = StepStats(
