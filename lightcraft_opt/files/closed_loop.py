@@ -304,62 +304,74 @@ def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
 
 
 def _mpc_options(src: str, raw: Any) -> MpcOptions:
-    table = read_table(src, raw, "controller", _CONTROLLER, tables=("tolerances",))
-    tol = read_table(src, raw.get("tolerances", {}), "controller.tolerances", _TOLERANCES)
+    table, tol, weights = _weighted_tables(src, raw, "controller", _CONTROLLER, _TOLERANCES)
     values = dict(table.values)
-    weights: dict[str, float] = {}
-    for name, v in tol.values.items():
-        if v <= 0:
-            raise ProblemFileError(src, tol.key(name), f"a tolerance must be positive, got {v}")
-        weights[name] = 1.0 / v**2
     if "propellant_weight" in values:
         weights["propellant"] = values.pop("propellant_weight")
-    renamed = {"horizon_pulses": "horizon"}
-    kwargs = {renamed.get(k, k): v for k, v in values.items()}
     try:
-        return MpcOptions(**kwargs, weights=ControlWeights(**weights))
+        return MpcOptions(**_renamed(values), weights=ControlWeights(**weights))
     except OptionError as err:
-        raise ProblemFileError(src, _option_key(str(err), table, tol), str(err)) from err
+        message = str(err)
+        key = (
+            table.key("propellant_weight")
+            if "ControlWeights.propellant" in message
+            else _option_key(message, (table, _CONTROLLER), (tol, _TOLERANCES), "MpcOptions")
+        )
+        raise ProblemFileError(src, key, message) from err
 
 
 def _director_options(src: str, raw: Any) -> DirectorOptions:
-    if not isinstance(raw, dict):
-        raise ProblemFileError(src, "director", f"must be a table [director], got {raw!r}")
-    table = read_table(src, raw, "director", _DIRECTOR, tables=("tolerances",))
-    tol = read_table(src, raw.get("tolerances", {}), "director.tolerances", _DIRECTOR_TOLERANCES)
-    weights: dict[str, float] = {}
-    for name, v in tol.values.items():
-        if not (math.isfinite(v) and v > 0):
-            raise ProblemFileError(src, tol.key(name), f"a tolerance must be positive, got {v}")
-        weights[name] = 1.0 / v**2
-    kwargs = {("horizon" if k == "horizon_pulses" else k): v for k, v in table.values.items()}
+    table, tol, weights = _weighted_tables(src, raw, "director", _DIRECTOR, _DIRECTOR_TOLERANCES)
+    kwargs = _renamed(table.values)
     if "energy_range" in kwargs:
         kwargs["energy_range"] = tuple(float(v) for v in kwargs["energy_range"])
     try:
         return DirectorOptions(**kwargs, weights=DirectorWeights(**weights))
     except OptionError as err:
         message = str(err)
-        key = "director"
-        for name in _DIRECTOR_TOLERANCES:
-            if f"DirectorWeights.{name} " in message:
-                key = tol.key(name)
-        for name in (*_DIRECTOR, "horizon"):
-            if f"DirectorOptions.{name} " in message:
-                key = table.key("horizon_pulses" if name == "horizon" else name)
+        key = _option_key(
+            message, (table, _DIRECTOR), (tol, _DIRECTOR_TOLERANCES), "DirectorOptions"
+        )
         raise ProblemFileError(src, key, message) from err
 
 
-def _option_key(message: str, table: Table, tol: Table) -> str:
-    """The key an OptionError's ``Class.field`` was written as."""
-    for name in (*_CONTROLLER, "horizon"):
-        if f"MpcOptions.{name} " in message:
-            return table.key("horizon_pulses" if name == "horizon" else name)
-    for name in _TOLERANCES:
-        if f"ControlWeights.{name} " in message:
-            return tol.key(name)
-    if "ControlWeights.propellant" in message:
-        return table.key("propellant_weight")
-    return "controller"
+def _weighted_tables(
+    src: str, raw: Any, name: str, schema: dict[str, Spec], tolerances: dict[str, Spec]
+) -> tuple[Table, Table, dict[str, float]]:
+    """The table ``name`` and its ``[name.tolerances]`` read, and the weights of the
+    tolerances, 1 / tolerance^2 by field (a tolerance must be positive)."""
+    table = read_table(src, raw, name, schema, tables=("tolerances",))
+    tol = read_table(src, raw.get("tolerances", {}), f"{name}.tolerances", tolerances)
+    weights: dict[str, float] = {}
+    for field, v in tol.values.items():
+        if not v > 0:
+            raise ProblemFileError(src, tol.key(field), f"a tolerance must be positive, got {v}")
+        weights[field] = 1.0 / v**2
+    return table, tol, weights
+
+
+def _renamed(values: dict[str, Any]) -> dict[str, Any]:
+    """A controller table's values by option field: ``horizon_pulses`` is ``horizon``."""
+    return {("horizon" if k == "horizon_pulses" else k): v for k, v in values.items()}
+
+
+def _option_key(
+    message: str,
+    options: tuple[Table, dict[str, Spec]],
+    tolerances: tuple[Table, dict[str, Spec]],
+    owner: str,
+) -> str:
+    """The key an OptionError's ``Class.field`` was written as: a field of ``owner`` (the
+    options class) in the table, a field of its weights (its ``weights`` class, named in
+    the message as ``...Weights.field``) in the tolerances, else the table itself."""
+    (table, schema), (tol, tol_schema) = options, tolerances
+    for field in (*schema, "horizon"):
+        if f"{owner}.{field} " in message:
+            return table.key("horizon_pulses" if field == "horizon" else field)
+    for field in tol_schema:
+        if f"Weights.{field} " in message:
+            return tol.key(field)
+    return table.where
 
 
 def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
