@@ -256,14 +256,14 @@ class DirectorController:
         q = x[STATE.index("q_LB")]
         self._B_torque = self._torque_columns(_dcm(q / np.linalg.norm(q)))
         Z, U = self._trajectory(z0, t)
-        sol = self._solve(Z, U, t, fault)
+        sol, bookkeeping = self._solve(Z, U, t, fault)
         late = fault is ControllerFault.LATE or (
             sol.solve_time > opts.time_budget and opts.solver is not MpcSolver.IPOPT
         )
         if sol.status is QpStatus.SOLVED and not late:
             planned = Z.copy()
             planned[:, :NQ] += sol.dz
-            planned[1:, NQ:] = self._bookkeeping  # Ψ's own prediction of the masses
+            planned[1:, NQ:] = bookkeeping  # Ψ's own prediction of the masses
             self.plan = (planned, U + sol.du)
             self._start = self.qp.shifted(sol) if opts.warm_start else None
             self._age = 0
@@ -276,7 +276,7 @@ class DirectorController:
                 message = f"late: {sol.solve_time * 1e3:.3f} ms > budget"
             else:
                 status, message = ControllerStatus.FALLBACK_FAILED, sol.message
-        u = self._map_input(v, np.asarray(x, dtype=float))
+        u = self._map_input(v)
         if self.nutation is not None and self.options.rcs == "nutation":
             u_rcs = self.nutation.step(x, t, fault=fault)
             u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]
@@ -291,16 +291,7 @@ class DirectorController:
         without a plan, the rollout of the schedule's input with the beam on the craft."""
         N = self.options.horizon
         if self.plan is None or self._A is None:
-            u0 = np.array(
-                [
-                    *np.clip(z0[_R][:2], self.u_lower[:2], self.u_upper[:2]),
-                    self._vergence(z0[_R][2]),
-                    np.clip(self.energy, self.u_lower[3], self.u_upper[3]),
-                    0.0,
-                    0.0,
-                ]
-            )
-            Z, U = np.zeros((N + 1, z0.size)), np.tile(u0, (N, 1))
+            Z, U = np.zeros((N + 1, z0.size)), np.tile(self._beam_on_craft(z0), (N, 1))
             Z[0] = z0
             self._A = np.zeros((N, z0.size, z0.size))
             self._B = np.zeros((N, z0.size, NU))
@@ -322,16 +313,14 @@ class DirectorController:
             miss_h = z0[_H][:2] - zp[1, _H][:2]
             self.disturbance = self.disturbance + gain * np.r_[miss_v, miss_h]
         Z = np.vstack([z0, zp[2:], 2 * zp[-1] - zp[-2]])
-        U = np.vstack([up[1:], up[-1:]])
-        A, B = self._A, self._B
-        assert B is not None  # set with A
-        self._A = np.concatenate([A[1:], A[-1:]])
-        self._B = np.concatenate([B[1:], B[-1:]])
-        return Z, U
+        self._shift_jacobians()
+        return Z, _shifted(up)
 
     def _solve(
         self, Z: np.ndarray, U: np.ndarray, t: float, fault: ControllerFault | None
-    ) -> DirectorSolution:
+    ) -> tuple[DirectorSolution, np.ndarray]:
+        """One QP about the trajectory (Z, U) from pulse time ``t`` [s]; also Ψ's prediction
+        (N, 3) of the mass bookkeeping along it, which the QP does not carry."""
         N = self.options.horizon
         assert self._A is not None and self._B is not None
         times = t + self.period * np.arange(N)
@@ -346,7 +335,6 @@ class DirectorController:
         for j in sorted(refresh):
             _, _, A, B = self._stage(Z[j], full[j], self.p, times[j])
             self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
-        self._bookkeeping = Zn[:, NQ:]
         d = Zn - Z[1:]
         d[:, _V.start : _V.start + 2] += self.disturbance[:2]
         d[:, _R.start : _R.start + 2] += 0.5 * self.period * self.disturbance[:2]
@@ -360,7 +348,7 @@ class DirectorController:
         g_stage = 2 * (res * self._W) @ self._C
         g_term = 2 * ((self._Ct @ Z[N, :NQ]) * self._Wt) @ self._Ct
         g = np.concatenate([g_stage.ravel(), g_term])
-        return self.qp.solve(
+        sol = self.qp.solve(
             self._A[:, :NQ, :NQ],
             self._B[:, :NQ],
             d[:, :NQ],
@@ -371,6 +359,7 @@ class DirectorController:
             self._start,
             fault,
         )
+        return sol, Zn[:, NQ:]
 
     # ----------------------------------------------------------------- helpers
     def _vergence(self, altitude: float | np.ndarray) -> float | np.ndarray:
@@ -419,7 +408,7 @@ class DirectorController:
         out[_H] = self.period * R_LB[:, 1:3]
         return out
 
-    def _map_input(self, v: np.ndarray, x: np.ndarray) -> np.ndarray:
+    def _map_input(self, v: np.ndarray) -> np.ndarray:
         """The plant's map input of the QP input v, inside the laser's ranges; the torque
         (B frame) allocated to held thrusts."""
         v = np.clip(v, self.u_lower, self.u_upper)
@@ -437,26 +426,42 @@ class DirectorController:
         self._age += 1
         if self.plan is not None and self._age < self.options.horizon:
             zp, up = self.plan
-            self.plan = (np.vstack([zp[1:], zp[-1:]]), np.vstack([up[1:], up[-1:]]))
-            if self._A is not None and self._B is not None:
-                self._A = np.concatenate([self._A[1:], self._A[-1:]])
-                self._B = np.concatenate([self._B[1:], self._B[-1:]])
+            self.plan = (_shifted(zp), _shifted(up))
+            self._shift_jacobians()
             self._start = None
             return up[1].copy()
         self.plan = None
+        return self._beam_on_craft(z0)
+
+    def _beam_on_craft(self, z: np.ndarray) -> np.ndarray:
+        """The QP input with no plan: the beam on the craft at ``z`` (inside the reach), the
+        schedule's focus at its height, the flight's energy, no torque."""
+        r = z[_R]
+        energy = np.clip(self.energy, self.u_lower[3], self.u_upper[3])
         return np.array(
             [
-                *np.clip(z0[_R][:2], self.u_lower[:2], self.u_upper[:2]),
-                self._vergence(z0[_R][2]),
-                self.energy,
-                0.0,
-                0.0,
+                *np.clip(r[:2], self.u_lower[:2], self.u_upper[:2]),
+                self._vergence(r[2]),
+                energy,
+                0,
+                0,
             ]
         )
 
+    def _shift_jacobians(self) -> None:
+        """The stored stage Jacobians one pulse on, the last repeated."""
+        if self._A is not None and self._B is not None:
+            self._A, self._B = _shifted(self._A), _shifted(self._B)
+
+
+def _shifted(a: np.ndarray) -> np.ndarray:
+    """``a`` by stage (first axis) one stage on, the last stage repeated."""
+    return np.concatenate([a[1:], a[-1:]])
+
 
 def _dcm(q: np.ndarray) -> np.ndarray:
-    """R_LB of the unit quaternion q_LB (w, x, y, z), as symbolic/rotation.dcm."""
+    """R_LB of the unit quaternion q_LB (w, x, y, z), as symbolic/rotation.dcm (which, fed a
+    DM, costs 0.8 ms a call: too dear every pulse)."""
     w, x, y, z = q
     return np.array(
         [
