@@ -404,6 +404,23 @@ def _compiled_with_pieces(
     stay interpreted."""
     values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
     jobs = [(f, DEFAULT_FLAGS) for f in values] + [(f, DERIVATIVE_FLAGS) for f in derivatives]
+    done = _compile_all(jobs, compiler, workers, max_instructions)
+    normalise, jump, substep, coning_rate = done[:4]
+    fast = dataclasses.replace(
+        pieces, normalise=normalise, jump=jump, substep=substep, coning_rate=coning_rate
+    )
+    return fast, done[4:]
+
+
+def _compile_all(
+    jobs: Sequence[tuple[ca.Function, tuple[str, ...]]],
+    compiler: str | None,
+    workers: int | None,
+    max_instructions: int,
+) -> list[ca.Function]:
+    """Each (Function, flags) compiled, its own library, ``workers`` at a time (default: the
+    cores), in order; a Function over ``max_instructions`` SX instructions, or one that does
+    not compile, stays interpreted."""
 
     def compiled_or_not(job: tuple[ca.Function, tuple[str, ...]]) -> ca.Function:
         f, flags = job
@@ -413,12 +430,7 @@ def _compiled_with_pieces(
 
     n = workers or os.cpu_count() or 1
     with ThreadPoolExecutor(max_workers=max(1, n)) as pool:
-        done = list(pool.map(compiled_or_not, jobs))
-    normalise, jump, substep, coning_rate = done[:4]
-    fast = dataclasses.replace(
-        pieces, normalise=normalise, jump=jump, substep=substep, coning_rate=coning_rate
-    )
-    return fast, done[4:]
+        return list(pool.map(compiled_or_not, jobs))
 
 
 def derivatives_for(
@@ -504,15 +516,9 @@ def reduced_derivatives_for(
         if not want:
             return interpreted
         flags = (DERIVATIVE_FLAGS, DERIVATIVE_FLAGS, DEFAULT_FLAGS, DEFAULT_FLAGS)
-
-        def one(job: tuple[ca.Function, tuple[str, ...]]) -> ca.Function:
-            return compile_function(job[0], flags=job[1])
-
-        with (
-            _compilation_warned_once(),
-            ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool,
-        ):
-            done = list(pool.map(one, zip(interpreted.pieces(), flags, strict=True)))
+        jobs = list(zip(interpreted.pieces(), flags, strict=True))
+        with _compilation_warned_once():
+            done = _compile_all(jobs, None, None, DERIVATIVE_INSTRUCTION_LIMIT)
         return interpreted.replaced((done[0], done[1], done[2], done[3]))
 
     return _remembered(_REDUCED, (model, opts, want), build)

@@ -48,7 +48,7 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.chunks import step_in_chunks
-from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end-of-flight rule
+from lightcraft_opt.simulation.flight_log import Z_UP, FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.error_state import build_error_state
@@ -164,7 +164,7 @@ def closed_loop(
     commanded: list[np.ndarray] = []
     nodes = [x]
     # drop-outs before the first fired pulse leave a craft at rest on the pad where it is
-    on_pad = x[STATE.slot("r_L").start + 2] <= 0.0 and x[STATE.slot("v_L").start + 2] <= 0.0
+    on_pad = x[Z_UP] <= 0.0 and x[STATE.slot("v_L").start + 2] <= 0.0
     resting = int(np.argmin(dropped)) if on_pad and not np.all(dropped) else 0
     fixed = getattr(controller, "fixed_input", None)
     if fixed is not None:  # open loop: no measurement, no faults to inject
