@@ -541,6 +541,21 @@ def quaternion_from_tilt(tilt: float = 0.0, azimuth: float = 0.0) -> np.ndarray:
     return tilted_attitude(np.array([0.5, -0.5, -0.5, -0.5]), tilt, azimuth)
 
 
+def _launch_angles(tilt: float, azimuth: float) -> tuple[float, float]:
+    """(tilt, azimuth) [rad] checked: both finite, 0 <= tilt < pi/2 (at 90 degrees the
+    craft lies on its side and no beam reaches its optic)."""
+    for name, value in (("tilt", tilt), ("tilt_azimuth", azimuth)):
+        if not math.isfinite(value):
+            raise ParameterError(name, f"must be finite, got {value}")
+    if not 0.0 <= tilt < math.pi / 2:
+        raise ParameterError(
+            "tilt",
+            f"must lie in [0, 90) degrees, got {math.degrees(tilt):.6g}: lean toward the "
+            "opposite azimuth instead of a negative tilt; at 90 the craft lies on its side",
+        )
+    return float(tilt), float(azimuth)
+
+
 def tilted_attitude(q_LB: np.ndarray, tilt: float, azimuth: float = 0.0) -> np.ndarray:
     """The attitude q_LB (w, x, y, z) turned in L by a lean of ``tilt`` [rad] toward
     ``azimuth`` [rad, clockwise from north]: about the horizontal L axis perpendicular to
@@ -587,6 +602,12 @@ def initial_state(
     w_B : angular velocity of B relative to N, B frame [rad/s].
     spin : rotor spin relative to B [rad/s]; default ``model.craft.spin``.
     """
+    tilt, tilt_azimuth = _launch_angles(tilt, tilt_azimuth)
+    for name, vec in (("r_L", r_L), ("v_L", v_L), ("w_B", w_B)):
+        if not np.all(np.isfinite(np.asarray(vec, dtype=float))):
+            raise ParameterError(name, f"must be finite, got {list(np.asarray(vec, float))}")
+    if spin is not None and not math.isfinite(spin):
+        raise ParameterError("spin", f"must be finite, got {spin}")
     craft = model.craft
     return STATE.pack(
         {

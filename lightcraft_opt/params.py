@@ -133,6 +133,28 @@ def _set(obj: object, attr: str, value: object) -> None:
     object.__setattr__(obj, attr, value)
 
 
+def _at_most(name: str, value: float, limit: float, unit: str, reason: str) -> float:
+    """``value`` if it is at most ``limit``, else a ParameterError giving the physical
+    ``reason`` of the bound (a finite number far outside it would load and then crash, or
+    fly nonsense)."""
+    if value > limit:
+        raise ParameterError(name, f"{value:.6g} {unit} is above {limit:.6g} {unit}: {reason}")
+    return value
+
+
+#: Largest values the model is meant for, with the reason (docs/physics.md#validity).
+MAX_CRAFT_MASS = 10.0  # kg
+MAX_RIM_SPEED = 500.0  # m/s
+MAX_WIND_SPEED = 100.0  # m/s
+MAX_PULSE_RATE = 1000.0  # Hz
+MAX_QUADRATURE = {"quadrature_radial": 64, "quadrature_azimuthal": 256}
+_NO_LAUNCH_WIND = "stronger than any surface wind recorded (113 m/s); no launch flies in it"
+_REFILL = (
+    "the engine model is one blast per pulse in an optic refilled with air, which takes "
+    "about a millisecond; the paper's craft flew at 10-28 Hz"
+)
+
+
 # --------------------------------------------------------------------------- craft parts
 class Propellant(Enum):
     """What the engine heats: ambient air or an ablative Delrin liner."""
@@ -437,6 +459,14 @@ class Engine:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 2:
                 raise ParameterError(f"engine.{name}", f"must be an integer >= 2, got {v!r}")
+            _at_most(
+                f"engine.{name}",
+                v,
+                MAX_QUADRATURE[name],
+                "points",
+                "8 x 32 already gives the captured energy within 1e-3; a finer grid adds "
+                "nothing measurable and the pulse map grows with the product of the two",
+            )
 
 
 @dataclass(frozen=True)
@@ -479,12 +509,35 @@ class Craft:
             _positive("craft.inertia_transverse", self.inertia_transverse),
         )
         _set(self, "spin", _finite("craft.spin", self.spin))
+        _at_most(
+            "craft.mass",
+            self.mass,
+            MAX_CRAFT_MASS,
+            "kg",
+            "the engine model is fitted to craft of 10-100 g (docs/physics.md#validity)",
+        )
+        rim_speed = abs(self.spin) * self.diameter / 2
+        if rim_speed > MAX_RIM_SPEED:
+            raise ParameterError(
+                "craft.spin",
+                f"the rim would move at {rim_speed:.6g} m/s (above {MAX_RIM_SPEED:g} m/s): the "
+                "hoop stress rho v^2 of a rim that fast exceeds the strength of any aluminium "
+                "or composite rotor (about 430 m/s for 7075 aluminium)",
+            )
         if not isinstance(self.propellant, Propellant):
             raise ParameterError(
                 "craft.propellant",
                 f"must be one of {[p.value for p in Propellant]}, got {self.propellant!r}",
             )
         _check_axisymmetric("craft.inertia", self.inertia_axial, self.inertia_transverse)
+        rim = self.mass * (self.diameter / 2) ** 2
+        if self.inertia_axial > rim * (1 + 1e-9):
+            raise ParameterError(
+                "craft.inertia_axial",
+                f"{self.inertia_axial:.6g} kg m^2 exceeds mass x (diameter / 2)^2 = {rim:.6g} "
+                "kg m^2, the moment with all the mass on the rim: no rotor inside the "
+                "diameter has it",
+            )
         if self.liner is not None:
             lm = self.liner.mass
             if lm >= self.mass:
@@ -588,6 +641,7 @@ class Laser:
     def __post_init__(self) -> None:
         _set(self, "pulse_energy_max", _positive("laser.pulse_energy_max", self.pulse_energy_max))
         _set(self, "pulse_rate", _positive("laser.pulse_rate", self.pulse_rate))
+        _at_most("laser.pulse_rate", self.pulse_rate, MAX_PULSE_RATE, "Hz", _REFILL)
         _set(self, "pulse_duration", _positive("laser.pulse_duration", self.pulse_duration))
         _set(self, "wavelength", _positive("laser.wavelength", self.wavelength))
         if not isinstance(self.profile, BeamProfile):
@@ -667,12 +721,14 @@ class Wind:
 
     def __post_init__(self) -> None:
         _set(self, "speed_ref", _non_negative("wind.speed_ref", self.speed_ref))
+        _at_most("wind.speed_ref", self.speed_ref, MAX_WIND_SPEED, "m/s", _NO_LAUNCH_WIND)
         _set(self, "height_ref", _positive("wind.height_ref", self.height_ref))
         _set(self, "roughness_height", _positive("wind.roughness_height", self.roughness_height))
         _set(self, "shear_exponent", _in_range("wind.shear_exponent", self.shear_exponent, 0, 1))
         _set(self, "direction_from", _finite("wind.direction_from", self.direction_from))
         _set(self, "veer", _finite("wind.veer", self.veer))
         _set(self, "gust_L", _vec3("wind.gust_L", self.gust_L))
+        _at_most("wind.gust_L", math.hypot(*self.gust_L), MAX_WIND_SPEED, "m/s", _NO_LAUNCH_WIND)
         _set(self, "gust_start", _finite("wind.gust_start", self.gust_start))
         _set(self, "gust_duration", _positive("wind.gust_duration", self.gust_duration))
         h = _series("wind.table_height", self.table_height, 0)
@@ -688,6 +744,8 @@ class Wind:
                 _set(self, name, vals)
             if min(self.table_speed) < 0.0:
                 raise ParameterError("wind.table_speed", "must not be negative")
+            top = max(self.table_speed)
+            _at_most("wind.table_speed", top, MAX_WIND_SPEED, "m/s", _NO_LAUNCH_WIND)
         elif self.table_speed or self.table_direction_from:
             raise ParameterError("wind.table_height", "speed/direction tables need heights")
         tt = _series("wind.gust_table_time", self.gust_table_time, 0)
@@ -701,6 +759,8 @@ class Wind:
             )
             if len(rows) != len(tt):
                 raise ParameterError("wind.gust_table_L", f"needs {len(tt)} rows (one per time)")
+            top = max(math.hypot(*r) for r in rows)
+            _at_most("wind.gust_table_L", top, MAX_WIND_SPEED, "m/s", _NO_LAUNCH_WIND)
             _set(self, "gust_table_L", rows)
         elif self.gust_table_L:
             raise ParameterError("wind.gust_table_time", "a gust table needs times")
@@ -748,6 +808,7 @@ class Flight:
     def __post_init__(self) -> None:
         _set(self, "pulse_energy", _positive("flight.pulse_energy", self.pulse_energy))
         _set(self, "pulse_rate", _positive("flight.pulse_rate", self.pulse_rate))
+        _at_most("flight.pulse_rate", self.pulse_rate, MAX_PULSE_RATE, "Hz", _REFILL)
         _set(self, "beam_side", _positive("flight.beam_side", self.beam_side))
         _set(
             self, "impulse_per_pulse", _positive("flight.impulse_per_pulse", self.impulse_per_pulse)

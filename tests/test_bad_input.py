@@ -64,3 +64,78 @@ def test_cli_reports_a_bad_model_file_without_a_traceback(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "bad.toml" in err and "mass_lb" in err
     assert "Traceback" not in err
+
+
+# ---------------------------------------------------------------- physical ranges (issue 18)
+def _flight5_file(tmp_path: Path, old: str, new: str) -> Path:
+    """models/flight5.toml with one line changed, beside its site and laser files."""
+    models = Path(__file__).resolve().parents[1] / "models"
+    for name in ("white_sands.toml", "plvts.toml"):
+        shutil.copy(models / name, tmp_path / name)
+    text = (models / "flight5.toml").read_text()
+    assert old in text
+    path = tmp_path / "edited.toml"
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key", "reason"),
+    [
+        ("spin_rpm = 10000.0", "spin_rpm = 1e300", "craft.spin_rpm", "rim would move"),
+        ("speed_ref_mps = 0.0", "speed_ref_mps = 1e300", "wind.speed_ref_mps", "surface wind"),
+        ("pulse_rate_hz = 26.0", "pulse_rate_hz = 1e300", "flight.pulse_rate_hz", "refilled"),
+        ("mass_g = 32.5", "mass_g = 1e300", "craft.mass_g", "fitted to craft of 10-100 g"),
+        ("mass_g = 32.5", "mass_g = 3.25", "inertia_axial_g_cm2", "all the mass on the rim"),
+        ("quadrature_radial = 8", "quadrature_radial = 1000000000", "quadrature_radial", "finer"),
+    ],
+)
+def test_finite_but_absurd_model_values_are_refused_with_a_reason(
+    tmp_path, capsys, old, new, key, reason
+):
+    """Values that loaded and then crashed simulate (or flew nonsense) are refused at load,
+    naming the key as written and the physical reason."""
+    path = _flight5_file(tmp_path, old, new)
+    assert main(["simulate", str(path), "--duration", "0.1", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert key in err and reason in err and "Traceback" not in err
+
+
+def test_the_rim_speed_bound_is_the_hoop_stress_figure():
+    """500 m/s of rim speed: Flight 5's 122.2 mm rotor may spin to 78,100 RPM, not faster."""
+    rpm_at_limit = 500.0 / (0.1222 / 2) * 60 / (2 * np.pi)
+    table1_flight5(spin=0.99 * rpm_at_limit * 2 * np.pi / 60)
+    with pytest.raises(ParameterError, match=r"craft\.spin.*rim would move at 50[0-9.]+ m/s"):
+        table1_flight5(spin=1.01 * rpm_at_limit * 2 * np.pi / 60)
+
+
+@pytest.mark.parametrize("tilt", [float("inf"), float("nan"), np.pi / 2, -0.1])
+def test_launch_tilt_outside_a_quarter_turn_is_refused(tilt):
+    with pytest.raises(ParameterError, match="tilt"):
+        initial_state(table1_flight5(), tilt=tilt)
+
+
+@pytest.mark.parametrize("coning", ["200", "90", "-5"])
+def test_initial_coning_must_be_below_a_quarter_turn(tmp_path, coning):
+    """A coning of 200 degrees used to fly as 20 (the angle wrapped), 90 flew too."""
+    from lightcraft_opt.errors import ProblemFileError
+    from lightcraft_opt.files.closed_loop import load_closed_loop
+
+    models = Path(__file__).resolve().parents[1] / "models"
+    path = tmp_path / "loop.toml"
+    path.write_text(
+        f'title = "t"\nmodel = "{(models / "flight5.toml").as_posix()}"\nduration_s = 0.1\n'
+        f"[initial]\nconing_deg = {coning}\n"
+    )
+    with pytest.raises(ProblemFileError, match=r"initial\.coning_deg: must lie in \[0, 90\)"):
+        load_closed_loop(path)
+
+
+def test_a_huge_horizon_is_refused_before_anything_is_built(tmp_path):
+    """horizon_pulses = 1e9 spent minutes inside load_problem before any check."""
+    from lightcraft_opt.errors import ProblemFileError
+    from lightcraft_opt.files.problem import load_problem
+
+    problems = Path(__file__).resolve().parents[1] / "problems"
+    with pytest.raises(ProblemFileError, match=r"horizon_pulses: 1000000000 pulses is above"):
+        load_problem(problems / "least_energy_flight16.toml", horizon=1_000_000_000)

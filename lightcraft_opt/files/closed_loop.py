@@ -286,15 +286,26 @@ def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
     tan(coning) = A |w_⊥| / H1 at w_B[b1] = 0 (H1 = J (w1 + spin), A the transverse
     moment: the craft's own inertia, for a centred rotor)."""
     raw = dict(raw or {})
-    coning = read_table(src, {k: raw.pop(k) for k in list(raw) if k.startswith("coning")},
-                        "initial", _CONING).values  # fmt: skip
+    table = read_table(src, {k: raw.pop(k) for k in list(raw) if k.startswith("coning")},
+                       "initial", _CONING)  # fmt: skip
+    coning = table.values
     x0 = initial_state_from_table(src, model, raw)
     if coning:
+        angle = coning.get("coning", 0.0)
+        if not 0.0 <= angle < math.pi / 2:
+            raise ProblemFileError(
+                src,
+                table.key("coning"),
+                f"must lie in [0, 90) degrees, got {math.degrees(angle):.6g}: the angle from "
+                "the spin axis b1 to H (set its direction with coning_azimuth_deg)",
+            )
         w = STATE.index("w_B")
         if abs(x0[w][0]) > 0 and coning.get("coning", 0.0):
             raise ProblemFileError(src, "initial.coning", "needs w_B[b1] = 0 (w_B_rad_s[0])")
         craft = model.craft
         spin = float(x0[STATE.index("spin")][0])
+        if angle and spin == 0.0:
+            raise ProblemFileError(src, table.key("coning"), "a craft without spin cannot cone")
         w_t = craft.inertia_axial * spin * math.tan(coning.get("coning", 0.0))
         w_t /= craft.inertia_transverse
         phase = coning.get("coning_azimuth", 0.0)

@@ -150,6 +150,7 @@ from lightcraft_opt.ocp.problem import (
     LateralOffset,
     OcpProblem,
     TrackReference,
+    check_horizon,
 )
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 
@@ -332,6 +333,10 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
     top = read_table(src, data, "", _TOP, required=("model", "horizon_pulses"), tables=_TABLES)
     model = model_with_overrides(src, file, top.values["model"], data.get("model_overrides"))
     horizon = top.values["horizon_pulses"]
+    try:
+        check_horizon("horizon_pulses", horizon)
+    except ParameterError as err:
+        raise ProblemFileError(src, top.key("horizon_pulses"), err.reason) from None
     t0 = top.values.get("t0", 0.0)
     x0 = initial_state_from_table(src, model, data.get("initial"))
     times = t0 + np.arange(horizon + 1) / model.flight.pulse_rate if horizon > 0 else None

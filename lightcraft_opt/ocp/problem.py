@@ -53,6 +53,7 @@ from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import BeamSizeModel, Model
 
 __all__ = [
+    "MAX_HORIZON",
     "CaptureFraction",
     "Constraint",
     "ControlBound",
@@ -71,6 +72,7 @@ __all__ = [
     "TerminalState",
     "TiltLimit",
     "TrackReference",
+    "check_horizon",
 ]
 
 Values = float | Sequence[float]
@@ -396,6 +398,21 @@ CONSTRAINT_KINDS = (
 
 
 # --------------------------------------------------------------------------- the problem
+#: Longest horizon [pulses]: 200 s at 26 Hz, ten times the longest lightcraft flight.
+MAX_HORIZON = 5200
+
+
+def check_horizon(name: str, pulses: int) -> None:
+    """Raise a ParameterError naming ``name`` when ``pulses`` exceeds :data:`MAX_HORIZON`
+    (the transcription's variables, memory and build time grow linearly with it)."""
+    if pulses > MAX_HORIZON:
+        raise ParameterError(
+            name,
+            f"{pulses} pulses is above {MAX_HORIZON} (200 s at 26 Hz, ten times the longest "
+            "lightcraft flight); the transcription grows linearly with the horizon",
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class OcpProblem:
     """An optimal control problem over ``horizon`` pulses of ``model`` (module docstring).
@@ -450,6 +467,7 @@ class OcpProblem:
         n = self.horizon
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
             raise ParameterError("horizon", f"must be an integer >= 1 (pulses), got {n!r}")
+        check_horizon("horizon", int(n))
         _set(self, "horizon", int(n))
         _set(self, "inputs", self._input_layout())
         _set(self, "objective", self._kinds("objective", self.objective, OBJECTIVE_KINDS))
