@@ -160,7 +160,7 @@ _DIRECTOR: dict[str, Spec] = {
     "relinearize": INTEGER,
     "focus_schedule": TEXT,
     "matched_side": quantity("length"),
-    "energy_range": NUMBERS,
+    "energy_range": quantity("dimensionless", "list", 2),
     "disturbance_gain": NUMBER,
     "rcs": TEXT,
     "warm_start": _SWITCH,
@@ -355,8 +355,13 @@ def _weighted_tables(
     tol = read_table(src, raw.get("tolerances", {}), f"{name}.tolerances", tolerances)
     weights: dict[str, float] = {}
     for field, v in tol.values.items():
-        if not v > 0:
-            raise ProblemFileError(src, tol.key(field), f"a tolerance must be positive, got {v}")
+        if not 0 < v < 1e100:
+            raise ProblemFileError(
+                src,
+                tol.key(field),
+                f"a tolerance must be positive and below 1e100 (its weight is 1 / tolerance^2), "
+                f"got {v:g}",
+            )
         weights[field] = 1.0 / v**2
     return table, tol, weights
 
