@@ -108,8 +108,8 @@ def _optimize(args: argparse.Namespace) -> int:
         fig.savefig(out / name, dpi=PLOT_DPI)
     print(
         f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
-        f"{summary['final_altitude_m']:.3f} m, largest capture fraction "
-        f"{summary['max_capture_fraction']:.3f} -> {out}/"
+        f"{summary['final_altitude_m']:.3f} m, largest beam offset "
+        f"{summary['max_offset_over_capture_radius']:.3f} of the capture radius -> {out}/"
     )
     return 0 if result.success else 1
 
