@@ -173,13 +173,15 @@ def _closed_loop(args: argparse.Namespace) -> int:
     )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
-    settled = summary["coning_below_0.5deg_from_pulse"]
-    times = summary["solve_time_ms"]
+    pulse = summary["coning_below_0.5deg_from_pulse"]
+    settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
+    median = summary["solve_time_ms"]["median"]
+    solves = "no solves" if median is None else f"solve time median {median:.2f} ms"
     print(
         f"{summary['status']}: coning {summary['coning_initial_deg']:.2f} -> "
-        f"{summary['coning_final_deg']:.3f} deg (below 0.5 from pulse {settled}), max tilt "
-        f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, solve time "
-        f"median {times['median']} ms -> {out}/"
+        f"{summary['coning_final_deg']:.3f} deg ({settled}), max tilt "
+        f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, {solves} "
+        f"-> {out}/"
     )
     return 0 if result.flight.status.value == "duration_reached" else 1
 
@@ -211,11 +213,16 @@ def _montecarlo(args: argparse.Namespace) -> int:
     low, high = beam["wilson_95"]
     print(
         f"{result.made} runs made, {result.skipped} found done ({result.engine}, "
-        f"{result.runs_per_minute:.0f} runs/min); status {s['status_counts']}; apogee "
+        f"{result.runs_per_minute:.0f} runs/min); {_counts(s['status_counts'])}; apogee "
         f"{apogee.get('mean', math.nan):.2f} ± {apogee.get('std', math.nan):.2f} m; left the "
         f"beam {beam['count']}/{s['runs']} (95 % {low:.3f}-{high:.3f}) -> {out}/"
     )
     return 0 if "error" not in s["status_counts"] else 1
+
+
+def _counts(counts: dict[str, int]) -> str:
+    """Status counts as words: ``{"landed": 12, "left_beam": 3}`` -> "12 landed, 3 left_beam"."""
+    return ", ".join(f"{n} {status}" for status, n in counts.items()) or "no runs"
 
 
 def _calibrate(args: argparse.Namespace) -> int:
