@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import os
 import sys
+import traceback
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -508,12 +510,28 @@ def _warning_line(
     return f"lightcraft: warning: {message}\n"
 
 
+def _internal_error(err: Exception) -> int:
+    """The backstop: an exception no check caught, as one line on stderr (the traceback
+    too with LIGHTCRAFT_DEBUG=1); exit status 1."""
+    debug = os.environ.get("LIGHTCRAFT_DEBUG") == "1"
+    if debug:
+        traceback.print_exception(err, file=sys.stderr)
+    message = " ".join(str(err).split())  # one line, whatever the exception wrote
+    hint = "" if debug else "; run with LIGHTCRAFT_DEBUG=1 for the traceback"
+    print(
+        f"lightcraft: internal error: {type(err).__name__}: {message} (please report{hint})",
+        file=sys.stderr,
+    )
+    return 1
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``lightcraft``; returns the exit status.
 
     0 done, 1 not converged or ended early (the command's help says which), 2 bad input
     (argparse's usage error, or a :class:`~lightcraft_opt.errors.LightcraftError` as
-    ``lightcraft: error: ...``).
+    ``lightcraft: error: ...``), 130 interrupted; an unexpected exception is an internal
+    error: one line, status 1.
     """
     try:
         args = build_parser().parse_args(argv)
@@ -525,6 +543,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except LightcraftError as err:
         print(f"lightcraft: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("lightcraft: interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:
+        return _internal_error(err)
     finally:
         warnings.formatwarning = shown
 

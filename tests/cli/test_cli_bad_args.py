@@ -119,6 +119,37 @@ def test_an_out_that_cannot_be_made_names_out_before_the_work(command, tmp_path,
     assert a_file.read_text() == "not a folder\n"
 
 
+def _raise(exc: BaseException):
+    def run(args):
+        raise exc
+
+    return run
+
+
+def test_an_unexpected_exception_is_one_line_and_exit_1(monkeypatch, capsys):
+    monkeypatch.delenv("LIGHTCRAFT_DEBUG", raising=False)
+    monkeypatch.setattr(cli, "_simulate", _raise(RuntimeError("boom\n  in two lines")))
+    assert main(["simulate", "m.toml"]) == 1
+    err = capsys.readouterr().err
+    assert err == (
+        "lightcraft: internal error: RuntimeError: boom in two lines (please report; run with "
+        "LIGHTCRAFT_DEBUG=1 for the traceback)\n"
+    )
+    monkeypatch.setenv("LIGHTCRAFT_DEBUG", "1")
+    assert main(["simulate", "m.toml"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("Traceback (most recent call last):")
+    assert err.endswith(
+        "lightcraft: internal error: RuntimeError: boom in two lines (please report)\n"
+    )
+
+
+def test_ctrl_c_exits_130_with_one_line(monkeypatch, capsys):
+    monkeypatch.setattr(cli, "_optimize", _raise(KeyboardInterrupt()))
+    assert main(["optimize", "p.toml"]) == 130
+    assert capsys.readouterr().err == "lightcraft: interrupted\n"
+
+
 def test_status_counts_print_as_words():
     assert (
         cli._counts({"duration_reached": 12, "left_beam": 3}) == "12 duration_reached, 3 left_beam"
