@@ -5,15 +5,18 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import os
 import sys
+import traceback
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
+from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, real, substeps
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
-from lightcraft_opt.errors import LightcraftError, ParameterError
+from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import load_closed_loop
@@ -45,8 +48,7 @@ __all__ = ["main"]
 
 def _simulate(args: argparse.Namespace) -> int:
     model = load_model(args.model)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(args.out)
     x0 = initial_state(
         model,
         r_L=(args.offset_east_cm / 100, args.offset_north_cm / 100, 0.0),
@@ -87,8 +89,7 @@ def _optimize(args: argparse.Namespace) -> int:
     problem, options = pf.problem, pf.options
     if args.verbose:
         options = dataclasses.replace(options, print_level=5)
-    out = Path(args.out) if args.out else Path("runs") / source.stem
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(args.out or Path("runs") / source.stem)
     print(
         f"building {pf.title!r}: {problem.model.name}, {problem.horizon} pulses, "
         f"{options.solver.value} ({options.hessian.value} Hessian) ...",
@@ -108,8 +109,8 @@ def _optimize(args: argparse.Namespace) -> int:
         fig.savefig(out / name, dpi=PLOT_DPI)
     print(
         f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
-        f"{summary['final_altitude_m']:.3f} m, largest capture fraction "
-        f"{summary['max_capture_fraction']:.3f} -> {out}/"
+        f"{summary['final_altitude_m']:.3f} m, largest beam offset "
+        f"{summary['max_offset_over_capture_radius']:.3f} of the capture radius -> {out}/"
     )
     return 0 if result.success else 1
 
@@ -126,8 +127,7 @@ def _closed_loop(args: argparse.Namespace) -> int:
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
     model = problem.model
-    out = Path(args.out) if args.out else Path("runs") / f"{source.stem}-{args.controller}"
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(args.out or Path("runs") / f"{source.stem}-{args.controller}")
     print(f"building the plant and the {args.controller} controller for {problem.title!r} ...")
     plant = build_pulse_map(model, plant_options(model))
     assert plant.inputs is not None  # build_pulse_map always records it
@@ -173,13 +173,15 @@ def _closed_loop(args: argparse.Namespace) -> int:
     )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
-    settled = summary["coning_below_0.5deg_from_pulse"]
-    times = summary["solve_time_ms"]
+    pulse = summary["coning_below_0.5deg_from_pulse"]
+    settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
+    median = summary["solve_time_ms"]["median"]
+    solves = "no solves" if median is None else f"solve time median {median:.2f} ms"
     print(
         f"{summary['status']}: coning {summary['coning_initial_deg']:.2f} -> "
-        f"{summary['coning_final_deg']:.3f} deg (below 0.5 from pulse {settled}), max tilt "
-        f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, solve time "
-        f"median {times['median']} ms -> {out}/"
+        f"{summary['coning_final_deg']:.3f} deg ({settled}), max tilt "
+        f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, {solves} "
+        f"-> {out}/"
     )
     return 0 if result.flight.status.value == "duration_reached" else 1
 
@@ -188,7 +190,7 @@ def _montecarlo(args: argparse.Namespace) -> int:
 
     source = Path(args.problem)
     campaign = load_campaign(source, duration=args.duration)
-    out = Path(args.out) if args.out else Path("runs") / f"{source.stem}-seed{args.seed}"
+    out = output_folder(args.out or Path("runs") / f"{source.stem}-seed{args.seed}")
     where = f"Dask at {args.scheduler}" if args.scheduler else "local processes"
     print(
         f"{campaign.title!r}: {args.runs} runs of {campaign.duration:g} s, controller "
@@ -211,11 +213,16 @@ def _montecarlo(args: argparse.Namespace) -> int:
     low, high = beam["wilson_95"]
     print(
         f"{result.made} runs made, {result.skipped} found done ({result.engine}, "
-        f"{result.runs_per_minute:.0f} runs/min); status {s['status_counts']}; apogee "
+        f"{result.runs_per_minute:.0f} runs/min); {_counts(s['status_counts'])}; apogee "
         f"{apogee.get('mean', math.nan):.2f} ± {apogee.get('std', math.nan):.2f} m; left the "
         f"beam {beam['count']}/{s['runs']} (95 % {low:.3f}-{high:.3f}) -> {out}/"
     )
     return 0 if "error" not in s["status_counts"] else 1
+
+
+def _counts(counts: dict[str, int]) -> str:
+    """Status counts as words: ``{"landed": 12, "left_beam": 3}`` -> "12 landed, 3 left_beam"."""
+    return ", ".join(f"{n} {status}" for status, n in counts.items()) or "no runs"
 
 
 def _calibrate(args: argparse.Namespace) -> int:
@@ -223,20 +230,13 @@ def _calibrate(args: argparse.Namespace) -> int:
     source = Path(args.model)
     model = load_model(source)
     track = read_track(args.track)
-    initial: dict[str, float] = {}
-    for item in args.initial:
-        name, _, value = item.partition("=")
-        try:
-            initial[name.strip()] = float(value)
-        except ValueError:
-            raise ParameterError("--initial", f"needs NAME=VALUE in SI, got {item!r}") from None
+    initial = dict(args.initial)
     options = CalibrationOptions(
         max_iter=args.max_iter,
         verbose=args.verbose,
         pulse_map=PulseMapOptions(substeps=args.substeps),
     )
-    out = Path(args.out) if args.out else Path("runs") / f"{source.stem}-calibration"
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(args.out or Path("runs") / f"{source.stem}-calibration")
     print(
         f"fitting {args.fit} of {model.name} to {track.t.size} tracked points "
         f"({track.gaps} gaps dropped) ...",
@@ -274,41 +274,72 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
+# The ranges of the numeric flags, each with its reason (cli_args.py).
+DURATION = real(
+    0.0, 3600.0, low_open=True, unit="s", why="an hour at most: a lightcraft flight lasts seconds"
+)
+LAUNCH_SPEED = real(
+    -340.0, 340.0, unit="m/s", why="below the speed of sound: the aerodynamics are subsonic"
+)
+TILT = real(
+    0.0,
+    90.0,
+    high_open=True,
+    unit="deg",
+    why="the angle of the axis from the vertical; --tilt-azimuth-deg sets where it leans",
+)
+OFFSET = real(
+    -1000.0, 1000.0, unit="cm", why="10 m from the beam axis at most: beyond, the beam cannot reach"
+)
+DROPOUT = real(0.0, 1.0, high_open=True, why="a probability; at 1 no pulse would fire")
+SEED = integer(0, why="numpy seeds are non-negative")
+HORIZON = integer(1, 100_000, why="100,000 pulses: an hour of flight at 26 Hz")
+RUNS = integer(1, 1_000_000, why="the summary reads every run's row into memory")
+
+
 def add_simulate(sub: argparse._SubParsersAction) -> None:
     """Add ``lightcraft simulate`` to the subcommands ``sub``."""
     sim = sub.add_parser("simulate", help="simulate a flight from a model file")
     sim.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
-    sim.add_argument("--duration", type=float, default=10.0, help="seconds (default 10)")
+    sim.add_argument("--duration", type=DURATION, default=10.0, help="seconds (default 10)")
     sim.add_argument("--out", default="runs/out", help="output folder")
     sim.add_argument(
-        "--launch-speed", type=float, default=0.0, help="initial vertical speed [m/s] (default 0)"
+        "--launch-speed",
+        type=LAUNCH_SPEED,
+        default=0.0,
+        help="initial vertical speed [m/s] (default 0)",
     )
-    sim.add_argument("--tilt-deg", type=float, default=0.0, help="initial tilt [deg] (default 0)")
+    sim.add_argument(
+        "--tilt-deg",
+        type=TILT,
+        default=0.0,
+        help="initial tilt from the vertical [deg] (default 0)",
+    )
     sim.add_argument(
         "--tilt-azimuth-deg",
-        type=float,
+        type=finite,
         default=90.0,
         help="direction of the tilt, clockwise from north [deg] (default 90: east)",
     )
     sim.add_argument(
         "--offset-east-cm",
-        type=float,
+        type=OFFSET,
         default=0.0,
         help="initial offset from the beam axis, east [cm]",
     )
     sim.add_argument(
         "--offset-north-cm",
-        type=float,
+        type=OFFSET,
         default=0.0,
         help="initial offset from the beam axis, north [cm]",
     )
     sim.add_argument(
         "--dropout-rate",
-        type=float,
+        type=DROPOUT,
         default=0.0,
         help="probability that the laser drops a pulse (default 0)",
     )
-    sim.add_argument("--seed", type=int, default=None, help="seed of the pulse drop-outs")
+    sim.add_argument("--seed", type=SEED, default=None, help="seed of the pulse drop-outs")
     sim.add_argument(
         "--interpreted",
         action="store_true",
@@ -333,7 +364,7 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
         "summary.json and figures. Exit status 0: solved; 1: the solver did not converge "
         "(files still written); 2: bad input.",
     )
-    opt.add_argument("problem", help="problem TOML, e.g. problems/hold_in_crosswind.toml")
+    opt.add_argument("problem", help="problem TOML, e.g. problems/crosswind_launch.toml")
     opt.add_argument("--out", default=None, help="output folder (default runs/<problem name>)")
     opt.add_argument(
         "--solver",
@@ -342,10 +373,10 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
         help="NLP solver instead of the file's [solver] name",
     )
     opt.add_argument(
-        "--horizon", type=int, default=None, help="pulses instead of the file's horizon_pulses"
+        "--horizon", type=HORIZON, default=None, help="pulses instead of the file's horizon_pulses"
     )
     opt.add_argument(
-        "--max-iter", type=int, default=None, help="NLP iterations instead of the file's"
+        "--max-iter", type=integer(1), default=None, help="NLP iterations instead of the file's"
     )
     opt.add_argument(
         "--verbose", action="store_true", help="print the solver's iterations (progress)"
@@ -374,7 +405,7 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
         "--out", default=None, help="output folder (default runs/<problem>-<controller>)"
     )
     loop.add_argument(
-        "--duration", type=float, default=None, help="seconds instead of the file's duration"
+        "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"
     )
     loop.set_defaults(run=_closed_loop)
 
@@ -392,17 +423,20 @@ def add_montecarlo(sub: argparse._SubParsersAction) -> None:
         "status 0: done; 1: some runs raised (status error in runs.csv); 2: bad input.",
     )
     mc.add_argument("problem", help="campaign TOML, e.g. problems/montecarlo_open_loop.toml")
-    mc.add_argument("--runs", type=int, default=100, help="number of runs (default 100)")
-    mc.add_argument("--seed", type=int, default=0, help="campaign seed (default 0)")
+    mc.add_argument("--runs", type=RUNS, default=100, help="number of runs (default 100)")
+    mc.add_argument("--seed", type=SEED, default=0, help="campaign seed (default 0)")
     mc.add_argument("--out", default=None, help="output folder (default runs/<file>-seed<S>)")
     mc.add_argument(
-        "--workers", type=int, default=None, help="local processes (default one per CPU; 1: serial)"
+        "--workers",
+        type=integer(1),
+        default=None,
+        help="local processes (default one per CPU; 1: serial)",
     )
     mc.add_argument(
         "--scheduler", default=None, help="Dask scheduler address, e.g. tcp://host:8786"
     )
     mc.add_argument(
-        "--duration", type=float, default=None, help="seconds per flight instead of the file's"
+        "--duration", type=DURATION, default=None, help="seconds per flight instead of the file's"
     )
     mc.add_argument("--quiet", action="store_true", help="no progress line")
     mc.set_defaults(run=_montecarlo)
@@ -428,16 +462,19 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
         "tipping_gain, offset, tilt, wind, cd",
     )
     cal.add_argument("--out", default=None, help="output folder (default runs/<model>-calibration)")
-    cal.add_argument("--max-iter", type=int, default=50, help="iterations at most (default 50)")
+    cal.add_argument(
+        "--max-iter", type=integer(1), default=50, help="iterations at most (default 50)"
+    )
     cal.add_argument(
         "--substeps",
-        type=int,
+        type=substeps,
         default=32,
         help="coast substeps per pulse of the pulse map (default 32; 16 is within 0.2 mm "
         "over 1.5 s of Flight 5 and twice as fast)",
     )
     cal.add_argument(
         "--initial",
+        type=name_value,
         action="append",
         default=[],
         metavar="NAME=VALUE",
@@ -473,15 +510,44 @@ def _warning_line(
     return f"lightcraft: warning: {message}\n"
 
 
+def _internal_error(err: Exception) -> int:
+    """The backstop: an exception no check caught, as one line on stderr (the traceback
+    too with LIGHTCRAFT_DEBUG=1); exit status 1."""
+    debug = os.environ.get("LIGHTCRAFT_DEBUG") == "1"
+    if debug:
+        traceback.print_exception(err, file=sys.stderr)
+    message = " ".join(str(err).split())  # one line, whatever the exception wrote
+    hint = "" if debug else "; run with LIGHTCRAFT_DEBUG=1 for the traceback"
+    print(
+        f"lightcraft: internal error: {type(err).__name__}: {message} (please report{hint})",
+        file=sys.stderr,
+    )
+    return 1
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of ``lightcraft``; returns the exit status."""
-    args = build_parser().parse_args(argv)
+    """Entry point of ``lightcraft``; returns the exit status.
+
+    0 done, 1 not converged or ended early (the command's help says which), 2 bad input
+    (argparse's usage error, or a :class:`~lightcraft_opt.errors.LightcraftError` as
+    ``lightcraft: error: ...``), 130 interrupted; an unexpected exception is an internal
+    error: one line, status 1.
+    """
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as stop:  # argparse printed the usage error (2) or the help (0)
+        return stop.code if isinstance(stop.code, int) else 0 if stop.code is None else 2
     shown, warnings.formatwarning = warnings.formatwarning, _warning_line
     try:
         return int(args.run(args))
     except LightcraftError as err:
         print(f"lightcraft: error: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("lightcraft: interrupted", file=sys.stderr)
+        return 130
+    except Exception as err:
+        return _internal_error(err)
     finally:
         warnings.formatwarning = shown
 

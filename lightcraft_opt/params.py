@@ -54,28 +54,28 @@ def _finite(name: str, value: float) -> float:
     except (TypeError, ValueError):
         raise ParameterError(name, f"must be a number, got {value!r}") from None
     if not math.isfinite(v):
-        raise ParameterError(name, f"must be finite, got {value!r}")
+        raise ParameterError(name, f"must be finite, got {v}")
     return v
 
 
 def _positive(name: str, value: float) -> float:
     v = _finite(name, value)
     if v <= 0.0:
-        raise ParameterError(name, f"must be positive, got {v!r}")
+        raise ParameterError(name, f"must be positive, got {v}")
     return v
 
 
 def _non_negative(name: str, value: float) -> float:
     v = _finite(name, value)
     if v < 0.0:
-        raise ParameterError(name, f"must not be negative, got {v!r}")
+        raise ParameterError(name, f"must not be negative, got {v}")
     return v
 
 
 def _in_range(name: str, value: float, lo: float, hi: float) -> float:
     v = _finite(name, value)
     if not lo <= v <= hi:
-        raise ParameterError(name, f"must lie in [{lo}, {hi}], got {v!r}")
+        raise ParameterError(name, f"must lie in [{lo}, {hi}], got {v}")
     return v
 
 

@@ -45,6 +45,16 @@ def test_negative_mass_and_triangle_inequality_are_refused():
         Site("nowhere", 2.0, 0.0, 0.0)
 
 
+def test_numbers_in_messages_print_plainly():
+    """A numpy scalar reads as its number, never as np.float64(...)."""
+    with pytest.raises(ParameterError, match=r"craft\.mass: must be positive, got -0\.03$"):
+        table1_flight5(mass=np.float64(-0.03))
+    with pytest.raises(ParameterError, match=r"site\.latitude: must lie in .*, got 2\.0$"):
+        Site("nowhere", np.float64(2.0), 0.0, 0.0)
+    with pytest.raises(ParameterError, match=r"must be finite, got inf$"):
+        table1_flight5(mass=np.float64("inf"))
+
+
 def test_unknown_option_values_list_the_allowed_ones():
     with pytest.raises(OptionError, match="rk4"):
         PulseMapOptions(scheme="euler")  # type: ignore[arg-type]

@@ -68,12 +68,12 @@ class Normal:
 
     def __post_init__(self) -> None:
         if not _finite(self.mean):
-            raise OptionError(f"Normal.mean must be a finite number, got {self.mean!r}")
+            raise OptionError(f"Normal.mean must be a finite number, got {self.mean}")
         if not (_finite(self.sigma) and self.sigma >= 0):
-            raise OptionError(f"Normal.sigma must be a finite number >= 0, got {self.sigma!r}")
+            raise OptionError(f"Normal.sigma must be a finite number >= 0, got {self.sigma}")
         t = self.truncate
         if t is not None and not (_finite(t) and t > 0):
-            raise OptionError(f"Normal.truncate must be a number of sigmas > 0, got {t!r}")
+            raise OptionError(f"Normal.truncate must be a number of sigmas > 0, got {t}")
 
     def sample(self, rng: np.random.Generator) -> float:
         n = rng.standard_normal()
@@ -91,9 +91,9 @@ class Uniform:
 
     def __post_init__(self) -> None:
         if not (_finite(self.low) and _finite(self.high)):
-            raise OptionError(f"Uniform bounds must be finite, got {self.low!r}, {self.high!r}")
+            raise OptionError(f"Uniform bounds must be finite, got {self.low}, {self.high}")
         if self.low > self.high:
-            raise OptionError(f"Uniform.low must be <= high, got {self.low!r} > {self.high!r}")
+            raise OptionError(f"Uniform.low must be <= high, got {self.low} > {self.high}")
 
     def sample(self, rng: np.random.Generator) -> float:
         return float(rng.uniform(self.low, self.high))
@@ -165,13 +165,13 @@ def loop_seed(seed: int, index: int) -> int:
 
 def _seed(seed: object) -> int:
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise OptionError(f"campaign seed must be an integer >= 0, got {seed!r}")
+        raise OptionError(f"campaign seed must be an integer >= 0, got {seed}")
     return int(seed)
 
 
 def _index(index: object) -> int:
     if isinstance(index, bool) or not isinstance(index, int | np.integer) or index < 0:
-        raise OptionError(f"run index must be an integer >= 0, got {index!r}")
+        raise OptionError(f"run index must be an integer >= 0, got {index}")
     return int(index)
 
 

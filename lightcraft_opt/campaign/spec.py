@@ -122,9 +122,9 @@ class Campaign:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.duration, int | float) and math.isfinite(self.duration)):
-            raise ParameterError("duration", f"must be a number of seconds, got {self.duration!r}")
+            raise ParameterError("duration", f"must be a number of seconds, got {self.duration}")
         if self.duration <= 0:
-            raise ParameterError("duration", f"must be positive, got {self.duration!r} s")
+            raise ParameterError("duration", f"must be positive, got {self.duration} s")
         if not isinstance(self.controller, CampaignController):
             allowed = [c.value for c in CampaignController]
             raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")

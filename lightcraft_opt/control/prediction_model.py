@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import math
 import os
 import tempfile
 from collections.abc import Sequence
@@ -299,9 +300,15 @@ def coning_model(
 
     Raises
     ------
-    ParameterError when Φ's RCS profile is not PHASE_LOCKED or the grids are not
-    increasing.
+    ParameterError when the craft does not spin (its spin sets the default grid), Φ's
+    RCS profile is not PHASE_LOCKED or the grids are not increasing.
     """
+    if spins is None and not model.craft.spin > 0:
+        raise ParameterError(
+            "craft.spin_rpm",
+            "the MPC and LQR predict the coning of a spinning craft: need spin_rpm > 0, got "
+            f"{model.craft.spin * 30 / math.pi:g}",
+        )
     if isinstance(pulse_map, PulseMapJacobian):
         phi = pulse_map.pulse_map
     else:

@@ -264,7 +264,7 @@ def closed_loop_from_tables(
     model = model_with_overrides(src, file, top.values["model"], data.get("model_overrides"))
     t_end = top.values["duration"] if duration is None else duration
     if not (math.isfinite(t_end) and t_end > 0):
-        raise ProblemFileError(src, top.key("duration"), f"must be positive, got {t_end!r} s")
+        raise ProblemFileError(src, top.key("duration"), f"must be positive, got {t_end} s")
     x0 = _initial(src, model, data.get("initial"))
     controller = data.get("controller", {})
     plant = data.get("plant", {})

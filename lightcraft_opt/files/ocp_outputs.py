@@ -108,7 +108,8 @@ def _cell(value: float, *, integer: bool = False) -> str:
 def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:
     """summary.json: how the solve went (status, cost and its terms by name, iterations,
     times), what it asked (solver, horizon) and what it achieved (laser energy, final
-    altitude, largest capture fraction against its limit, constraint violation)."""
+    altitude, largest beam offset over the capture radius against its limit, constraint
+    violation)."""
     problem, options = problem_file.problem, problem_file.options
     fractions = capture_fractions(result, problem)
     limits = [c.fraction for c in problem.constraints if isinstance(c, CaptureFraction)]
@@ -136,7 +137,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "final_altitude_m": float(r_L[-1, 2]),
         "final_position_m": r_L[-1].tolist(),
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
-        "max_capture_fraction": float(np.max(fractions)) if fractions.size else 0.0,
+        "max_offset_over_capture_radius": float(np.max(fractions)) if fractions.size else 0.0,
         "capture_fraction_limit": min(limits) if limits else None,
         "constraint_violation": finite_or_none(result.constraint_violation),
     }

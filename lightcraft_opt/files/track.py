@@ -1,6 +1,7 @@
 """Reading a tracked flight (CSV from video tracking) into a :class:`Track` (edge).
 
-The file: a header row naming the columns, then one row per video frame::
+The file (UTF-8, with or without the byte-order mark spreadsheets write): a header row
+naming the columns, then one row per video frame::
 
     t_s,x_m,y_m,z_m
     0.0167,0.0012,-0.0008,0.0213
@@ -71,7 +72,7 @@ def read_track(path: str | Path) -> Track:
     file = Path(path)
     src = str(file)
     try:
-        text = file.read_text(encoding="utf-8")
+        text = file.read_text(encoding="utf-8-sig")  # a spreadsheet may open with a BOM
     except FileNotFoundError:
         raise ProblemFileError(src, None, "no such file") from None
     except (OSError, UnicodeDecodeError) as err:
@@ -118,7 +119,7 @@ def read_track(path: str | Path) -> Track:
         raise ProblemFileError(
             src,
             f"line {lines[0]}, column {t_name}",
-            f"times count from the first laser pulse and must be >= 0, got {arr[0, 0]!r} s",
+            f"times count from the first laser pulse and must be >= 0, got {float(arr[0, 0])} s",
         )
     back = np.flatnonzero(np.diff(arr[:, 0]) <= 0)
     if back.size:
@@ -126,7 +127,7 @@ def read_track(path: str | Path) -> Track:
         raise ProblemFileError(
             src,
             f"line {lines[i]}, column {t_name}",
-            f"times must increase strictly: {arr[i, 0]!r} s follows {arr[i - 1, 0]!r} s "
+            f"times must increase strictly: {float(arr[i, 0])} s follows {float(arr[i - 1, 0])} s "
             f"(line {lines[i - 1]})",
         )
     return Track(arr[:, 0], arr[:, 1:], gaps=gaps, source=src)

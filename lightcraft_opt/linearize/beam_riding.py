@@ -145,7 +145,7 @@ class AltitudeStability:
         i = self.schedules.index(FocusSchedule(schedule))
         hits = np.flatnonzero(np.isclose(self.offsets, offset, rtol=0, atol=1e-12))
         if not hits.size:
-            raise ParameterError("offset", f"{offset!r} m is not on the grid {self.offsets}")
+            raise ParameterError("offset", f"{offset} m is not on the grid {self.offsets}")
         above = np.flatnonzero(self.beam_riding[i, :, hits[0]] > limit)
         return float(self.altitudes[above[0]]) if above.size else float("inf")
 

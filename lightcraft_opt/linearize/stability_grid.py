@@ -89,7 +89,7 @@ def grid(values: Sequence[float] | np.ndarray, name: str, positive: bool = False
     v = np.asarray(values, dtype=float).ravel()
     if not (v.size and np.all(np.isfinite(v)) and (not positive or np.all(v > 0))):
         need = "finite values > 0" if positive else "finite values"
-        raise ParameterError(name, f"needs at least one value, all {need}; got {values!r}")
+        raise ParameterError(name, f"needs at least one value, all {need}; got {v.tolist()}")
     return v
 
 

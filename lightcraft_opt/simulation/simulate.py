@@ -100,9 +100,9 @@ def simulate(
     record and status ``duration_reached``, ``landed``, ``left_beam`` or ``failed``.
     """
     if not (np.isfinite(duration) and duration > 0):
-        raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
+        raise ParameterError("duration", f"must be a positive number of seconds, got {duration}")
     if not 0.0 <= dropout_rate < 1.0:
-        raise ParameterError("dropout_rate", f"must lie in [0, 1), got {dropout_rate!r}")
+        raise ParameterError("dropout_rate", f"must lie in [0, 1), got {dropout_rate}")
     if pulse_map is None:
         phi = pulse_map_for(model, options, compiled=compiled)
     else:

@@ -77,7 +77,7 @@ def _check_zero_at_zero(aero: Aerodynamics) -> None:
     if aero.model is AeroModel.TABLE and abs(aero.table_alpha[0]) > _ZERO_TOL:
         raise ParameterError(
             "aero.table_alpha",
-            f"must start at 0 rad (lift and moment vanish there), got {aero.table_alpha[0]!r}",
+            f"must start at 0 rad (lift and moment vanish there), got {aero.table_alpha[0]}",
         )
     for name in ("cl", "cm"):
         c0 = getattr(aero, name)[0]
@@ -86,7 +86,7 @@ def _check_zero_at_zero(aero: Aerodynamics) -> None:
             raise ParameterError(
                 f"aero.{name}",
                 f"{what} must be 0 for an axisymmetric craft (no C_{name[1].upper()} at zero angle "
-                f"of attack), got {c0!r}",
+                f"of attack), got {c0}",
             )
 
 

@@ -309,9 +309,10 @@ def test_track_file_gaps_units_and_errors(tmp_path):
         return str(err.value)
 
     assert "line 1, column z: missing" in error("t_s,x_m,y_m\n0.1,0,0\n0.2,0,0\n")
-    assert "line 3, column t_s: times must increase strictly" in error(
-        "t_s,x_m,y_m,z_m\n0.2,0,0,0\n0.1,0,0,0\n"
+    assert "line 3, column t_s: times must increase strictly: 0.1 s follows 0.2 s (line 2)" in (
+        error("t_s,x_m,y_m,z_m\n0.2,0,0,0\n0.1,0,0,0\n")
     )
+    assert "must be >= 0, got -0.1 s" in error("t_s,x_m,y_m,z_m\n-0.1,0,0,0\n0.1,0,0,0\n")
     assert "line 2, column y_m: must be a number, got 'abc'" in error(
         "t_s,x_m,y_m,z_m\n0.1,0,abc,0\n0.2,0,0,0\n"
     )
@@ -320,3 +321,16 @@ def test_track_file_gaps_units_and_errors(tmp_path):
     assert "at least 2 tracked rows" in error("t_s,x_m,y_m,z_m\n0.1,0,0,0\n")
     with pytest.raises(ProblemFileError, match="no such file"):
         read_track(tmp_path / "no.csv")
+
+
+def test_track_file_with_a_byte_order_mark_reads_as_without(tmp_path):
+    """A spreadsheet's "CSV UTF-8" starts with the byte-order mark U+FEFF: the same track."""
+    text = "t_s,x_m,y_m,z_m\n0.1,0.001,0,0.1\n0.2,0.002,0,0.3\n"
+    plain, marked = tmp_path / "plain.csv", tmp_path / "marked.csv"
+    plain.write_text(text, encoding="utf-8")
+    marked.write_text(text, encoding="utf-8-sig")
+    assert marked.read_bytes()[:3] == b"\xef\xbb\xbf"
+    a, b = read_track(plain), read_track(marked)
+    np.testing.assert_array_equal(b.t, [0.1, 0.2])
+    np.testing.assert_array_equal(b.t, a.t)
+    np.testing.assert_array_equal(b.r_L, a.r_L)

@@ -26,6 +26,7 @@ def test_cli_writes_the_table_summary_and_figures(tmp_path, capsys):
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "3 runs made" in printed
+    assert "runs/min); 3 duration_reached; apogee" in printed  # counts as words, no dict
     t = read_table(out / "runs.csv")
     assert list(t["run"]) == [0, 1, 2]
     assert set(t["status"]) == {"duration_reached"}

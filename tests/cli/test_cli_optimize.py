@@ -151,7 +151,7 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     assert summary["solver"] == "ipopt" and summary["horizon_pulses"] == 4
     assert summary["laser_energy_J"] == pytest.approx(4 * 420.0, rel=1e-12)
     assert summary["final_altitude_m"] == pytest.approx(X[-1, 2], rel=1e-11)
-    assert summary["max_capture_fraction"] == pytest.approx(np.max(fraction), rel=1e-10)
+    assert summary["max_offset_over_capture_radius"] == pytest.approx(np.max(fraction), rel=1e-10)
     assert summary["capture_fraction_limit"] == 0.2
     terms = summary["cost_terms"]
     assert list(terms) == ["lateral_offset[pad]", "control_effort[pointing_L]"]

@@ -47,7 +47,7 @@ from lightcraft_opt.control.options import (
 )
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus
-from lightcraft_opt.errors import OptionError
+from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import CONING, STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import (
@@ -408,3 +408,11 @@ def test_bad_options_name_the_field():
     with pytest.raises(OptionError, match=r"ClosedLoopOptions\.fault must be one of"):
         ClosedLoopOptions(fault="raise")  # type: ignore[arg-type]
     assert replace(MpcOptions(), horizon=3).horizon == 3
+
+
+def test_a_craft_that_does_not_spin_is_refused_naming_spin_rpm():
+    """The coning model's spin grid scales the craft's spin: at 0 RPM it would be all zeros
+    (the MPC's and LQR's prediction is about a spinning craft)."""
+    still = replace(MODEL, craft=replace(MODEL.craft, spin=0.0))
+    with pytest.raises(ParameterError, match=r"^craft\.spin_rpm: .*need spin_rpm > 0, got 0$"):
+        coning_model(still)
