@@ -32,6 +32,7 @@ from lightcraft_opt.files.simulation_outputs import (
 from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.ocp.options import OcpSolver
+from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.plots.calibration import calibration_figures
@@ -293,7 +294,9 @@ OFFSET = real(
 )
 DROPOUT = real(0.0, 1.0, high_open=True, why="a probability; at 1 no pulse would fire")
 SEED = integer(0, why="numpy seeds are non-negative")
-HORIZON = integer(1, 100_000, why="100,000 pulses: an hour of flight at 26 Hz")
+HORIZON = integer(
+    1, MAX_HORIZON, why=f"{MAX_HORIZON} pulses: 200 s at 26 Hz, ten times the longest flight"
+)
 RUNS = integer(1, 1_000_000, why="the summary reads every run's row into memory")
 
 
