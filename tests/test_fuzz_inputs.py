@@ -186,3 +186,59 @@ def test_every_malformed_track_is_read_or_named(tmp_path: Path) -> None:
             elif not np.all(np.isfinite(track.r_L)) or track.t.size != 5:
                 problems.append(f"{label}: read wrongly: {track}")
     assert not problems, "\n".join(problems)
+
+
+# ---------------------------------------------------------------- every flag of every command
+#: Required positional arguments and options of each subcommand (the files need not exist:
+#: the flags are checked first, and a missing file is itself a named error).
+REQUIRED = {
+    "simulate": ["m.toml"],
+    "optimize": ["p.toml"],
+    "closed-loop": ["p.toml"],
+    "montecarlo": ["p.toml"],
+    "calibrate": ["m.toml", "--track", "t.csv", "--fit", "cm"],
+}
+FLAG_VALUES = ("nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "1.5", "text", "", "0x10")
+
+
+def _flags() -> Iterator[tuple[str, str]]:
+    """(command, flag) for every option of every subcommand that takes a value."""
+    import argparse
+
+    from lightcraft_opt.cli import build_parser
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for command, p in sub.choices.items():
+        for action in p._actions:
+            if action.option_strings and action.nargs != 0 and action.dest != "help":
+                yield command, action.option_strings[-1]
+
+
+def test_every_flag_of_every_command_takes_any_text_without_a_traceback(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each value-taking flag gets each of FLAG_VALUES: the command exits 2 naming the flag
+    or the (missing) input file, or, for a value the flag takes, goes on to the missing file;
+    never a traceback, never the internal-error backstop, never status 0 or 1."""
+    from lightcraft_opt.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    flags = list(_flags())
+    assert len(flags) > 25
+    problems = []
+    for command, flag in flags:
+        for value in FLAG_VALUES:
+            argv = [command, *REQUIRED[command]]
+            if flag in argv:  # a required option: replace its value
+                argv[argv.index(flag) + 1] = value
+            else:
+                argv += [f"{flag}={value}"]
+            status = main(argv)
+            err = capsys.readouterr().err
+            named = flag in err or ".toml" in err or ".csv" in err
+            if status != 2 or not named or "Traceback" in err or "internal error" in err:
+                problems.append(f"{' '.join(argv)}: status {status}: {err.strip()[-200:]}")
+    assert not problems, f"{len(problems)} of {len(flags) * len(FLAG_VALUES)}:\n" + "\n".join(
+        problems
+    )
