@@ -102,19 +102,22 @@ def run_campaign(
     out_dir : output folder (created); resumes the campaign found there.
     workers : local worker processes (1: this process; default one per CPU); ignored
         with ``scheduler``.
-    scheduler : address of a Dask scheduler, "tcp://host:port".
+    scheduler : address of a Dask scheduler, "tcp://host:port", or the path of its
+        scheduler file (:func:`.engines.scheduler_address`).
     progress : show a progress line on stderr.
 
     Raises
     ------
     ParameterError : bad runs, seed or workers; ``out_dir`` holds another campaign;
-        the scheduler cannot be reached.
+        a malformed scheduler address, or the scheduler cannot be reached.
     """
     for name, value, low in (("runs", runs, 1), ("seed", seed, 0), ("workers", workers, 1)):
         if value is None and name == "workers":
             continue
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
             raise ParameterError(name, f"must be an integer >= {low}, got {value!r}")
+    if scheduler is not None:
+        scheduler = engines.scheduler_address(scheduler)  # a bad form fails before any file
     start = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
