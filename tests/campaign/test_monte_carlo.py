@@ -24,7 +24,7 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.campaign import run as monte_carlo_run
 from lightcraft_opt.campaign.dispersions import loop_seed
 from lightcraft_opt.campaign.run import run_one
-from lightcraft_opt.campaign.run_table import read_table
+from lightcraft_opt.campaign.run_table import DamagedRowsWarning, read_table
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.campaign import load_campaign
@@ -118,7 +118,8 @@ def test_kill_and_resume_loses_nothing_and_duplicates_nothing(serial, campaign, 
     assert 3 <= done < runs
     with open(table, "ab") as f:  # a row the kill cut short
         f.write(b"59,0.0312")
-    resumed = run_campaign(campaign, runs, SEED, out, workers=1, progress=False)
+    with pytest.warns(DamagedRowsWarning, match=r"a cut line"):
+        resumed = run_campaign(campaign, runs, SEED, out, workers=1, progress=False)
     assert resumed.skipped >= 3 and resumed.made + resumed.skipped == runs
     index = resumed.table["run"]
     assert len(index) == len(set(index)) == runs
