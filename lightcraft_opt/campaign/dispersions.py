@@ -11,6 +11,12 @@ the draws of the others unchanged (common random numbers between campaigns).
 
 Distributions describe the value itself, absolute and SI: the file reader turns a
 relative sigma and a missing mean into absolute numbers (files/campaign.py).
+
+Every quantity has its physical domain (:data:`DOMAINS`: a mass, an inertia and an impulse
+per pulse are positive, a wind speed is not negative, a drop-out rate is a probability), and
+a distribution whose support leaves it is refused (:func:`domain_problem`): a uniform's
+bounds, a truncated normal's mean ± truncate·sigma, and an untruncated normal (sigma > 0) on
+a bounded quantity at all, since its draws reach every value.
 """
 
 from __future__ import annotations
@@ -24,12 +30,17 @@ from lightcraft_opt.errors import OptionError
 
 __all__ = [
     "DISPERSED",
+    "DOMAINS",
     "Dispersions",
+    "Distribution",
+    "Domain",
     "Normal",
     "Uniform",
+    "domain_problem",
     "draw",
     "draw_many",
     "loop_seed",
+    "support",
 ]
 
 #: Quantity -> (column of the run table, what it sets). The order is the drawing order
@@ -49,6 +60,49 @@ DISPERSED: dict[str, tuple[str, str]] = {
     "tilt_azimuth": ("tilt_azimuth_rad", "direction of that tilt, clockwise from north [rad]"),
     "wind_speed": ("wind_speed_mps", "wind_speed_ref: the plant's reference wind [m/s]"),
     "wind_direction_from": ("wind_direction_from_rad", "wind_direction_from [rad]"),
+}
+
+
+@dataclass(frozen=True)
+class Domain:
+    """The values a quantity may physically take (SI): ``low`` (excluded when
+    ``open_low``) to ``high``; ``why`` says it in words ("a mass must be positive")."""
+
+    low: float = -math.inf
+    high: float = math.inf
+    open_low: bool = False
+    why: str = ""
+
+    @property
+    def bounded(self) -> bool:
+        return math.isfinite(self.low) or math.isfinite(self.high)
+
+    def below(self, value: float) -> bool:
+        """``value`` is under the domain (at an excluded ``low`` too)."""
+        return value < self.low or (self.open_low and value == self.low)
+
+    def above(self, value: float) -> bool:
+        return value > self.high
+
+    def low_text(self) -> str:
+        """How a value under the domain fails: "below 0", "not above 0"."""
+        return f"{'not above' if self.open_low else 'below'} {self.low:g}"
+
+
+_ANY = Domain()
+#: Quantity -> its physical domain (SI); angles and offsets take any value.
+DOMAINS: dict[str, Domain] = {
+    "mass": Domain(0.0, open_low=True, why="a mass must be positive"),
+    "inertia_axial": Domain(0.0, open_low=True, why="an inertia must be positive"),
+    "inertia_transverse": Domain(0.0, open_low=True, why="an inertia must be positive"),
+    "coupling": Domain(0.0, open_low=True, why="an impulse per pulse must be positive"),
+    "dropout_rate": Domain(0.0, 1.0, why="a drop-out rate is a probability, in [0, 1]"),
+    "offset_east": _ANY,
+    "offset_north": _ANY,
+    "tilt": _ANY,
+    "tilt_azimuth": _ANY,
+    "wind_speed": Domain(0.0, why="a wind speed cannot be negative"),
+    "wind_direction_from": _ANY,
 }
 
 
@@ -102,6 +156,39 @@ class Uniform:
 Distribution = Normal | Uniform
 
 
+def support(dist: Distribution) -> tuple[float, float]:
+    """(lowest, highest) value ``dist`` draws (SI); ±inf for an untruncated normal with
+    sigma > 0."""
+    if isinstance(dist, Uniform):
+        return dist.low, dist.high
+    if dist.sigma == 0:
+        return dist.mean, dist.mean
+    if dist.truncate is None:
+        return -math.inf, math.inf
+    return dist.mean - dist.truncate * dist.sigma, dist.mean + dist.truncate * dist.sigma
+
+
+def domain_problem(name: str, dist: Distribution) -> str | None:
+    """Why ``dist`` cannot be quantity ``name``'s distribution (it draws values outside
+    :data:`DOMAINS`), or None (SI in the message)."""
+    domain = DOMAINS[name]
+    low, high = support(dist)
+    if isinstance(dist, Normal) and not (math.isfinite(low) and math.isfinite(high)):
+        if domain.bounded:
+            return (
+                f"an untruncated normal draws any value, and {domain.why}: "
+                "give truncate_sigmas so that mean ± truncate_sigmas·sigma stays inside"
+            )
+        return None
+    side = "low" if isinstance(dist, Uniform) else "mean - truncate·sigma"
+    if domain.below(low):
+        return f"{side} = {low:g} is {domain.low_text()}: {domain.why}"
+    side = "high" if isinstance(dist, Uniform) else "mean + truncate·sigma"
+    if domain.above(high):
+        return f"{side} = {high:g} is above {domain.high:g}: {domain.why}"
+    return None
+
+
 @dataclass(frozen=True)
 class Dispersions:
     """The distributions of a campaign: ((quantity of :data:`DISPERSED`, distribution), ...),
@@ -123,6 +210,9 @@ class Dispersions:
                 raise OptionError(f"Dispersions.{name} must be a Normal or a Uniform, got {dist!r}")
             if name in seen:
                 raise OptionError(f"Dispersions.{name} is given twice")
+            problem = domain_problem(name, dist)
+            if problem:
+                raise OptionError(f"Dispersions.{name}: {problem}")
             seen.add(name)
         order = list(DISPERSED)
         object.__setattr__(

@@ -8,6 +8,8 @@ initial state and the drop-out rate, flies :func:`~lightcraft_opt.control.closed
 under the campaign's controller ("none" is the open loop: the nominal input every pulse)
 and returns the row of the run table (inputs and outputs, SI, unit in the column name) and
 a row of wall-clock timings, kept apart so that tables can be compared bit for bit.
+:func:`row_problem` checks a row read back from a resumed table against what run_one
+writes: a row it refuses is flown again (run_table.py).
 
 The plant Φ and the controller are built once per process and thread (keyed by the
 campaign's fingerprint), not per run. Determinism: the MPC normally discards a solve that
@@ -33,7 +35,9 @@ from lightcraft_opt.campaign.dispersions import draw, loop_seed
 from lightcraft_opt.campaign.spec import (
     CAMPAIGN_TIME_BUDGET,
     DISPERSED_PARAMETER,
+    INTEGER_OUTPUTS,
     OUTPUT_COLUMNS,
+    TEXT_OUTPUTS,
     Campaign,
     CampaignController,
 )
@@ -51,9 +55,11 @@ from lightcraft_opt.symbolic.pulse_map import PulseMap
 if TYPE_CHECKING:
     from lightcraft_opt.control.controllers import Controller
 
-__all__ = ["RunOutcome", "run_one"]
+__all__ = ["RunOutcome", "row_problem", "run_one"]
 
 _MAX_DROPOUT = 0.99
+#: The statuses a row may hold.
+_STATUSES = frozenset({*(s.value for s in SimulationStatus), "error"})
 
 
 @dataclass(frozen=True)
@@ -97,6 +103,51 @@ def run_one(campaign: Campaign, seed: int, index: int) -> RunOutcome:
         "solve_time_total_s": float(np.sum(solve)),
     }
     return RunOutcome(index, {"run": index, **inputs, **outputs}, timing)
+
+
+def row_problem(campaign: Campaign, seed: int, row: Mapping[str, str]) -> str | None:
+    """Why ``row`` ({column: text as written}, with a run index) cannot be run
+    ``row["run"]``'s row of ``campaign`` seeded ``seed``, or None: a drawn input that is
+    not a finite number or not the run's draw, a loop seed that is not the run's, an
+    unknown status, an integer output that is not an integer, a float output that is not
+    a number (NaN is one). Numbers must be spelt as run_one's table writes them
+    (``repr``): ``1.50`` or ``1_5`` is refused too."""
+    index = int(row["run"])
+    draws = draw(campaign.dispersions, seed, index)
+    for name, column in zip(campaign.dispersions.names, campaign.dispersions.columns, strict=True):
+        text = row[column]
+        value = _float(text)
+        if value is None or not math.isfinite(value):
+            return f"{column}: {text!r} is not a finite number"
+        if value != draws[name]:
+            return f"{column}: {text} is not run {index}'s draw {draws[name]!r}"
+    if row["loop_seed"] != str(loop_seed(seed, index)):
+        return f"loop_seed: {row['loop_seed']!r} is not run {index}'s {loop_seed(seed, index)}"
+    for column in OUTPUT_COLUMNS:
+        text = row[column]
+        if column == "status" and text not in _STATUSES:
+            return f"status: {text!r} is not one of {sorted(_STATUSES)}"
+        if column in INTEGER_OUTPUTS and not _is_integer(text):
+            return f"{column}: {text!r} is not an integer"
+        if column not in INTEGER_OUTPUTS | TEXT_OUTPUTS and _float(text) is None:
+            return f"{column}: {text!r} is not a number"
+    return None
+
+
+def _is_integer(text: str) -> bool:
+    try:
+        return str(int(text)) == text
+    except ValueError:
+        return False
+
+
+def _float(text: str) -> float | None:
+    """The float ``text`` is as a run writes it (``repr``: the one spelling), else None."""
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return value if repr(value) == text else None
 
 
 def _outputs(result: ClosedLoopResult) -> dict[str, Any]:

@@ -11,7 +11,11 @@ seed and its index) and writes, in ``out_dir``:
   index, drawn inputs, outputs, SI with the unit in the column name. Finished runs found
   there are skipped, so an interrupted campaign resumes and loses none; when every run
   is in, the table is rewritten sorted by index, byte-identical whatever the engine,
-  order or worker count.
+  order or worker count. A damaged row found there (a cut line, a wrong field count, a
+  value that does not read back or is not the run's draw, a run index found twice:
+  :func:`~lightcraft_opt.campaign.run.row_problem`) is never trusted: it is dropped,
+  named in one :class:`~lightcraft_opt.campaign.run_table.DamagedRowsWarning`, and its
+  run flown again.
 * ``timings.csv``: wall time and solve-time statistics per run (machine-dependent, so
   kept out of runs.csv).
 * ``summary.json``: :func:`~lightcraft_opt.campaign.summary.campaign_summary`, once
@@ -27,7 +31,10 @@ import hashlib
 import json
 import math
 import time
+import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -35,8 +42,8 @@ import numpy as np
 
 from lightcraft_opt.campaign import engines as engines
 from lightcraft_opt.campaign.progress import Progress
-from lightcraft_opt.campaign.run import run_one
-from lightcraft_opt.campaign.run_table import RunTable, read_table
+from lightcraft_opt.campaign.run import row_problem, run_one
+from lightcraft_opt.campaign.run_table import DamagedRowsWarning, RunTable, read_table
 from lightcraft_opt.campaign.spec import TIMING_COLUMNS, Campaign
 from lightcraft_opt.campaign.summary import campaign_summary
 from lightcraft_opt.errors import ParameterError
@@ -59,6 +66,7 @@ class CampaignResult:
     summary : :func:`campaign_summary` of the table (empty when not complete).
     engine : "serial", "processes (N workers)" or "dask <address>".
     elapsed : wall time of this call [s].
+    dropped : damaged rows of runs.csv this call dropped (their runs made again).
     """
 
     out_dir: Path
@@ -70,6 +78,7 @@ class CampaignResult:
     summary: dict[str, Any]
     engine: str
     elapsed: float
+    dropped: int = 0
 
     @property
     def runs_per_minute(self) -> float:
@@ -102,25 +111,30 @@ def run_campaign(
     out_dir : output folder (created); resumes the campaign found there.
     workers : local worker processes (1: this process; default one per CPU); ignored
         with ``scheduler``.
-    scheduler : address of a Dask scheduler, "tcp://host:port".
+    scheduler : address of a Dask scheduler, "tcp://host:port", or the path of its
+        scheduler file (:func:`.engines.scheduler_address`).
     progress : show a progress line on stderr.
 
     Raises
     ------
     ParameterError : bad runs, seed or workers; ``out_dir`` holds another campaign;
-        the scheduler cannot be reached.
+        a malformed scheduler address, or the scheduler cannot be reached.
     """
     for name, value, low in (("runs", runs, 1), ("seed", seed, 0), ("workers", workers, 1)):
         if value is None and name == "workers":
             continue
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
             raise ParameterError(name, f"must be an integer >= {low}, got {value!r}")
+    if scheduler is not None:
+        scheduler = engines.scheduler_address(scheduler)  # a bad form fails before any file
     start = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     _check_manifest(out, campaign, runs, seed)
-    table = RunTable(out / RUNS, campaign.columns)
-    timings = RunTable(out / TIMINGS, TIMING_COLUMNS)
+    table = RunTable(out / RUNS, campaign.columns, partial(row_problem, campaign, seed))
+    timings = RunTable(out / TIMINGS, TIMING_COLUMNS, _timing_problem)
+    timings.drop(timings.done - table.done)  # the runs made again write theirs again
+    _warn_dropped(table, timings)
     todo = [i for i in range(runs) if i not in table.done]
     if scheduler is not None:
         name = f"dask {scheduler}"
@@ -158,7 +172,37 @@ def run_campaign(
         summary=summary,
         engine=name,
         elapsed=time.perf_counter() - start,
+        dropped=len(table.dropped),
     )
+
+
+def _timing_problem(row: Mapping[str, str]) -> str | None:
+    """Why a row of timings.csv is damaged: a value that is not a number as written."""
+    for column, text in row.items():
+        try:
+            ok = repr(float(text)) == text or str(int(text)) == text
+        except ValueError:
+            ok = False
+        if not ok:
+            return f"{column}: {text!r} is not a number"
+    return None
+
+
+def _warn_dropped(*tables: RunTable) -> None:
+    """One warning line naming the damaged rows the tables dropped, if any."""
+    parts = []
+    for t in tables:
+        if not t.dropped:
+            continue
+        rows = "; ".join(
+            f"{'run ' + str(i) if i is not None else 'a row without a run index'} ({why})"
+            for i, why in dict.fromkeys(t.dropped)
+        )
+        what = "flown again" if t.path.name == RUNS else "wall times lost"
+        n = len(t.dropped)
+        parts.append(f"{t.path}: dropped {n} damaged row{'s' * (n != 1)}, {what}: {rows}")
+    if parts:
+        warnings.warn(" | ".join(parts), DamagedRowsWarning, stacklevel=3)
 
 
 def _first(table: dict[str, np.ndarray], runs: int) -> dict[str, np.ndarray]:

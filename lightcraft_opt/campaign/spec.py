@@ -22,7 +22,9 @@ from lightcraft_opt.params import Model
 __all__ = [
     "CAMPAIGN_TIME_BUDGET",
     "DISPERSED_PARAMETER",
+    "INTEGER_OUTPUTS",
     "OUTPUT_COLUMNS",
+    "TEXT_OUTPUTS",
     "TIMING_COLUMNS",
     "Campaign",
     "CampaignController",
@@ -55,6 +57,12 @@ OUTPUT_COLUMNS = (
     "iterations_total",
     "iterations_max",
 )
+#: Outputs written as integers (-1 in an error row), and as text; the others are floats,
+#: NaN where a run has no value (an error row; a landing point of a run that did not land).
+INTEGER_OUTPUTS = frozenset(
+    ("left_beam", "pulses", "dropped_pulses", "fallbacks", "iterations_total", "iterations_max")
+)
+TEXT_OUTPUTS = frozenset(("status", "message"))
 #: Wall-clock columns of timings.csv (machine-dependent, never in the run table).
 TIMING_COLUMNS = (
     "run",

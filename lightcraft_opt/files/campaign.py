@@ -31,8 +31,12 @@ the azimuth clockwise from north; nominal 0; a ``tilt`` without ``tilt_azimuth``
 uniform azimuth over 0-360°), ``wind_speed`` (speed) and ``wind_direction_from`` (angle),
 the plant's reference wind ([plant.wind], else the model's).
 
-``[plant] seed`` is refused: each run's closed-loop seed comes from the campaign seed and
-the run index (dispersions.py). Problems raise
+A distribution must stay in its quantity's physical domain
+(:data:`~lightcraft_opt.campaign.dispersions.DOMAINS`): a mass, inertia or coupling is
+positive, a wind speed is not negative, a drop-out rate is in [0, 1]. A uniform's ``low`` and
+``high``, and a normal's mean ± ``truncate_sigmas``·sigma, must lie inside; a normal on a
+bounded quantity must be truncated. ``[plant] seed`` is refused: each run's closed-loop seed
+comes from the campaign seed and the run index (dispersions.py). Problems raise
 :class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
 """
 
@@ -43,14 +47,22 @@ import math
 from pathlib import Path
 from typing import Any
 
-from lightcraft_opt.campaign.dispersions import DISPERSED, Dispersions, Normal, Uniform
+from lightcraft_opt.campaign.dispersions import (
+    DISPERSED,
+    DOMAINS,
+    Dispersions,
+    Distribution,
+    Normal,
+    Uniform,
+    support,
+)
 from lightcraft_opt.campaign.spec import DISPERSED_PARAMETER, Campaign, CampaignController
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables
 from lightcraft_opt.files.problem import as_problem_file_errors
-from lightcraft_opt.files.problem_tables import read_table
-from lightcraft_opt.files.schema import NUMBER, TEXT, Spec, choice, quantity
+from lightcraft_opt.files.problem_tables import Table, read_table
+from lightcraft_opt.files.schema import NUMBER, QUANTITIES, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 
 __all__ = ["load_campaign"]
@@ -71,6 +83,9 @@ _KIND: dict[str, str | None] = {
     "wind_direction_from": "angle",
 }
 _DISTRIBUTIONS = ("normal", "uniform")
+#: How a unit suffix of a key is shown in a message, where it differs.
+_SHOWN = {"mps": "m/s", "kmh": "km/h", "kg_m2": "kg m^2", "g_cm2": "g cm^2",
+          "g_mm2": "g mm^2", "ns": "N s", "n_s": "N s"}  # fmt: skip
 
 
 def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:
@@ -138,7 +153,9 @@ def _dispersions(src: str, raw: Any, nominal: dict[str, float]) -> Dispersions:
             raise ProblemFileError(
                 src, where, f"unknown dispersion; {hint}allowed: {', '.join(DISPERSED)}"
             )
-        items.append((name, _distribution(src, where, table, _KIND[name], nominal[name])))
+        dist = _distribution(src, where, table, _KIND[name], nominal[name])
+        _check_domain(src, name, where, table, dist)
+        items.append((name, dist))
     if "tilt" in raw and "tilt_azimuth" not in raw:
         items.append(("tilt_azimuth", Uniform(0.0, 2.0 * math.pi)))
     return Dispersions(tuple(items))
@@ -207,3 +224,57 @@ def _distribution(
         return Normal(v.get("mean", nominal), sigma, truncate)
     except (OptionError, ParameterError) as err:
         raise ProblemFileError(src, where, str(err)) from err
+
+
+def _check_domain(src: str, name: str, where: str, raw: dict[str, Any], dist: Distribution) -> None:
+    """Refuse ``dist`` if it draws values outside quantity ``name``'s physical domain,
+    naming the key and the value in the file's units."""
+    domain, kind = DOMAINS[name], _KIND[name]
+    keys = {_field(key): key for key in raw}
+    table = Table(where, {}, keys)
+
+    def shown(si: float, *fields: str) -> str:
+        """``si`` in the unit of the first of ``fields`` written with one (else SI)."""
+        units = QUANTITIES[kind] if kind else {"": "1"}
+        written = [keys[f].split("_", 1)[1] for f in fields if "_" in keys.get(f, "")]
+        unit = next((u for u in written if u in units), "")
+        unit = unit or next(u for u, factor in units.items() if factor == "1")
+        return f"{si / float(units[unit]):g} {_SHOWN.get(unit, unit)}".rstrip()
+
+    def refuse(key: str, what: str, si: float, *fields: str) -> None:
+        if domain.below(si):
+            bound = domain.low_text()
+        elif domain.above(si):
+            bound = f"above {domain.high:g}"
+        else:
+            return
+        raise ProblemFileError(src, key, f"{what}{shown(si, *fields)} is {bound}: {domain.why}")
+
+    low, high = support(dist)
+    if isinstance(dist, Uniform):
+        refuse(table.key("low"), "", low, "low")
+        refuse(table.key("high"), "", high, "high")
+        return
+    if not (math.isfinite(low) and math.isfinite(high)):
+        if domain.bounded:
+            raise ProblemFileError(
+                src,
+                table.key("truncate_sigmas"),
+                f"missing: an untruncated normal draws any value, and {domain.why}; give "
+                "truncate_sigmas so that mean ± truncate_sigmas·sigma stays inside",
+            )
+        return
+    refuse(table.key("mean"), "mean ", dist.mean, "mean", "sigma")
+    sides = (("-", low), ("+", high))
+    for sign, si in sides:
+        what = f"mean {sign} truncate_sigmas·sigma = "
+        refuse(table.key("truncate_sigmas"), what, si, "sigma", "mean")
+
+
+def _field(key: str) -> str:
+    """The field a key of a dispersion table gives (``low_mps`` -> ``low``)."""
+    for field in ("relative_sigma", "truncate_sigmas", "distribution", "mean", "sigma", "low",
+                  "high"):  # fmt: skip
+        if key == field or key.startswith(field + "_"):
+            return field
+    return key

@@ -8,6 +8,7 @@ the MPC's order independence is checked run by run in one process."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import signal
@@ -23,7 +24,7 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.campaign import run as monte_carlo_run
 from lightcraft_opt.campaign.dispersions import loop_seed
 from lightcraft_opt.campaign.run import run_one
-from lightcraft_opt.campaign.run_table import read_table
+from lightcraft_opt.campaign.run_table import DamagedRowsWarning, read_table
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.campaign import load_campaign
@@ -117,7 +118,8 @@ def test_kill_and_resume_loses_nothing_and_duplicates_nothing(serial, campaign, 
     assert 3 <= done < runs
     with open(table, "ab") as f:  # a row the kill cut short
         f.write(b"59,0.0312")
-    resumed = run_campaign(campaign, runs, SEED, out, workers=1, progress=False)
+    with pytest.warns(DamagedRowsWarning, match=r"a cut line"):
+        resumed = run_campaign(campaign, runs, SEED, out, workers=1, progress=False)
     assert resumed.skipped >= 3 and resumed.made + resumed.skipped == runs
     index = resumed.table["run"]
     assert len(index) == len(set(index)) == runs
@@ -126,6 +128,56 @@ def test_kill_and_resume_loses_nothing_and_duplicates_nothing(serial, campaign, 
     assert {k: v for k, v in resumed.summary.items() if k not in timing} == {
         k: v for k, v in reference.summary.items() if k not in timing
     }
+
+
+def _children(pid: int) -> set[int]:
+    """The pids of the children of process ``pid``, from /proc (Linux)."""
+    kids: set[int] = set()
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with contextlib.suppress(OSError):  # the task ended meanwhile
+            kids |= {int(k) for k in (task / "children").read_text().split()}
+    return kids
+
+
+def _alive(pid: int) -> bool:
+    """Process ``pid`` exists and is not a zombie (exited, not yet reaped)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_workers_die_with_a_killed_campaign(tmp_path):
+    """SIGKILL the campaign (only it, not its process group) while its two workers fly
+    runs: the workers and the multiprocessing resource tracker exit within seconds."""
+    out = tmp_path / "mc"
+    cmd = [sys.executable, "-m", "lightcraft_opt.cli", "montecarlo", str(OPEN), "--runs", "10000",
+           "--out", str(out), "--duration", "0.1", "--workers", "2", "--quiet"]  # fmt: skip
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    kids: set[int] = set()
+    try:
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline:
+            kids |= _children(proc.pid)
+            table = out / "runs.csv"
+            if len(kids) >= 3 and table.exists() and table.read_bytes().count(b"\n") >= 2:
+                break  # two workers and the tracker; a run is in: the workers are flying
+            assert proc.poll() is None, "the campaign ended before it could be killed"
+            time.sleep(0.05)
+        else:
+            pytest.fail("the workers did not start in 90 s")
+        kids |= _children(proc.pid)
+    finally:
+        proc.kill()
+        proc.wait()
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline and any(_alive(k) for k in kids):
+        time.sleep(0.05)
+    alive = [k for k in kids if _alive(k)]
+    for k in alive:  # leave nothing behind, then fail
+        os.kill(k, signal.SIGKILL)
+    assert alive == [], f"children alive 5 s after the campaign was killed: {alive}"
 
 
 def test_a_run_that_raises_is_an_error_row(campaign, tmp_path, monkeypatch):

@@ -39,13 +39,13 @@ def _truncated_std(k: float) -> float:
 def test_normal_and_uniform_moments():
     d = Dispersions(
         (
-            ("mass", Normal(0.0325, 0.002)),
+            ("offset_east", Normal(0.0325, 0.002)),
             ("tilt", Normal(0.0, 0.01, truncate=3.0)),
             ("wind_speed", Uniform(1.0, 4.0)),
         )
     )
     v = draw_many(d, 123, N)
-    m = v["mass"]
+    m = v["offset_east"]
     assert abs(m.mean() - 0.0325) < 4 * 0.002 / math.sqrt(N)
     assert abs(m.std(ddof=1) / 0.002 - 1) < 4 / math.sqrt(2 * N)
     t = v["tilt"]
@@ -58,9 +58,9 @@ def test_normal_and_uniform_moments():
 
 
 def test_draws_depend_on_seed_and_index_only():
-    a = Dispersions((("mass", Normal(1.0, 0.1)), ("coupling", Uniform(0.0, 1.0))))
-    b = Dispersions((("coupling", Uniform(0.0, 1.0)), ("mass", Normal(1.0, 0.1))))
-    alone = Dispersions((("coupling", Uniform(0.0, 1.0)),))
+    a = Dispersions((("mass", Normal(1.0, 0.1, 3.0)), ("coupling", Uniform(0.5, 1.0))))
+    b = Dispersions((("coupling", Uniform(0.5, 1.0)), ("mass", Normal(1.0, 0.1, 3.0))))
+    alone = Dispersions((("coupling", Uniform(0.5, 1.0)),))
     assert a == b  # the order given does not matter: kept in DISPERSED order
     assert draw(a, 5, 7) == draw(b, 5, 7)
     # each quantity has its own stream: adding the mass leaves the coupling's draws alone
@@ -77,7 +77,7 @@ def test_draws_depend_on_seed_and_index_only():
         (lambda: Normal(0.0, 1.0, truncate=0.0), "truncate"),
         (lambda: Uniform(2.0, 1.0), "low"),
         (lambda: Dispersions((("spin", Normal(0.0, 1.0)),)), "unknown quantity"),
-        (lambda: Dispersions((("mass", Normal(0, 1)), ("mass", Normal(0, 2)))), "twice"),
+        (lambda: Dispersions((("tilt", Normal(0, 1)), ("tilt", Normal(0, 2)))), "twice"),
     ],
 )
 def test_bad_distributions_raise_option_errors(make, match):
@@ -136,3 +136,68 @@ def test_bad_campaign_files_name_the_key(tmp_path, text, key):
         load_campaign(path)
     assert err.value.field == key, str(err.value)
     assert str(path) in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("text", "key", "message"),
+    [
+        # a uniform's bounds: below a bound that may be reached, at an excluded one, above
+        ('[dispersions.wind_speed]\ndistribution = "uniform"\nlow_mps = -5\nhigh_mps = 1\n',
+         "dispersions.wind_speed.low_mps", "-5 m/s is below 0: a wind speed cannot be negative"),
+        ('[dispersions.mass]\ndistribution = "uniform"\nlow_g = 0\nhigh_g = 30\n',
+         "dispersions.mass.low_g", "0 g is not above 0: a mass must be positive"),
+        ('[dispersions.dropout_rate]\ndistribution = "uniform"\nlow = 0.5\nhigh = 1.5\n',
+         "dispersions.dropout_rate.high", "1.5 is above 1: a drop-out rate is a probability"),
+        # a truncated normal's mean ± truncate_sigmas·sigma, in the file's unit
+        ('[dispersions.mass]\ndistribution = "normal"\nsigma_g = 10\ntruncate_sigmas = 4\n',
+         "dispersions.mass.truncate_sigmas",
+         "mean - truncate_sigmas·sigma = -7.5 g is not above 0"),
+        ('[dispersions.dropout_rate]\ndistribution = "normal"\nmean = 0.97\nsigma = 0.01\n'
+         'truncate_sigmas = 4\n', "dispersions.dropout_rate.truncate_sigmas",
+         "mean + truncate_sigmas·sigma = 1.01 is above 1"),
+        ('[dispersions.inertia_axial]\ndistribution = "normal"\nmean_g_cm2 = -3\n'
+         'sigma_g_cm2 = 0\n', "dispersions.inertia_axial.mean_g_cm2",
+         "mean -3 g cm^2 is not above 0: an inertia must be positive"),
+        ('[dispersions.coupling]\ndistribution = "normal"\nrelative_sigma = 0.5\n'
+         'truncate_sigmas = 3\n', "dispersions.coupling.truncate_sigmas",
+         "an impulse per pulse must be positive"),
+        # an untruncated normal on a bounded quantity reaches past the bound
+        ('[dispersions.wind_speed]\ndistribution = "normal"\nmean_mps = 3\nsigma_mps = 0.1\n',
+         "dispersions.wind_speed.truncate_sigmas", "missing: an untruncated normal"),
+    ],
+)  # fmt: skip
+def test_a_distribution_outside_its_quantity_s_domain_is_refused(tmp_path, text, key, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(BASE + text)
+    with pytest.raises(ProblemFileError) as err:
+        load_campaign(path)
+    assert err.value.field == key, str(err.value)
+    assert message in str(err.value)
+
+
+def test_distributions_inside_their_domains_are_taken(tmp_path):
+    """Reaching a closed bound, a point mass, and an untruncated normal where any value is
+    physical (an offset) are all fine."""
+    path = tmp_path / "good.toml"
+    path.write_text(BASE + '[dispersions.wind_speed]\ndistribution = "uniform"\nlow_mps = 0\n'
+                    'high_mps = 2\n[dispersions.dropout_rate]\ndistribution = "uniform"\n'
+                    'low = 0\nhigh = 1\n[dispersions.mass]\ndistribution = "normal"\n'
+                    'sigma_g = 0\n[dispersions.offset_east]\ndistribution = "normal"\n'
+                    'sigma_mm = 2\n')  # fmt: skip
+    items = dict(load_campaign(path).dispersions.items)
+    assert items["wind_speed"] == Uniform(0.0, 2.0) and items["dropout_rate"] == Uniform(0, 1)
+    assert items["mass"].sigma == 0 and items["offset_east"] == Normal(0.0, 0.002)
+
+
+@pytest.mark.parametrize(
+    ("name", "dist", "match"),
+    [
+        ("wind_speed", Uniform(-5.0, 1.0), r"low = -5 is below 0: a wind speed"),
+        ("mass", Normal(0.03, 0.01, 4.0), r"mean - truncate·sigma = -0.01 is not above 0"),
+        ("dropout_rate", Normal(0.5, 0.1), r"untruncated normal"),
+        ("coupling", Uniform(0.0, 0.1), r"not above 0: an impulse per pulse"),
+    ],
+)
+def test_dispersions_refuse_a_support_outside_the_domain(name, dist, match):
+    with pytest.raises(OptionError, match=rf"Dispersions\.{name}: .*{match}"):
+        Dispersions(((name, dist),))
