@@ -34,7 +34,7 @@ from lightcraft_opt.layout import initial_state
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
 from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.plots.closed_loop import closed_loop_figures
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
@@ -277,7 +277,11 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 # The ranges of the numeric flags, each with its reason (cli_args.py).
 DURATION = real(
-    0.0, 3600.0, low_open=True, unit="s", why="an hour at most: a lightcraft flight lasts seconds"
+    0.0,
+    MAX_DURATION,
+    low_open=True,
+    unit="s",
+    why="an hour at most: a lightcraft flight lasts seconds",
 )
 LAUNCH_SPEED = real(
     -340.0, 340.0, unit="m/s", why="below the speed of sound: the aerodynamics are subsonic"

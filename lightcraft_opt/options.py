@@ -6,17 +6,37 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from lightcraft_opt.errors import OptionError
+from lightcraft_opt.errors import OptionError, ParameterError
 
 __all__ = [
+    "MAX_DURATION",
     "CoastScheme",
     "PulseMapOptions",
     "RcsProfile",
     "SimulationOptions",
+    "checked_duration",
     "checked_int",
     "checked_nonnegative",
     "checked_number",
 ]
+
+#: Longest flight any runner flies [s]: a lightcraft flight lasts seconds; the logs grow
+#: with the pulses (26 an s).
+MAX_DURATION = 3600.0
+
+
+def checked_duration(duration: object, name: str = "duration") -> float:
+    """``duration`` [s] as a float in (0, :data:`MAX_DURATION`], else a ParameterError
+    naming ``name``."""
+    if isinstance(duration, bool) or not isinstance(duration, int | float):
+        raise ParameterError(name, f"must be a number of seconds, got {duration!r}")
+    if not (math.isfinite(duration) and 0 < duration <= MAX_DURATION):
+        raise ParameterError(
+            name,
+            f"must lie in (0, {MAX_DURATION:g}] s, got {duration:g}: an hour at most, a "
+            "lightcraft flight lasts seconds",
+        )
+    return float(duration)
 
 
 class CoastScheme(Enum):

@@ -149,3 +149,13 @@ def test_a_huge_horizon_is_refused_before_anything_is_built(tmp_path):
     problems = Path(__file__).resolve().parents[1] / "problems"
     with pytest.raises(ProblemFileError, match=r"horizon_pulses: 1000000000 pulses is above"):
         load_problem(problems / "least_energy_flight16.toml", horizon=1_000_000_000)
+
+
+@pytest.mark.parametrize("duration", [1e300, 3600.5, True])
+def test_a_duration_beyond_an_hour_is_refused_by_every_runner(duration):
+    """simulate(model, 1e300) used to size its pulse arrays first: 'maximum dimension'."""
+    from lightcraft_opt.simulation.simulate import simulate
+
+    for run in (simulate, simulate_coast):
+        with pytest.raises(ParameterError, match=r"duration: must (lie in \(0, 3600\] s|be a)"):
+            run(table1_flight5(), duration)

@@ -4,7 +4,6 @@ the columns of its run table (SI, the unit in the column name)."""
 from __future__ import annotations
 
 import hashlib
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
@@ -17,6 +16,7 @@ from lightcraft_opt.campaign.dispersions import Dispersions
 from lightcraft_opt.control.options import ClosedLoopOptions, DirectorOptions, MpcOptions
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import STATE, checked_vector, initial_state
+from lightcraft_opt.options import checked_duration
 from lightcraft_opt.params import Model
 
 __all__ = [
@@ -129,10 +129,7 @@ class Campaign:
     title: str = "campaign"
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.duration, int | float) and math.isfinite(self.duration)):
-            raise ParameterError("duration", f"must be a number of seconds, got {self.duration}")
-        if self.duration <= 0:
-            raise ParameterError("duration", f"must be positive, got {self.duration} s")
+        object.__setattr__(self, "duration", checked_duration(self.duration))
         if not isinstance(self.controller, CampaignController):
             allowed = [c.value for c in CampaignController]
             raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")

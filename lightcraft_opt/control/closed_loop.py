@@ -45,7 +45,7 @@ from lightcraft_opt.layout import (
     initial_state,
     parameter_values,
 )
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.options import PulseMapOptions, RcsProfile, checked_duration
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import Z_UP, FlightLog  # simulate's end rule
@@ -145,8 +145,7 @@ def closed_loop(
     status in the log, never an exception.
     """
     opts = options or ClosedLoopOptions()
-    if not (np.isfinite(duration) and duration > 0):
-        raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
+    duration = checked_duration(duration)
     phi = pulse_map or pulse_map_for(model, plant_options(model))
     lay = phi.inputs
     if lay is None:

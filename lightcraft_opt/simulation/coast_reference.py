@@ -12,7 +12,6 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
@@ -21,7 +20,7 @@ from lightcraft_opt.layout import (
     input_layout,
     parameter_values,
 )
-from lightcraft_opt.options import SimulationOptions
+from lightcraft_opt.options import SimulationOptions, checked_duration
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
@@ -124,8 +123,7 @@ def simulate_coast(
     with what was finished so far).
     """
     opts = options or SimulationOptions()
-    if not (np.isfinite(duration) and duration > 0):
-        raise ParameterError("duration", f"must be a positive number of seconds, got {duration!r}")
+    duration = checked_duration(duration)
     craft = model.craft
     ulay = input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
     xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)

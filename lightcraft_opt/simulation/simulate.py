@@ -26,7 +26,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.options import PulseMapOptions, checked_duration
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog
@@ -99,8 +99,7 @@ def simulate(
     SimulationResult, dense in time (the pulse map's dense output), with the pulse
     record and status ``duration_reached``, ``landed``, ``left_beam`` or ``failed``.
     """
-    if not (np.isfinite(duration) and duration > 0):
-        raise ParameterError("duration", f"must be a positive number of seconds, got {duration}")
+    duration = checked_duration(duration)
     if not 0.0 <= dropout_rate < 1.0:
         raise ParameterError("dropout_rate", f"must lie in [0, 1), got {dropout_rate}")
     if pulse_map is None:
