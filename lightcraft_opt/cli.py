@@ -364,7 +364,8 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
         "~/.cache/lightcraft_opt (~25 s the first time). Exit status 0: the flight "
-        "reached its duration; 1: it ended early (left the beam, landed); 2: bad input.",
+        "reached its duration; 1: it ended early (left the beam, landed) or no pulse fired; "
+        "2: bad input.",
     )
     loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
     loop.add_argument(
