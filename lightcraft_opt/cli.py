@@ -296,7 +296,7 @@ TILT = real(
 OFFSET = real(
     -1000.0, 1000.0, unit="cm", why="10 m from the beam axis at most: beyond, the beam cannot reach"
 )
-DROPOUT = real(0.0, 1.0, high_open=True, why="a probability; at 1 no pulse would fire")
+DROPOUT = real(0.0, 1.0, why="a probability (at 1 no pulse fires: status never_fired)")
 SEED = integer(0, why="numpy seeds are non-negative")
 HORIZON = integer(
     1, MAX_HORIZON, why=f"{MAX_HORIZON} pulses: 200 s at 26 Hz, ten times the longest flight"
@@ -402,7 +402,8 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
         "~/.cache/lightcraft_opt (~25 s the first time). Exit status 0: the flight "
-        "reached its duration; 1: it ended early (left the beam, landed); 2: bad input.",
+        "reached its duration; 1: it ended early (left the beam, landed) or no pulse fired; "
+        "2: bad input.",
     )
     loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
     loop.add_argument(

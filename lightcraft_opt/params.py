@@ -772,12 +772,15 @@ class Environment:
 
     Attributes
     ----------
-    gravity_j2 : include the J2 zonal term (otherwise inverse-square, as the paper).
+    gravity_j2 : include the J2 zonal term (default). With ``earth_rotation`` this is the
+        WGS-84 normal gravity, plumb along L's up (the ellipsoid normal); False gives the
+        paper's inverse-square gravity, 1.5 mrad off L's up at White Sands
+        (docs/physics.md#gravity).
     earth_rotation : include Coriolis and centripetal terms of the rotating site frame.
     """
 
     wind: Wind = field(default_factory=Wind)
-    gravity_j2: bool = False
+    gravity_j2: bool = True
     earth_rotation: bool = True
 
     def __post_init__(self) -> None:

@@ -4,7 +4,8 @@
 apogee's mean, standard deviation and percentiles, the mean and covariance of the landing
 points and of the final horizontal positions with their 1σ and 95 % confidence ellipses,
 the probability of leaving the beam with its Wilson 95 % interval, the status counts and
-the controller's statistics. Runs with status ``error`` count in the status counts only.
+the controller's statistics. Runs with status ``error`` or ``never_fired`` (no pulse fired:
+the craft never left the pad) count in the status counts only.
 """
 
 from __future__ import annotations
@@ -98,7 +99,7 @@ def campaign_summary(
     timings : the same of timings.csv, for wall and solve times.
     """
     status = np.asarray(table["status"]).astype(str)
-    flown = status != "error"
+    flown = (status != "error") & (status != "never_fired")
     n = int(flown.sum())
     names, counts = np.unique(status, return_counts=True)
     left = int(np.sum(np.asarray(table["left_beam"])[flown] == 1))

@@ -15,7 +15,8 @@ problem's overrides (wind, gusts) and the dispersion of
 the undispersed model and calm air. Flights end as :func:`lightcraft_opt.simulate`'s do (duration,
 landing, leaving the beam, a non-finite state), by the same bookkeeping; pulses the laser
 drops before the first one fires leave a craft at rest on the pad where it is (the pad holds
-it up: without this a drop-out at launch "landed" the craft at t = 0).
+it up: without this a drop-out at launch "landed" the craft at t = 0); a flight in which no
+pulse fires ends ``never_fired``.
 
 A controller whose input does not depend on what it is told (its ``fixed_input`` is not
 None: the open loop, "none") is flown as :func:`lightcraft_opt.simulate` flies open-loop
@@ -48,7 +49,7 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.options import PulseMapOptions, RcsProfile, checked_duration
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.chunks import step_in_chunks
-from lightcraft_opt.simulation.flight_log import Z_UP, FlightLog  # simulate's end rule
+from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.error_state import build_error_state
@@ -156,15 +157,12 @@ def closed_loop(
     n = int(np.ceil(duration / phi.period - 1e-9))
     dropped = rng.random(n) < opts.dropout_rate if opts.dropout_rate else np.zeros(n, bool)
     i_energy = lay.slot("energy").start
-    flight = FlightLog(x, phi.period, duration, i_energy)
+    flight = FlightLog(x, phi.period, duration, lay, p, model.laser)
     faults = set(opts.faults)
     controller.reset()
     steps: list[StepStats] = []
     commanded: list[np.ndarray] = []
     nodes = [x]
-    # drop-outs before the first fired pulse leave a craft at rest on the pad where it is
-    on_pad = x[Z_UP] <= 0.0 and x[STATE.slot("v_L").start + 2] <= 0.0
-    resting = int(np.argmin(dropped)) if on_pad and not np.all(dropped) else 0
     fixed = getattr(controller, "fixed_input", None)
     if fixed is not None:  # open loop: no measurement, no faults to inject
         u = checked_vector("controller input", fixed, lay.size)
@@ -172,6 +170,8 @@ def closed_loop(
         steps = [controller.last] * n
         applied = np.tile(u, (n, 1))
         applied[dropped, i_energy] = 0.0
+        # drop-outs before the first fired pulse leave a craft at rest on the pad where it is
+        resting = flight.resting_pulses(applied)
         for k in range(resting):
             flight.rest(k * phi.period, applied[k], x, ENGINE.size)
         nodes = [x] * resting + step_in_chunks(phi, applied[resting:], x, p, flight, resting)
@@ -188,7 +188,7 @@ def closed_loop(
             applied = u.copy()
             if dropped[k]:
                 applied[i_energy] = 0.0
-            if k < resting:
+            if flight.rests(applied):  # on the pad, nothing fired yet
                 flight.rest(t, applied, x, ENGINE.size)
                 nodes.append(x)
                 continue

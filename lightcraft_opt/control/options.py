@@ -398,7 +398,7 @@ class ClosedLoopOptions:
     ----------
     noise : on the state the controller is told (:class:`MeasurementNoise`).
     dispersion : of the plant's parameters (:class:`PlantDispersion`).
-    dropout_rate : probability that the laser drops a pulse (no energy), in [0, 1).
+    dropout_rate : probability that the laser drops a pulse (no energy), in [0, 1].
     faults : pulse numbers (0 the first, >= 0) at which ``fault`` is injected into the
         controller's step.
     fault : the failure injected (:class:`ControllerFault`).
@@ -426,9 +426,9 @@ class ClosedLoopOptions:
             isinstance(r, int | float)
             and not isinstance(r, bool)
             and math.isfinite(r)
-            and 0 <= r < 1
+            and 0 <= r <= 1
         ):
-            raise OptionError(f"ClosedLoopOptions.dropout_rate must be in [0, 1), got {r!r}")
+            raise OptionError(f"ClosedLoopOptions.dropout_rate must be in [0, 1], got {r!r}")
         if not isinstance(self.faults, tuple) or any(
             isinstance(k, bool) or not isinstance(k, int) or k < 0 for k in self.faults
         ):

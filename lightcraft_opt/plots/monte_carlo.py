@@ -34,6 +34,7 @@ STATUS_COLORS = {
     "landed": "tab:green",
     "left_beam": "tab:red",
     "failed": "black",
+    "never_fired": "tab:gray",
     "error": "tab:purple",
 }
 

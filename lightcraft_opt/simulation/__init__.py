@@ -10,23 +10,19 @@ rule, and an independent variable-step reference for the coast.
 """
 
 from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
-from lightcraft_opt.simulation.flight_log import (
-    LEFT_BEAM_FRACTION,
-    LEFT_BEAM_PULSES,
-    FlightLog,
-)
+from lightcraft_opt.simulation.flight_log import LEFT_BEAM_PULSES, FlightLog, beam_gap
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import InputPolicy, simulate
 
 __all__ = [
-    "LEFT_BEAM_FRACTION",
     "LEFT_BEAM_PULSES",
     "FlightLog",
     "InputPolicy",
     "PulseRecord",
     "SimulationResult",
     "SimulationStatus",
+    "beam_gap",
     "coast_integrator",
     "flight_result",
     "simulate",

@@ -2,55 +2,137 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from lightcraft_opt.layout import STATE
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.params import BeamProfile, Laser
 from lightcraft_opt.simulation.result import SimulationStatus
+from lightcraft_opt.symbolic.beam import beam_side
 
-__all__ = ["LEFT_BEAM_FRACTION", "LEFT_BEAM_PULSES", "Z_UP", "FlightLog"]
+__all__ = ["LEFT_BEAM_PULSES", "Z_UP", "FlightLog", "beam_gap"]
 
-#: Leaving the beam: the optic captures under this fraction of a fired pulse's energy ...
-LEFT_BEAM_FRACTION = 0.01
-#: ... for this many fired pulses in a row.
+#: Leaving the beam: the optic and the beam do not overlap for this many fired pulses in a row.
 LEFT_BEAM_PULSES = 3
 #: Index in the state x of the altitude above the pad (r_L's up component, L frame) [m].
 Z_UP = STATE.slot("r_L").start + 2
+_V_UP = STATE.slot("v_L").start + 2
+_OFFSET = ENGINE.slot("offset_L")
+
+
+def beam_gap(
+    offset_L: np.ndarray, side: float, capture_radius: float, profile: BeamProfile
+) -> float:
+    """Clearance between the beam's footprint and the optic, in the plane across the beam [m].
+
+    Positive when they do not overlap (docs/frames.md#end-of-flight). The optic is the
+    disc of the capture radius about its centre (tilted, its shadow on the beam plane is an
+    ellipse inside that disc, so a positive clearance is never wrong). The footprint is the
+    nominal edge of the profile (symbolic/beam.py), the soft edge's half-fluence line:
+    the square of side ``side`` with edges along east and north (HOLLOW_SQUARE: the outer
+    square; an optic over the hole is centred, not out), the disc of diameter ``side``
+    (TOP_HAT; GAUSSIAN: the 1/e^2 diameter).
+
+    Parameters
+    ----------
+    offset_L : (2,) east/north offset of the optic centre from the beam axis, L frame [m].
+    side : beam size at the craft, :func:`~lightcraft_opt.symbolic.beam.beam_side` [m].
+    capture_radius : outer radius of the optic [m].
+    profile : the beam's transverse profile.
+
+    Returns
+    -------
+    The distance from the footprint to the optic centre minus the capture radius [m]
+    (negative: overlap).
+    """
+    east, north = (abs(float(c)) for c in offset_L)
+    half = 0.5 * side
+    if profile is BeamProfile.HOLLOW_SQUARE:
+        reach = math.hypot(max(east - half, 0.0), max(north - half, 0.0))
+    else:
+        reach = max(math.hypot(east, north) - half, 0.0)
+    return reach - capture_radius
 
 
 class FlightLog:
     """The record of a flight as its pulses come in, and the rules that end it.
 
     Shared by :func:`~lightcraft_opt.simulation.simulate.simulate` and the closed loop, so
-    every flight ends by the same rules: landing (interpolated to the pad), leaving the beam
-    (the optic captures under :data:`LEFT_BEAM_FRACTION` of the pulse's energy for
-    :data:`LEFT_BEAM_PULSES` fired pulses in a row; dropped pulses do not count), a
-    non-finite state; otherwise the duration is reached.
+    every flight ends by the same rules (docs/frames.md#end-of-flight): landing
+    (interpolated to the pad); leaving the beam (the optic and the beam do not overlap,
+    :func:`beam_gap` > 0 at the craft's altitude, for :data:`LEFT_BEAM_PULSES` fired pulses
+    in a row; dropped pulses neither count nor reset the count); a non-finite state;
+    otherwise the duration is reached. A craft that starts at rest on the pad stays there
+    while the laser drops its pulses (:meth:`rests`); if no pulse ever fires the flight
+    ends ``never_fired``.
+
+    Parameters
+    ----------
+    x0 : (STATE.size,) state at the first pulse.
+    period : pulse period [s].
+    duration : s.
+    inputs : the map-input layout (its ``focus`` and ``energy`` slots are read).
+    p : (PARAMETERS.size,) the flight's parameters (beam size and capture radius).
+    laser : the beam's profile and size model.
     """
 
-    def __init__(self, x0: np.ndarray, period: float, duration: float, i_energy: int) -> None:
-        self.period, self.duration, self.i_energy = period, duration, i_energy
+    def __init__(
+        self,
+        x0: np.ndarray,
+        period: float,
+        duration: float,
+        inputs: VectorLayout,
+        p: np.ndarray,
+        laser: Laser,
+    ) -> None:
+        self.period, self.duration = period, duration
+        self.i_energy = inputs.slot("energy").start
+        self.i_focus = inputs.slot("focus").start
+        self.p, self.laser = np.asarray(p, dtype=float), laser
         self.times: list[float] = [0.0]
         self.states: list[np.ndarray] = [x0]
         self.pulse_t: list[float] = []
         self.pulse_u: list[np.ndarray] = []
         self.pulse_e: list[np.ndarray] = []
         self.status, self.message = SimulationStatus.DURATION_REACHED, ""
-        self.weak = 0
+        self.outside = 0
+        self.on_pad = bool(x0[Z_UP] <= 0.0 and x0[_V_UP] <= 0.0)
+
+    def rests(self, u: np.ndarray) -> bool:
+        """True when the pulse of map input ``u`` leaves the craft at rest on the pad: it
+        started there, no pulse has been stepped since, and this one carries no energy."""
+        return self.on_pad and u[self.i_energy] <= 0.0
+
+    def resting_pulses(self, U: np.ndarray) -> int:
+        """How many of the rows of ``U`` (pulses, map inputs), from the first, leave the
+        craft at rest on the pad (:meth:`rests`)."""
+        n = 0
+        while n < len(U) and self.rests(U[n]):
+            n += 1
+        return n
 
     def rest(self, t: float, u: np.ndarray, x: np.ndarray, n_engine: int) -> None:
         """Record a pulse the laser dropped at ``t`` [s] (map input ``u``, energy 0) while the
-        craft sits on the pad before its first fired pulse: it stays at ``x`` (STATE.size,)
-        for the interval, held up by the pad; the engine outputs are zeros (``n_engine``)."""
+        craft sits on the pad before its first fired pulse (:meth:`rests`): it stays at ``x``
+        (STATE.size,) for the interval, held up by the pad; the engine outputs are zeros
+        (``n_engine``). Until a pulse fires the flight's status is ``never_fired``."""
         self.pulse_t.append(t)
         self.pulse_u.append(u)
         self.pulse_e.append(np.zeros(n_engine))
         self.times.append(t + self.period)
         self.states.append(np.array(x, dtype=float))
+        self.status = SimulationStatus.NEVER_FIRED
+        self.message = "no pulse fired: the craft rests on the pad"
 
     def ended_by(self, t: float, u: np.ndarray, X: np.ndarray, eng: np.ndarray) -> bool:
         """Record the pulse fired at ``t`` [s] with map input ``u``: ``X`` (STATE.size,
-        dense) states after it, ``eng`` (11,) engine outputs. True when the flight ends."""
+        dense) states after it, ``eng`` (ENGINE.size,) engine outputs. True when the flight
+        ends."""
         iz = Z_UP
+        self.on_pad = False
+        self.status, self.message = SimulationStatus.DURATION_REACHED, ""
+        z_pulse = float(self.states[-1][iz])  # the craft's altitude at the pulse
         if not (np.all(np.isfinite(X)) and np.all(np.isfinite(eng))):
             k = len(self.pulse_t)
             self.status, self.message = SimulationStatus.FAILED, f"non-finite state after pulse {k}"
@@ -74,14 +156,19 @@ class FlightLog:
             return True
         self.times.extend(tb[keep])
         self.states.extend(X[keep])
-        energy = u[self.i_energy]
-        if energy > 0:  # a dropped pulse neither counts nor resets the count
-            self.weak = self.weak + 1 if eng[0] < LEFT_BEAM_FRACTION * energy else 0
-        if self.weak >= LEFT_BEAM_PULSES:
-            self.status = SimulationStatus.LEFT_BEAM
-            self.message = (
-                f"optic captured < {LEFT_BEAM_FRACTION:.0%} of the pulse energy for "
-                f"{LEFT_BEAM_PULSES} fired pulses"
-            )
-            return True
-        return False
+        if u[self.i_energy] <= 0:  # a dropped pulse neither counts nor resets the count
+            return False
+        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser))
+        offset = eng[_OFFSET.start : _OFFSET.stop]
+        radius = float(PARAMETERS.get("capture_radius", self.p))
+        outside = beam_gap(offset, side, radius, self.laser.profile) > 0.0
+        self.outside = self.outside + 1 if outside else 0
+        if self.outside < LEFT_BEAM_PULSES:
+            return False
+        self.status = SimulationStatus.LEFT_BEAM
+        self.message = (
+            f"the optic was outside the beam for {LEFT_BEAM_PULSES} fired pulses in a row "
+            f"(last: {100 * float(np.hypot(*offset)):.3g} cm from the axis, beam "
+            f"{100 * side:.3g} cm, optic radius {100 * radius:.3g} cm)"
+        )
+        return True

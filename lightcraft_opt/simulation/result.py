@@ -19,6 +19,8 @@ class SimulationStatus(Enum):
     LANDED = "landed"
     LEFT_BEAM = "left_beam"
     FAILED = "failed"
+    #: No pulse fired: the laser dropped every pulse and the craft rested on the pad.
+    NEVER_FIRED = "never_fired"
 
 
 @dataclass(frozen=True)

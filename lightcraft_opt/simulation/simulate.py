@@ -2,8 +2,10 @@
 
 ``u = inputs(k, t, x); x = Φ(x, u, p, t)``: the laser pulse at t_k, then the coast
 to the next pulse. The flight ends when the duration is reached, the craft lands
-(mass centre back below the pad) or leaves the beam (the optic captures under 1 %
-of the pulse's energy for three fired pulses in a row; dropped pulses do not count).
+(mass centre back below the pad) or leaves the beam (the optic and the beam do not overlap
+for three fired pulses in a row; dropped pulses do not count): flight_log.py. Pulses the
+laser drops before the first one fires leave a craft that starts on the pad at rest there;
+if none fires the flight ends ``never_fired``.
 Open-loop inputs are stepped a second of pulses per call (chunks.py: Φ's mapaccum), then
 checked pulse by pulse exactly as a policy's flight is.
 """
@@ -17,6 +19,7 @@ import numpy as np
 from lightcraft_opt.compiled import compile_pulse_map, pulse_map_for
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
+    ENGINE,
     PARAMETERS,
     STATE,
     VectorLayout,
@@ -87,7 +90,7 @@ def simulate(
     pulse_map : a Φ to step (used as given); else Φ of ``model`` with ``options``
         from :func:`~lightcraft_opt.compiled.pulse_map_for`: built once per process and
         model, compiled to C where a compiler works.
-    dropout_rate : probability that the laser drops a pulse (its energy set to 0).
+    dropout_rate : probability that the laser drops a pulse (its energy set to 0), in [0, 1].
     seed : of the drop-out random generator (one draw per pulse, in order).
     compiled : True or False to choose whether Φ is compiled to C (cached on disk; falls
         back to the interpreted Φ with a warning); None (default): compiled unless
@@ -97,11 +100,12 @@ def simulate(
     Returns
     -------
     SimulationResult, dense in time (the pulse map's dense output), with the pulse
-    record and status ``duration_reached``, ``landed``, ``left_beam`` or ``failed``.
+    record and status ``duration_reached``, ``landed``, ``left_beam``, ``failed`` or
+    ``never_fired``.
     """
     duration = checked_duration(duration)
-    if not 0.0 <= dropout_rate < 1.0:
-        raise ParameterError("dropout_rate", f"must lie in [0, 1), got {dropout_rate}")
+    if not 0.0 <= dropout_rate <= 1.0:
+        raise ParameterError("dropout_rate", f"must lie in [0, 1], got {dropout_rate}")
     if pulse_map is None:
         phi = pulse_map_for(model, options, compiled=compiled)
     else:
@@ -116,13 +120,16 @@ def simulate(
     rng = np.random.default_rng(seed)
     dropped = rng.random(n_pulses) < dropout_rate if dropout_rate else np.zeros(n_pulses, bool)
     i_energy = lay.slot("energy").start
-    flight = FlightLog(xk, phi.period, duration, i_energy)
+    flight = FlightLog(xk, phi.period, duration, lay, pk, model.laser)
     if callable(inputs):
         for k in range(n_pulses):
             t = k * phi.period
             u = checked_vector(f"inputs[{k}]", inputs(k, t, xk), lay.size).copy()
             if dropped[k]:
                 u[i_energy] = 0.0
+            if flight.rests(u):
+                flight.rest(t, u, xk, ENGINE.size)
+                continue
             X, eng = (np.asarray(v) for v in phi.dense(xk, u, pk, t))
             if flight.ended_by(t, u, X, eng.ravel()):
                 break
@@ -130,7 +137,10 @@ def simulate(
     else:
         U = _input_rows(model, inputs, lay, n_pulses)
         U[dropped, i_energy] = 0.0
-        step_in_chunks(phi, U, xk, pk, flight)
+        resting = flight.resting_pulses(U)
+        for k in range(resting):
+            flight.rest(k * phi.period, U[k], xk, ENGINE.size)
+        step_in_chunks(phi, U[resting:], xk, pk, flight, resting)
     record = PulseRecord(
         t=np.asarray(flight.pulse_t),
         u=np.asarray(flight.pulse_u).reshape(-1, lay.size),

@@ -71,8 +71,9 @@ def earth_rate_L(lat: Expr) -> Expr:
 def gravity_E(R_E: Expr, j2: bool) -> Expr:
     """Gravitational acceleration at R_E (from the Earth's centre, E frame) [m/s^2].
 
-    Inverse-square (paper); with ``j2`` the zonal J2 term is added (Vallado Eq. 8-30,
-    docs/references.md#vallado).
+    Inverse-square (the paper); with ``j2`` (every model file) the zonal J2 term is added
+    (Vallado Eq. 8-30, docs/references.md#vallado): with the frame terms of
+    :func:`site_acceleration_L` that is plumb along L's up (docs/physics.md#gravity).
     """
     r2 = ca.sumsqr(R_E)
     r = ca.sqrt(r2)

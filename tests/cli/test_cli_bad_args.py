@@ -28,7 +28,7 @@ BAD_NUMBERS = [
     (["simulate", "m.toml", "--tilt-azimuth-deg", "nan"], "--tilt-azimuth-deg", "finite"),
     (["simulate", "m.toml", "--dropout-rate", "0.1", "--seed", "-1"], "--seed", "got -1"),
     (["simulate", "m.toml", "--seed", "1.5"], "--seed", "must be an integer >= 0"),
-    (["simulate", "m.toml", "--dropout-rate", "1"], "--dropout-rate", "must lie in [0, 1)"),
+    (["simulate", "m.toml", "--dropout-rate", "1.5"], "--dropout-rate", "must lie in [0, 1]"),
     (["simulate", "m.toml", "--dropout-rate", "-0.1"], "--dropout-rate", "a probability"),
     (["simulate", "m.toml", "--duration", "0"], "--duration", "must lie in (0, 3600] s"),
     (["simulate", "m.toml", "--duration", "1e300"], "--duration", "an hour at most"),

@@ -106,8 +106,9 @@ def test_non_spinning_craft_1_cm_off_axis_tips_over_within_a_few_pulses(flight5)
 def test_craft_is_lost_beyond_the_capture_radius_frisbee(flight5, offset, kept):
     """In flight (10 m, climbing at 10 m/s), spinning, started off the axis: inside the
     capture radius and just beyond it (8 cm: the beam's edge still lights the optic) the
-    restoring impulse brings it back; at 10 cm the optic catches under 1 % of the pulse and
-    the craft "Frisbees" away: the flight ends with status left_beam."""
+    restoring impulse brings it back; at 10 cm the optic's rim is clear of the beam's edge
+    (10 - 5.5 cm beyond its 4.1 cm half side at 10 m) and the craft "Frisbees" away: the
+    flight ends with status left_beam."""
     model, phi = flight5
     x0 = initial_state(model, r_L=(offset, 0.0, 10.0), v_L=(0.0, 0.0, 10.0))
     result = simulate(model, 3.0, x0=x0, pulse_map=phi)

@@ -48,14 +48,16 @@ def table1_flight5(**craft_changes: object) -> Model:
 
 
 def torque_free(model: Model, carrier: Carrier | None = None) -> Model:
-    """The same craft with every torque switched off and the site frame inertial."""
+    """The same craft with every torque switched off, the site frame inertial and gravity
+    inverse-square (the analytic references: Kepler invariants, the 1/r^2 gradient)."""
     craft = replace(
         model.craft,
         aero=Aerodynamics(cd_scale=0.0, cl_scale=0.0, cm_scale=0.0),
         spin_decay=SpinDecay(),
         carrier=carrier,
     )
-    return replace(model, craft=craft, environment=Environment(earth_rotation=False))
+    inverse_square = Environment(gravity_j2=False, earth_rotation=False)
+    return replace(model, craft=craft, environment=inverse_square)
 
 
 #: The cheapest optic quadrature that is still the full engine model (2 radii x 8 sectors):

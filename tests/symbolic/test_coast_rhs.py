@@ -69,7 +69,8 @@ def test_drag_free_coast_keeps_the_kepler_invariants():
     its specific energy v^2/2 - GM/|R| and angular momentum R x v are constant."""
     base = table1_flight5()
     craft = replace(base.craft, aero=Aerodynamics(cd_scale=0.0, cl_scale=0.0, cm_scale=0.0))
-    model = replace(base, craft=craft, environment=Environment(earth_rotation=False))
+    inverse_square = Environment(gravity_j2=False, earth_rotation=False)
+    model = replace(base, craft=craft, environment=inverse_square)
     res = simulate_coast(
         model,
         5.0,

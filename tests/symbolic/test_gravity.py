@@ -14,7 +14,9 @@ import numpy as np
 import pytest
 from support.jacobian_check import assert_jacobians_match_finite_differences
 from support.models import table1_flight5
+from support.paths import MODELS
 
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.params import Environment
 from lightcraft_opt.symbolic.gravity import (
@@ -35,7 +37,7 @@ def test_inverse_square_gravity_at_the_pad():
     model = table1_flight5()
     p = parameter_values(model)
     g = np.asarray(
-        build_gravity(Environment(earth_rotation=False))([0, 0, 0], [0, 0, 0], p)
+        build_gravity(Environment(gravity_j2=False, earth_rotation=False))([0, 0, 0], [0, 0, 0], p)
     ).ravel()
     lat, lon, h = model.site.latitude, model.site.longitude, model.site.height
     R = np.asarray(site_position_E(lat, lon, h)).ravel()
@@ -53,6 +55,23 @@ def test_j2_gravity_with_rotation_is_wgs84_normal_gravity_on_the_ellipsoid():
     # magnitude to the size of the neglected J4 and higher terms
     assert np.linalg.norm(g) == pytest.approx(_somigliana(model.site.latitude), rel=2e-5)
     # direction: along -up, deflection of the vertical below 1e-5 rad
+    assert math.hypot(g[0], g[1]) / abs(g[2]) < 1e-5
+
+
+#: The flight models shipped in models/ (site and laser files hold no [craft]).
+FLIGHT_MODELS = sorted(f for f in MODELS.glob("*.toml") if "[craft]" in f.read_text())
+
+
+@pytest.mark.parametrize("path", [None, *FLIGHT_MODELS], ids=lambda f: f.stem if f else "default")
+def test_shipped_gravity_is_plumb_along_the_launch_frame_up(path):
+    """L's up is the WGS-84 ellipsoid normal. The shipped environments (every model file, and
+    Environment()) put gravity plus the centripetal term along it at the pad, to the J2-only
+    field's deflection of the vertical (< 1e-5 rad; inverse-square would be 1.5e-3 rad off,
+    docs/physics.md#gravity)."""
+    model = table1_flight5() if path is None else load_model(path)
+    g = np.asarray(
+        build_gravity(model.environment)([0, 0, 0], [0, 0, 0], parameter_values(model))
+    ).ravel()
     assert math.hypot(g[0], g[1]) / abs(g[2]) < 1e-5
 
 

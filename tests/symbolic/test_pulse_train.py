@@ -106,7 +106,7 @@ def _b1_L(q: np.ndarray) -> np.ndarray:
 
 
 def full_flight5(**craft_changes: object) -> Model:
-    """Flight 5 with everything on: aerodynamics, disk spin decay, rotating Earth."""
+    """Flight 5 with everything on: aerodynamics, disk spin decay, rotating Earth, J2."""
     base = table1_flight5()
     changes: dict[str, object] = {
         "engine": ENGINE,
@@ -202,11 +202,11 @@ def _force_and_moment_quadrature(model: Model, period: float) -> ca.Function:
     """CVODES over one coast from t0: ``(x0, p, t0) -> (x, F, M)`` with F = ∫ F_L dt [N s]
     and M = ∫ (M_L - W_L x H_L) dt [N m s] as quadratures.
 
-    F_L is assembled here: the aerodynamic and RCS forces rotated to L, inverse-square
-    gravity at the position from the Earth's centre, and the rotating-frame terms of L,
-    -2 m W x v_L - m W x (W x R_L), written out. M_L is the aerodynamic and RCS moment
-    plus the spin-decay torque on b1, about S*; -W_L x H_L turns dH/dt in N into the
-    rate of H's L components.
+    F_L is assembled here: the aerodynamic and RCS forces rotated to L, the model's gravity
+    (inverse-square, plus J2 when ``gravity_j2``) at the position from the Earth's centre,
+    and the rotating-frame terms of L, -2 m W x v_L - m W x (W x R_L), written out. M_L is
+    the aerodynamic and RCS moment plus the spin-decay torque on b1, about S*; -W_L x H_L
+    turns dH/dt in N into the rate of H's L components.
     """
     x = ca.SX.sym("x", STATE.size)
     p = ca.SX.sym("p", PARAMETERS.size)
@@ -221,7 +221,8 @@ def _force_and_moment_quadrature(model: Model, period: float) -> ca.Function:
     R_from_centre_L = (
         ca.mtimes(R_EL.T, site_position_E(lat, lon, PARAMETERS.get("site_height", p))) + r_L
     )
-    g_L = ca.mtimes(R_EL.T, gravity_E(ca.mtimes(R_EL, R_from_centre_L), False))
+    j2 = model.environment.gravity_j2
+    g_L = ca.mtimes(R_EL.T, gravity_E(ca.mtimes(R_EL, R_from_centre_L), j2))
     W_L = earth_rate_L(lat)
     F_L = (
         ca.mtimes(R_LB, terms["F_aero_B"] + terms["F_rcs_B"])
