@@ -99,5 +99,8 @@ class SimulationResult:
 
     @property
     def air_time(self) -> float:
-        """Time from launch to the end of the simulation [s]."""
+        """Time from launch to the end of the simulation [s]; 0 when no pulse fired (the
+        craft never left the pad)."""
+        if self.status is SimulationStatus.NEVER_FIRED:
+            return 0.0
         return float(self.t[-1] - self.t[0])

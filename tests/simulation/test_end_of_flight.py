@@ -127,6 +127,7 @@ def test_a_flight_without_a_fired_pulse_never_leaves_the_pad(flight5):
         assert len(result.pulses.t) == 8 and np.all(result.pulses.engine == 0.0)
         assert result.t[-1] == pytest.approx(8 * phi.period)
         assert np.all(result.x == x0)
+        assert result.air_time == 0.0 and result.apogee == 0.0
 
 
 def test_dropped_pulses_before_the_first_fired_one_rest_the_craft_on_the_pad(flight5):
