@@ -83,7 +83,13 @@ def _simulate(args: argparse.Namespace) -> int:
 
 def _optimize(args: argparse.Namespace) -> int:
     source = Path(args.problem)
-    pf = load_problem(source, horizon=args.horizon, solver=args.solver, max_iter=args.max_iter)
+    pf = load_problem(
+        source,
+        horizon=args.horizon,
+        solver=args.solver,
+        max_iter=args.max_iter,
+        time_limit=args.time_limit,
+    )
     problem, options = pf.problem, pf.options
     if args.verbose:
         options = dataclasses.replace(options, print_level=5)
@@ -95,7 +101,11 @@ def _optimize(args: argparse.Namespace) -> int:
         flush=True,
     )
     compiled = CompiledOcp(problem, options)
-    print(f"built in {compiled.build_time:.1f} s; solving ...", flush=True)
+    limit = "none" if options.time_limit is None else f"{options.time_limit:g} s"
+    print(
+        f"built in {compiled.build_time:.1f} s; solving (wall-clock limit {limit}) ...",
+        flush=True,
+    )
     result = compiled.solve(initial_guess=pf.initial_guess())
     print(
         f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
@@ -331,7 +341,7 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
         help="solve an optimal control problem from a problem file",
         description="Solve the problem file's optimal control problem and write solution.csv, "
         "summary.json and figures. Exit status 0: solved; 1: the solver did not converge "
-        "(files still written); 2: bad input.",
+        "or reached its wall-clock limit (files still written); 2: bad input.",
     )
     opt.add_argument("problem", help="problem TOML, e.g. problems/hold_in_crosswind.toml")
     opt.add_argument("--out", default=None, help="output folder (default runs/<problem name>)")
@@ -346,6 +356,14 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
     )
     opt.add_argument(
         "--max-iter", type=int, default=None, help="NLP iterations instead of the file's"
+    )
+    opt.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="wall-clock limit of the solve instead of the file's [solver] time_limit_s "
+        "(default 1800 s): the solve then stops with status time_limit",
     )
     opt.add_argument(
         "--verbose", action="store_true", help="print the solver's iterations (progress)"
