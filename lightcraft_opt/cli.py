@@ -240,10 +240,12 @@ def _calibrate(args: argparse.Namespace) -> int:
             initial[name.strip()] = float(value)
         except ValueError:
             raise ParameterError("--initial", f"needs NAME=VALUE in SI, got {item!r}") from None
+    limit = {} if args.time_limit is None else {"time_limit": args.time_limit}
     options = CalibrationOptions(
         max_iter=args.max_iter,
         verbose=args.verbose,
         pulse_map=PulseMapOptions(substeps=args.substeps),
+        **limit,
     )
     out = Path(args.out) if args.out else Path("runs") / f"{source.stem}-calibration"
     out.mkdir(parents=True, exist_ok=True)
@@ -435,7 +437,8 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
         "x_m, y_m, z_m: L frame, time from the first pulse) by Gauss-Newton least squares "
         "over the pulse map, and write the fitted model file, fit_report.json (values, "
         "standard deviations, correlations, identifiability flags) and residual plots. "
-        "Exit status 0: converged; 1: not converged (files still written); 2: bad input.",
+        "Exit status 0: converged; 1: not converged or out of time (files still written); "
+        "2: bad input.",
     )
     cal.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
     cal.add_argument("--track", required=True, help="tracked flight CSV (t_s,x_m,y_m,z_m)")
@@ -447,6 +450,14 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
     )
     cal.add_argument("--out", default=None, help="output folder (default runs/<model>-calibration)")
     cal.add_argument("--max-iter", type=int, default=50, help="iterations at most (default 50)")
+    cal.add_argument(
+        "--time-limit",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="wall-clock limit of the fit (default 1800 s): it then stops at its last "
+        "accepted step with status time_limit",
+    )
     cal.add_argument(
         "--substeps",
         type=int,
