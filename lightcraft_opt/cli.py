@@ -135,6 +135,13 @@ def _closed_loop(args: argparse.Namespace) -> int:
 
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
+    if args.deterministic or args.time_budget_ms is not None:
+        budget = None if args.deterministic else args.time_budget_ms * 1e-3
+        problem = dataclasses.replace(
+            problem,
+            mpc=dataclasses.replace(problem.mpc, time_budget=budget),
+            director=dataclasses.replace(problem.director, time_budget=budget),
+        )
     model = problem.model
     out = Path(args.out) if args.out else Path("runs") / f"{source.stem}-{args.controller}"
     out.mkdir(parents=True, exist_ok=True)
@@ -383,7 +390,9 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
-        "~/.cache/lightcraft_opt (~25 s the first time). Exit status 0: the flight "
+        "~/.cache/lightcraft_opt (~25 s the first time). A solve over its wall-clock "
+        "budget is discarded (the shifted plan flies), so results depend on the machine's "
+        "load unless --deterministic. Exit status 0: the flight "
         "reached its duration; 1: it ended early (left the beam, landed); 2: bad input.",
     )
     loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
@@ -395,6 +404,23 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     )
     loop.add_argument(
         "--duration", type=float, default=None, help="seconds instead of the file's duration"
+    )
+    budget = loop.add_mutually_exclusive_group()
+    budget.add_argument(
+        "--deterministic",
+        action="store_true",
+        help="no wall-clock budget for the MPC and the director (time_budget none): no "
+        "solve is discarded as late, so the results depend only on the inputs, not on the "
+        "machine's load (injected 'late' faults still fall back)",
+    )
+    budget.add_argument(
+        "--time-budget-ms",
+        type=float,
+        default=None,
+        metavar="MS",
+        help="wall-clock budget of a solve instead of the file's time_budget_ms (MPC and "
+        "director), for real-time studies: a later solve is discarded and the shifted "
+        "plan flies",
     )
     loop.set_defaults(run=_closed_loop)
 
