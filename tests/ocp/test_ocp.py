@@ -407,6 +407,23 @@ def test_a_wall_clock_limit_stops_a_solve_that_would_not_end(vertical, solver, h
         assert f"after {result.iterations} iterations" in result.message
 
 
+def test_a_wind_ramps_solves_share_one_limit(lateral):
+    """The ramp's steps (calm air, then the 3 m/s wind in thirds) run against one deadline:
+    a limit already past when the first step starts stops that step at its first
+    iteration and ends the ramp there, instead of granting each step a limit of its own."""
+    problem, phi, _, _ = lateral
+    options = OcpOptions(
+        solver=OcpSolver.SQP_HPIPM,
+        hessian=HessianApproximation.GAUSS_NEWTON,
+        wind_ramp=3,
+        time_limit=1e-6,
+    )
+    result = solve(problem, options, pulse_map=phi)
+    assert result.status is OcpStatus.TIME_LIMIT
+    assert result.message.endswith("(wind ramp 0/3: time_limit in 0)")
+    assert result.iterations == 0
+
+
 def test_bad_problems_and_options_name_the_field():
     model = drag_free_vertical()
     good = (LaserEnergy(),)
