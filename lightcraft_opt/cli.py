@@ -86,7 +86,13 @@ def _simulate(args: argparse.Namespace) -> int:
 
 def _optimize(args: argparse.Namespace) -> int:
     source = Path(args.problem)
-    pf = load_problem(source, horizon=args.horizon, solver=args.solver, max_iter=args.max_iter)
+    pf = load_problem(
+        source,
+        horizon=args.horizon,
+        solver=args.solver,
+        max_iter=args.max_iter,
+        time_limit=args.time_limit,
+    )
     problem, options = pf.problem, pf.options
     if args.verbose:
         options = dataclasses.replace(options, print_level=5)
@@ -97,7 +103,11 @@ def _optimize(args: argparse.Namespace) -> int:
         flush=True,
     )
     compiled = CompiledOcp(problem, options)
-    print(f"built in {compiled.build_time:.1f} s; solving ...", flush=True)
+    limit = "none" if options.time_limit is None else f"{options.time_limit:g} s"
+    print(
+        f"built in {compiled.build_time:.1f} s; solving (wall-clock limit {limit}) ...",
+        flush=True,
+    )
     result = compiled.solve(initial_guess=pf.initial_guess())
     print(
         f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
@@ -127,6 +137,13 @@ def _closed_loop(args: argparse.Namespace) -> int:
 
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
+    if args.deterministic or args.time_budget_ms is not None:
+        budget = None if args.deterministic else args.time_budget_ms * 1e-3
+        problem = dataclasses.replace(
+            problem,
+            mpc=dataclasses.replace(problem.mpc, time_budget=budget),
+            director=dataclasses.replace(problem.director, time_budget=budget),
+        )
     model = problem.model
     out = output_folder(args.out or Path("runs") / f"{source.stem}-{args.controller}")
     print(f"building the plant and the {args.controller} controller for {problem.title!r} ...")
@@ -232,10 +249,12 @@ def _calibrate(args: argparse.Namespace) -> int:
     model = load_model(source)
     track = read_track(args.track)
     initial = dict(args.initial)
+    limit = {} if args.time_limit is None else {"time_limit": args.time_limit}
     options = CalibrationOptions(
         max_iter=args.max_iter,
         verbose=args.verbose,
         pulse_map=PulseMapOptions(substeps=args.substeps),
+        **limit,
     )
     out = output_folder(args.out or Path("runs") / f"{source.stem}-calibration")
     print(
@@ -300,6 +319,10 @@ DROPOUT = real(0.0, 1.0, why="a probability (at 1 no pulse fires: status never_f
 SEED = integer(0, why="numpy seeds are non-negative")
 HORIZON = integer(
     1, MAX_HORIZON, why=f"{MAX_HORIZON} pulses: 200 s at 26 Hz, ten times the longest flight"
+)
+TIME_LIMIT = real(0.0, 86400.0, low_open=True, unit="s", why="a day at most")
+BUDGET_MS = real(
+    0.0, 60000.0, low_open=True, unit="ms", why="a minute at most; a pulse leaves 38 ms"
 )
 RUNS = integer(1, 1_000_000, why="the summary reads every run's row into memory")
 
@@ -369,7 +392,7 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
         help="solve an optimal control problem from a problem file",
         description="Solve the problem file's optimal control problem and write solution.csv, "
         "summary.json and figures. Exit status 0: solved; 1: the solver did not converge "
-        "(files still written); 2: bad input.",
+        "or reached its wall-clock limit (files still written); 2: bad input.",
     )
     opt.add_argument("problem", help="problem TOML, e.g. problems/crosswind_launch.toml")
     opt.add_argument("--out", default=None, help="output folder (default runs/<problem name>)")
@@ -384,6 +407,14 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
     )
     opt.add_argument(
         "--max-iter", type=integer(1), default=None, help="NLP iterations instead of the file's"
+    )
+    opt.add_argument(
+        "--time-limit",
+        type=TIME_LIMIT,
+        default=None,
+        metavar="SECONDS",
+        help="wall-clock limit of the solve instead of the file's [solver] time_limit_s "
+        "(default 1800 s): the solve then stops with status time_limit",
     )
     opt.add_argument(
         "--verbose", action="store_true", help="print the solver's iterations (progress)"
@@ -401,9 +432,10 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
-        "~/.cache/lightcraft_opt (~25 s the first time). Exit status 0: the flight "
-        "reached its duration; 1: it ended early (left the beam, landed) or no pulse fired; "
-        "2: bad input.",
+        "~/.cache/lightcraft_opt (~25 s the first time). A solve over its wall-clock "
+        "budget is discarded (the shifted plan flies), so results depend on the machine's "
+        "load unless --deterministic. Exit status 0: the flight reached its duration; 1: it "
+        "ended early (left the beam, landed) or no pulse fired; 2: bad input.",
     )
     loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
     loop.add_argument(
@@ -414,6 +446,23 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     )
     loop.add_argument(
         "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"
+    )
+    budget = loop.add_mutually_exclusive_group()
+    budget.add_argument(
+        "--deterministic",
+        action="store_true",
+        help="no wall-clock budget for the MPC and the director (time_budget none): no "
+        "solve is discarded as late, so the results depend only on the inputs, not on the "
+        "machine's load (injected 'late' faults still fall back)",
+    )
+    budget.add_argument(
+        "--time-budget-ms",
+        type=BUDGET_MS,
+        default=None,
+        metavar="MS",
+        help="wall-clock budget of a solve instead of the file's time_budget_ms (MPC and "
+        "director), for real-time studies: a later solve is discarded and the shifted "
+        "plan flies",
     )
     loop.set_defaults(run=_closed_loop)
 
@@ -459,7 +508,8 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
         "x_m, y_m, z_m: L frame, time from the first pulse) by Gauss-Newton least squares "
         "over the pulse map, and write the fitted model file, fit_report.json (values, "
         "standard deviations, correlations, identifiability flags) and residual plots. "
-        "Exit status 0: converged; 1: not converged (files still written); 2: bad input.",
+        "Exit status 0: converged; 1: not converged or out of time (files still written); "
+        "2: bad input.",
     )
     cal.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
     cal.add_argument("--track", required=True, help="tracked flight CSV (t_s,x_m,y_m,z_m)")
@@ -472,6 +522,14 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
     cal.add_argument("--out", default=None, help="output folder (default runs/<model>-calibration)")
     cal.add_argument(
         "--max-iter", type=integer(1), default=50, help="iterations at most (default 50)"
+    )
+    cal.add_argument(
+        "--time-limit",
+        type=TIME_LIMIT,
+        default=None,
+        metavar="SECONDS",
+        help="wall-clock limit of the fit (default 1800 s): it then stops at its last "
+        "accepted step with status time_limit",
     )
     cal.add_argument(
         "--substeps",

@@ -153,10 +153,16 @@ class SimulationOptions:
 # --------------------------------------------------------------------------- validators
 
 
-def checked_int(owner: str, name: str, value: object, low: int) -> None:
-    """Raise OptionError unless ``value`` is an integer (not a bool) >= ``low``."""
+def checked_int(
+    owner: str, name: str, value: object, low: int, high: int | None = None, why: str = ""
+) -> None:
+    """Raise OptionError unless ``value`` is an integer (not a bool) >= ``low`` (and <=
+    ``high`` if given; ``why`` is the reason of that bound)."""
     if isinstance(value, bool) or not isinstance(value, int) or value < low:
         raise OptionError(f"{owner}.{name} must be an integer >= {low}, got {value!r}")
+    if high is not None and value > high:
+        reason = f" ({why})" if why else ""
+        raise OptionError(f"{owner}.{name} must be <= {high}{reason}, got {value}")
 
 
 def checked_number(

@@ -112,7 +112,7 @@ ax.grid(alpha=0.3)
 # the beam within the director's reach and within 2.2 cm of the optic, over 10 pulses.
 
 # %%
-options = MpcOptions(time_budget=1.0)  # no wall-time budget here: a notebook is not real time
+options = MpcOptions(time_budget=None)  # no wall-clock budget: a notebook is not real time
 mpc = MpcController(model, options, prediction=prediction)
 lqr = LqrController(model, prediction, options.weights)
 none = OpenLoopController(model, plant.inputs)

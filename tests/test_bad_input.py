@@ -159,3 +159,13 @@ def test_a_duration_beyond_an_hour_is_refused_by_every_runner(duration):
     for run in (simulate, simulate_coast):
         with pytest.raises(ParameterError, match=r"duration: must (lie in \(0, 3600\] s|be a)"):
             run(table1_flight5(), duration)
+
+
+def test_a_controller_horizon_beyond_ten_seconds_is_refused():
+    """horizon_pulses = 1e9 in a closed-loop file would build a QP of a billion stages."""
+    from lightcraft_opt.control.options import MAX_CONTROL_HORIZON, DirectorOptions, MpcOptions
+
+    MpcOptions(horizon=MAX_CONTROL_HORIZON)
+    for options in (MpcOptions, DirectorOptions):
+        with pytest.raises(OptionError, match=r"horizon must be <= 260 \(10 s ahead"):
+            options(horizon=10**9)

@@ -62,6 +62,10 @@ class CalibrationOptions:
     correlation_max : CORRELATED when |correlation| exceeds it (in (0, 1)).
     pulse_map : options of Φ (dense must be >= 2: the Hermite nodes).
     verbose : print one line per iteration.
+    time_limit : wall-clock limit of the fit [s], > 0, or None for none (max_iter still
+        bounds it); checked before every evaluation of a trial step. A fit that reaches it
+        stops at its last accepted step with status ``TIME_LIMIT``. Default 30 minutes, as
+        an optimal control solve's (ocp/options.py: OCP_TIME_LIMIT).
     """
 
     max_iter: int = 50
@@ -74,8 +78,17 @@ class CalibrationOptions:
     correlation_max: float = 0.95
     pulse_map: PulseMapOptions = field(default_factory=PulseMapOptions)
     verbose: bool = False
+    time_limit: float | None = 1800.0
 
     def __post_init__(self) -> None:
+        t = self.time_limit
+        if t is not None and not (
+            isinstance(t, int | float) and not isinstance(t, bool) and np.isfinite(t) and t > 0
+        ):
+            raise OptionError(
+                "CalibrationOptions.time_limit must be a positive number of seconds or None, "
+                f"got {t!r}"
+            )
         if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, int):
             raise OptionError(
                 f"CalibrationOptions.max_iter must be an integer, got {self.max_iter!r}"
@@ -241,7 +254,9 @@ def _solve(
     upper: np.ndarray,
     opts: CalibrationOptions,
 ) -> _Stop:
-    """Projected Levenberg-Marquardt in z = θ / scale."""
+    """Projected Levenberg-Marquardt in z = θ / scale, stopped at ``opts.time_limit``
+    seconds from the call."""
+    until = np.inf if opts.time_limit is None else time.perf_counter() + opts.time_limit
     scale = np.array([c.scale for c in problem.components])
     lo, hi = lower / scale, upper / scale
     z = start / scale
@@ -262,6 +277,10 @@ def _solve(
     def stop(status: CalibrationStatus, message: str, iterations: int) -> _Stop:
         return _Stop(status, message, z * scale, iterations, cost0, cost, r, J)
 
+    def out_of_time(iterations: int) -> _Stop:
+        message = f"wall-clock limit {opts.time_limit:g} s reached after {iterations} iterations"
+        return stop(CalibrationStatus.TIME_LIMIT, message, iterations)
+
     Js = J * scale
     H = Js.T @ Js
     lam = opts.damping * max(float(np.max(np.diag(H))), 1e-30)
@@ -280,6 +299,8 @@ def _solve(
             z_new = np.clip(z + step, lo, hi)
             d = z_new - z
             predicted = -(g @ d + 0.5 * d @ H @ d)
+            if time.perf_counter() > until:
+                return out_of_time(it - 1)
             r_new, J_new = _evaluate(problem, z_new * scale)
             finite = bool(np.all(np.isfinite(r_new)) and np.all(np.isfinite(J_new)))
             cost_new = 0.5 * float(r_new @ r_new) if finite else np.inf

@@ -17,6 +17,7 @@ class CalibrationStatus(Enum):
 
     CONVERGED = "converged"  # cost or step stopped changing
     MAX_ITER = "max_iter"  # the iteration limit came first
+    TIME_LIMIT = "time_limit"  # the wall-clock limit (CalibrationOptions.time_limit) came first
     FAILED = "failed"  # a non-finite residual or Jacobian, or no descent possible
 
 

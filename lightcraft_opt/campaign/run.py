@@ -14,9 +14,10 @@ writes: a row it refuses is flown again (run_table.py).
 The plant Φ and the controller are built once per process and thread (keyed by the
 campaign's fingerprint), not per run. Determinism: the MPC normally discards a solve that
 overruns its wall-clock ``time_budget`` and flies its fallback plan, which would make a run
-depend on the machine's load; campaign runs use :data:`CAMPAIGN_TIME_BUDGET` instead (a
-solve is never late, injected ``late`` faults still are), so a run depends only on
-(campaign, seed, index). A run that raises is a row with status ``error`` and the message.
+depend on the machine's load; campaign runs fly the deterministic mode instead
+(``time_budget=None``: a solve is never late, injected ``late`` faults still are), so a run
+depends only on (campaign, seed, index). A run that raises is a row with status ``error``
+and the message.
 """
 
 from __future__ import annotations
@@ -33,7 +34,6 @@ import numpy as np
 
 from lightcraft_opt.campaign.dispersions import draw, loop_seed
 from lightcraft_opt.campaign.spec import (
-    CAMPAIGN_TIME_BUDGET,
     DISPERSED_PARAMETER,
     INTEGER_OUTPUTS,
     OUTPUT_COLUMNS,
@@ -238,15 +238,15 @@ def _controller(c: Campaign, plant: PulseMap) -> Controller:
         nutation = None
         if c.model.craft.rcs is not None and c.director.rcs == "nutation":
             prediction = coning_model(c.model, pulse_map=plant, cache=True)
-            mpc = dataclasses.replace(c.mpc, time_budget=CAMPAIGN_TIME_BUDGET)
+            mpc = dataclasses.replace(c.mpc, time_budget=None)
             nutation = MpcController(c.model, mpc, prediction=prediction)
-        director = dataclasses.replace(c.director, time_budget=CAMPAIGN_TIME_BUDGET)
+        director = dataclasses.replace(c.director, time_budget=None)
         return DirectorController(
             c.model, plant.inputs, director, nutation=nutation, compiled=c.compiled
         )
     prediction = coning_model(c.model, pulse_map=plant, cache=True)
     if c.controller is CampaignController.MPC:
-        options = dataclasses.replace(c.mpc, time_budget=CAMPAIGN_TIME_BUDGET)
+        options = dataclasses.replace(c.mpc, time_budget=None)
         return MpcController(c.model, options, prediction=prediction)
     return LqrController(c.model, prediction, c.mpc.weights)
 

@@ -20,7 +20,6 @@ from lightcraft_opt.options import checked_duration
 from lightcraft_opt.params import Model
 
 __all__ = [
-    "CAMPAIGN_TIME_BUDGET",
     "DISPERSED_PARAMETER",
     "INTEGER_OUTPUTS",
     "OUTPUT_COLUMNS",
@@ -29,9 +28,6 @@ __all__ = [
     "Campaign",
     "CampaignController",
 ]
-
-#: The MPC's wall-clock budget in campaign runs [s]: large enough that no solve is late.
-CAMPAIGN_TIME_BUDGET = 3600.0
 
 #: Outputs of a run, after its index and drawn inputs (SI; angles in rad).
 OUTPUT_COLUMNS = (
@@ -102,10 +98,10 @@ class Campaign:
     duration : of each flight [s].
     controller : :class:`CampaignController`.
     x0 : (STATE.size,) state at the first pulse (default: on the pad, upright).
-    mpc : the MPC's options (the LQR takes their weights); ``time_budget`` is replaced
-        by :data:`CAMPAIGN_TIME_BUDGET` in runs.
+    mpc : the MPC's options (the LQR takes their weights); runs fly them without a
+        wall-clock budget (``time_budget=None``, the deterministic mode).
     director : the director's options (with the MPC's for the RCS of a craft that has
-        one); ``time_budget`` is replaced by :data:`CAMPAIGN_TIME_BUDGET` in runs.
+        one); runs fly them without a wall-clock budget, as the MPC's.
     loop : the closed loop's noise, relative dispersion, drop-outs and injected faults;
         its ``seed`` is replaced by each run's (:func:`.dispersions.loop_seed`).
     plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not

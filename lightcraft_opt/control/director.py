@@ -21,7 +21,8 @@ Every pulse, ``u = director.step(x)`` (docs/director.md):
    iteration where its linearisation holds;
 4. fly the first input and keep the plan. A solve that fails or overruns the budget is
    discarded and the plan's next input flies (status ``fallback_*``); once the plan is used
-   up, the schedule's focus and the flight's energy with the beam on the craft.
+   up, the schedule's focus and the flight's energy with the beam on the craft. No budget
+   (``time_budget=None``, the deterministic mode): no solve is late.
 
 The focus is decided in its vergence κ = 1/f: the beam's side at height z is
 a0 sqrt((1 - z κ)² + (z/z_R)²), affine in κ inside the root, so the QP sees a nearly linear
@@ -258,7 +259,9 @@ class DirectorController:
         Z, U = self._trajectory(z0, t)
         sol, bookkeeping = self._solve(Z, U, t, fault)
         late = fault is ControllerFault.LATE or (
-            sol.solve_time > opts.time_budget and opts.solver is not MpcSolver.IPOPT
+            opts.time_budget is not None
+            and sol.solve_time > opts.time_budget
+            and opts.solver is not MpcSolver.IPOPT
         )
         if sol.status is QpStatus.SOLVED and not late:
             planned = Z.copy()

@@ -28,7 +28,8 @@ interpolation adds 0.3 % (A) to 1 % (B).
 A solve that fails (solver error, iteration cap, NaN) or overruns the wall-time budget is
 discarded: the previous plan's next input is applied (the shifted plan) and the pulse is
 counted as a fallback in ``last.status``; once the plan is used up the operating input
-(RCS off, beam on the pad axis) is applied.
+(RCS off, beam on the pad axis) is applied. With ``time_budget=None`` (the deterministic
+mode) no solve is late: the flight depends only on its inputs, not on the machine's load.
 
 Actuators. The RCS thrust is phase-locked to the coning rate in B (options.RcsProfile):
 a mean level plus a cosine and a sine at ω per thruster. The coning mode (216 Hz) turns
@@ -267,7 +268,9 @@ class MpcController:
                 solve_time=sol.solve_time + again.solve_time,
             )
         late = fault is ControllerFault.LATE or (
-            sol.solve_time > opts.time_budget and opts.solver is not MpcSolver.IPOPT
+            opts.time_budget is not None
+            and sol.solve_time > opts.time_budget
+            and opts.solver is not MpcSolver.IPOPT
         )
         if sol.status is QpStatus.SOLVED and not late:
             self.solution, self._yaw, self._age = sol, meas.yaw, 0

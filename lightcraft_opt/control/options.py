@@ -12,6 +12,7 @@ from lightcraft_opt.options import checked_int, checked_nonnegative, checked_num
 __all__ = [
     "DIRECTOR_RCS",
     "FOCUS_SCHEDULES",
+    "MAX_CONTROL_HORIZON",
     "ClosedLoopOptions",
     "ControlWeights",
     "ControllerFault",
@@ -22,6 +23,10 @@ __all__ = [
     "MpcSolver",
     "PlantDispersion",
 ]
+
+#: Longest horizon of the pulse-by-pulse controllers [pulses]: 10 s ahead at 26 Hz.
+MAX_CONTROL_HORIZON = 260
+_WHY_HORIZON = "10 s ahead; the QP grows with the horizon and a pulse leaves 38 ms to solve it"
 
 
 class MpcSolver(Enum):
@@ -102,7 +107,9 @@ class MpcOptions:
     max_iter : iteration cap of the QP solver, >= 1 (a solve that reaches it falls back).
     tol : solver tolerance on the residuals, in (0, 1).
     time_budget : wall time a solve may take [s], > 0: a later answer is discarded and
-        the shifted previous plan flies (not applied to IPOPT, the reference).
+        the shifted previous plan flies (not applied to IPOPT, the reference). None: no
+        wall-clock check, the deterministic mode (max_iter still bounds the work): the
+        flight then depends only on its inputs, not on the machine's load.
     envelope_directions : P >= 2: the thrust envelope, the pointing limit and the beam
         offset limit are regular 2P-gons inscribed in their circles.
     capture_fraction : soft limit of the predicted beam offset, as a fraction of the
@@ -115,13 +122,13 @@ class MpcOptions:
     solver: MpcSolver = MpcSolver.HPIPM
     max_iter: int = 30
     tol: float = 1e-6
-    time_budget: float = 5e-3
+    time_budget: float | None = 5e-3
     envelope_directions: int = 4
     capture_fraction: float = 0.4
     warm_start: bool = True
 
     def __post_init__(self) -> None:
-        checked_int("MpcOptions", "horizon", self.horizon, 1)
+        checked_int("MpcOptions", "horizon", self.horizon, 1, MAX_CONTROL_HORIZON, _WHY_HORIZON)
         _checked_qp_options("MpcOptions", self, ControlWeights)
         checked_int("MpcOptions", "envelope_directions", self.envelope_directions, 2)
         c = self.capture_fraction
@@ -224,7 +231,8 @@ class DirectorOptions:
     max_iter : QP iteration cap, >= 1.
     tol : QP tolerance on the residuals, in (0, 1).
     time_budget : wall time the QP may take [s], > 0; a later answer is discarded and the
-        shifted plan flies (not applied to IPOPT, the reference).
+        shifted plan flies (not applied to IPOPT, the reference). None: no wall-clock
+        check, the deterministic mode (as :class:`MpcOptions`).
     relinearize : stages whose Jacobians are computed afresh each pulse, in [1, horizon]:
         the first (at the measured state), the new last one and the others in turn; the
         rest are the previous pulses' Jacobians, shifted (a multi-level real-time
@@ -250,7 +258,7 @@ class DirectorOptions:
     solver: MpcSolver = MpcSolver.HPIPM
     max_iter: int = 30
     tol: float = 1e-6
-    time_budget: float = 20e-3
+    time_budget: float | None = 20e-3
     relinearize: int = 3
     focus_schedule: str = "matched"
     matched_side: float | None = None
@@ -261,7 +269,9 @@ class DirectorOptions:
     warm_start: bool = True
 
     def __post_init__(self) -> None:
-        checked_int("DirectorOptions", "horizon", self.horizon, 2)
+        checked_int(
+            "DirectorOptions", "horizon", self.horizon, 2, MAX_CONTROL_HORIZON, _WHY_HORIZON
+        )
         _checked_qp_options("DirectorOptions", self, DirectorWeights)
         checked_int("DirectorOptions", "relinearize", self.relinearize, 1)
         if self.relinearize > self.horizon:
@@ -314,7 +324,7 @@ class DirectorOptions:
 def _checked_qp_options(owner: str, options: MpcOptions | DirectorOptions, weights: type) -> None:
     """Raise OptionError naming the field unless ``options`` (an MpcOptions or
     DirectorOptions) has weights of class ``weights``, an MpcSolver, an iteration cap >= 1,
-    a tolerance in (0, 1) and a positive time budget."""
+    a tolerance in (0, 1) and a positive time budget or None."""
     if not isinstance(options.weights, weights):
         raise OptionError(f"{owner}.weights must be a {weights.__name__}, got {options.weights!r}")
     if not isinstance(options.solver, MpcSolver):
@@ -322,7 +332,8 @@ def _checked_qp_options(owner: str, options: MpcOptions | DirectorOptions, weigh
         raise OptionError(f"{owner}.solver must be one of {allowed}, got {options.solver!r}")
     checked_int(owner, "max_iter", options.max_iter, 1)
     checked_number(owner, "tol", options.tol, 0.0, 1.0)
-    checked_number(owner, "time_budget", options.time_budget, 0.0)
+    if options.time_budget is not None:
+        checked_number(owner, "time_budget", options.time_budget, 0.0)
 
 
 @dataclass(frozen=True)

@@ -23,8 +23,8 @@ A closed-loop file::
     solver = "hpipm"                       # qrqp, osqp, ipopt
     max_iter = 30
     tol = 1e-6
-    time_budget_ms = 5.0
-    envelope_directions = 4
+    time_budget_ms = 5.0                   # "none": no wall-clock check, the deterministic
+    envelope_directions = 4                #   mode (the flight depends on its inputs only)
     capture_fraction = 0.4
     warm_start = true
     propellant_weight = 1.0                # [1/N] on the summed mean thrust, linear
@@ -46,7 +46,7 @@ A closed-loop file::
     energy_range = [0.5, 1.0]              # fractions of the flight's pulse energy
     disturbance_gain = 0.05
     rcs = "tilt"                           # the director's torques; "nutation": the MPC's
-    time_budget_ms = 20.0                  # also solver, max_iter, tol, warm_start
+    time_budget_ms = 20.0                  # or "none"; also solver, max_iter, tol, warm_start
 
     [director.tolerances]                  # weight = 1 / tolerance^2
     offset_cm = 1.0
@@ -315,8 +315,11 @@ def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
 
 
 def _mpc_options(src: str, raw: Any) -> MpcOptions:
+    raw, unlimited = _without_budget(src, raw, "controller")
     table, tol, weights = _weighted_tables(src, raw, "controller", _CONTROLLER, _TOLERANCES)
     values = dict(table.values)
+    if unlimited:
+        values["time_budget"] = None
     if "propellant_weight" in values:
         weights["propellant"] = values.pop("propellant_weight")
     try:
@@ -332,8 +335,11 @@ def _mpc_options(src: str, raw: Any) -> MpcOptions:
 
 
 def _director_options(src: str, raw: Any) -> DirectorOptions:
+    raw, unlimited = _without_budget(src, raw, "director")
     table, tol, weights = _weighted_tables(src, raw, "director", _DIRECTOR, _DIRECTOR_TOLERANCES)
     kwargs = _renamed(table.values)
+    if unlimited:
+        kwargs["time_budget"] = None
     if "energy_range" in kwargs:
         kwargs["energy_range"] = tuple(float(v) for v in kwargs["energy_range"])
     try:
@@ -344,6 +350,25 @@ def _director_options(src: str, raw: Any) -> DirectorOptions:
             message, (table, _DIRECTOR), (tol, _DIRECTOR_TOLERANCES), "DirectorOptions"
         )
         raise ProblemFileError(src, key, message) from err
+
+
+def _without_budget(src: str, raw: Any, name: str) -> tuple[Any, bool]:
+    """The table ``name`` without a ``time_budget`` key written as "none" (any unit
+    suffix), and whether it had one: no wall-clock budget, the deterministic mode. Another
+    text there is an error naming the key."""
+    if not isinstance(raw, dict):
+        return raw, False
+    for key, value in raw.items():
+        if key.startswith("time_budget") and isinstance(value, str):
+            if value.strip().lower() != "none":
+                raise ProblemFileError(
+                    src,
+                    f"{name}.{key}",
+                    'must be a time or "none" (no wall-clock budget: the deterministic '
+                    f"mode), got {value!r}",
+                )
+            return {k: v for k, v in raw.items() if k != key}, True
+    return raw, False
 
 
 def _weighted_tables(

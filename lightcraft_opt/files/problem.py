@@ -75,6 +75,7 @@ A problem file::
     print_level = 0
     wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
     prediction = "full"                    # or "reduced": the coning-aware reduced map
+    time_limit_s = 1800.0                  # wall-clock limit of a solve (OcpOptions)
 
     [pulse_map]                            # optional: PulseMapOptions; keys not given
     scheme = "split4"                      # keep OCP_PULSE_MAP's (split4, 8 substeps,
@@ -199,6 +200,7 @@ _SOLVER: Mapping[str, Spec] = {
     "print_level": INTEGER,
     "wind_ramp": INTEGER,
     "prediction": choice(PredictionMap),
+    "time_limit": quantity("time"),
 }
 
 
@@ -279,14 +281,16 @@ def load_problem(
     horizon: int | None = None,
     solver: str | None = None,
     max_iter: int | None = None,
+    time_limit: float | None = None,
 ) -> ProblemFile:
     """Read a problem file (module docstring) and the model file it names.
 
     Parameters
     ----------
     path : the problem file.
-    horizon, solver, max_iter : replace the file's ``horizon_pulses`` [pulses],
-        ``solver.name`` and ``solver.max_iter`` (quick runs from the command line).
+    horizon, solver, max_iter, time_limit : replace the file's ``horizon_pulses``
+        [pulses], ``solver.name``, ``solver.max_iter`` and ``solver.time_limit_s`` [s]
+        (quick runs from the command line).
 
     Returns
     -------
@@ -302,10 +306,19 @@ def load_problem(
     file = Path(path)
     with as_problem_file_errors():
         src, data = schema.read_toml(file)
-    for key, value in (("horizon_pulses", horizon), ("name", solver), ("max_iter", max_iter)):
+    overrides = (
+        ("horizon_pulses", horizon),
+        ("name", solver),
+        ("max_iter", max_iter),
+        ("time_limit_s", time_limit),
+    )
+    for key, value in overrides:
         if value is not None:
             table = data if key == "horizon_pulses" else data.setdefault("solver", {})
             if isinstance(table, dict):
+                if key == "time_limit_s":  # the file's limit in whatever unit it was given
+                    for given in [k for k in table if k.startswith("time_limit")]:
+                        del table[given]
                 table[key] = value
     with as_problem_file_errors():
         return _problem_file(src, file, data)

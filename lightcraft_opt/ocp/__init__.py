@@ -2,7 +2,8 @@
 transcription, solve) and what came out (result).
 
 - :mod:`.problem`: :class:`OcpProblem`, its objective terms and constraints (numpy only);
-- :mod:`.options`: :class:`OcpOptions` (solver, Hessian, prediction map, move blocking);
+- :mod:`.options`: :class:`OcpOptions` (solver, Hessian, prediction map, move blocking,
+  wall-clock limit);
 - :mod:`.transcription`: :class:`MultipleShooting`, Φ as the dynamics of an NLP;
 - :mod:`.solve`: :class:`CompiledOcp` (built once, solved warm), :func:`solve`, :func:`rollout`;
 - :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus`.
@@ -12,6 +13,7 @@ The what never imports the how (an import-linter contract).
 
 from lightcraft_opt.ocp.options import (
     OCP_PULSE_MAP,
+    OCP_TIME_LIMIT,
     HessianApproximation,
     OcpOptions,
     OcpSolver,
@@ -43,6 +45,7 @@ from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
 
 __all__ = [
     "OCP_PULSE_MAP",
+    "OCP_TIME_LIMIT",
     "CaptureFraction",
     "CompiledOcp",
     "Constraint",

@@ -9,7 +9,14 @@ from enum import Enum
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
 
-__all__ = ["OCP_PULSE_MAP", "HessianApproximation", "OcpOptions", "OcpSolver", "PredictionMap"]
+__all__ = [
+    "OCP_PULSE_MAP",
+    "OCP_TIME_LIMIT",
+    "HessianApproximation",
+    "OcpOptions",
+    "OcpSolver",
+    "PredictionMap",
+]
 
 
 class OcpSolver(Enum):
@@ -68,6 +75,12 @@ class HessianApproximation(Enum):
 #: position over one pulse of Flight 5).
 OCP_PULSE_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT4, substeps=8, dense=8)
 
+#: Wall-clock limit of a solve unless told otherwise [s]: 30 minutes, about 3 times the
+#: longest solve bench/README.md measures (IPOPT converging at 260 pulses in 665 s, with the
+#: wind ramp), so no solve that converges today is cut short, while a solve that cannot end
+#: (fatrop spinning in its restoration phase on an infeasible problem) still does.
+OCP_TIME_LIMIT = 1800.0
+
 
 @dataclass(frozen=True)
 class OcpOptions:
@@ -96,6 +109,13 @@ class OcpOptions:
         Jacobian and Hessian from Φ's explicit-chain derivatives over compiled pieces
         (symbolic/pulse_map_derivatives.py; transcription.MultipleShooting.chain_derivatives)
         instead of casadi's AD through Φ: equal to rounding, faster to evaluate. False: AD.
+    time_limit : wall-clock limit of a solve [s], > 0, or None for none (max_iter still
+        bounds the iterations); default :data:`OCP_TIME_LIMIT`. A solve that reaches it
+        ends with status ``TIME_LIMIT`` (ocp/result.py). IPOPT checks it every iteration
+        (its ``max_wall_time``), sqpmethod through casadi's iteration callback; fatrop
+        offers neither, so its solve runs in a forked process that is stopped at the
+        limit (its iterate is then lost: the result carries the initial guess). A wind
+        ramp's solves share one limit.
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -109,8 +129,16 @@ class OcpOptions:
     wind_ramp: int = 0
     chain_derivatives: bool = True
     prediction: PredictionMap = PredictionMap.FULL
+    time_limit: float | None = OCP_TIME_LIMIT
 
     def __post_init__(self) -> None:
+        t = self.time_limit
+        if t is not None and not (
+            isinstance(t, int | float) and not isinstance(t, bool) and math.isfinite(t) and t > 0
+        ):
+            raise OptionError(
+                f"OcpOptions.time_limit must be a positive number of seconds or None, got {t!r}"
+            )
         if not isinstance(self.prediction, PredictionMap):
             allowed = [m.value for m in PredictionMap]
             raise OptionError(

@@ -22,6 +22,7 @@ class OcpStatus(Enum):
     SOLVED = "solved"  # converged to the requested tolerance
     ACCEPTABLE = "acceptable"  # converged to the solver's looser acceptable level
     MAX_ITER = "max_iter"  # iteration limit reached first
+    TIME_LIMIT = "time_limit"  # the wall-clock limit (OcpOptions.time_limit) came first
     INFEASIBLE = "infeasible"  # the solver found the constraints (locally) infeasible
     FAILED = "failed"  # anything else: evaluation error, line search or QP failure ...
 

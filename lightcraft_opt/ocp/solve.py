@@ -12,13 +12,15 @@ flight's pulse energy, focus at the far end, the beam axis under the craft's mas
 RCS and motor off, moved at most by the slew limits and clipped to the bounds (held
 inputs at their values).
 A failed or infeasible solve returns an :class:`~lightcraft_opt.ocp.result.OcpResult`
-with a readable status and the solver's last iterate; bad inputs raise
+with a readable status and the solver's last iterate; so does a solve stopped by its
+wall-clock limit (``OcpOptions.time_limit``, ocp/time_limit.py); bad inputs raise
 :class:`~lightcraft_opt.errors.ParameterError` or :class:`~lightcraft_opt.errors.OptionError`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Sequence
 from typing import Any, cast
@@ -37,6 +39,7 @@ from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver, PredictionMap
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.time_limit import Deadline, SolverCall, call_forked, call_solver, can_fork
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.pulse_map import PulseMap
@@ -107,8 +110,11 @@ def _uses_chain(opts: OcpOptions) -> bool:
     )
 
 
-def _solver_options(opts: OcpOptions, tr: MultipleShooting) -> tuple[str, dict[str, Any]]:
-    """nlpsol plugin name and options for ``opts``."""
+def _solver_options(
+    opts: OcpOptions, tr: MultipleShooting, deadline: Deadline | None
+) -> tuple[str, dict[str, Any]]:
+    """nlpsol plugin name and options for ``opts``; ``deadline`` the iteration callback
+    that holds IPOPT and sqpmethod to the time limit (fatrop calls none)."""
     quiet = opts.print_level == 0
     # Trial points where Φ is not finite (IPOPT then shortens its step) are not warned about
     # unless the solver is verbose.
@@ -117,6 +123,8 @@ def _solver_options(opts: OcpOptions, tr: MultipleShooting) -> tuple[str, dict[s
         "error_on_fail": False,
         "show_eval_warnings": not quiet,
     }
+    if deadline is not None:
+        common["iteration_callback"] = deadline
     if opts.hessian is HessianApproximation.GAUSS_NEWTON:
         common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
     elif _uses_chain(opts) and tr.derivatives is not None:
@@ -134,6 +142,8 @@ def _solver_options(opts: OcpOptions, tr: MultipleShooting) -> tuple[str, dict[s
         }
         if not exact:
             ipopt["hessian_approximation"] = "limited-memory"
+        if opts.time_limit is not None:
+            ipopt["max_wall_time"] = float(opts.time_limit)
         return "ipopt", {**common, "ipopt": ipopt}
     if opts.solver is OcpSolver.FATROP:
         fatrop = {
@@ -196,15 +206,33 @@ def _wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
     return out
 
 
-def _stats(solver: ca.Function, opts: OcpOptions) -> tuple[OcpStatus, str, int]:
-    """OcpStatus, message and iteration count from the nlpsol statistics."""
+#: IPOPT's words for its own wall-clock (and CPU-time) limit.
+_IPOPT_TIME_LIMIT = ("Maximum_WallTime_Exceeded", "Maximum_CpuTime_Exceeded")
+
+
+def _status(call: SolverCall, opts: OcpOptions) -> tuple[OcpStatus, str, int]:
+    """OcpStatus, message and iteration count of one solver call."""
     name = opts.solver.value
-    try:
-        stats = solver.stats()
-    except RuntimeError:  # sqpmethod leaves no status when its QP fails without raising
+    stats = call.stats
+    iterations = int(stats.get("iter_count", 0)) if stats else 0
+    raw = stats.get("return_status", "unknown") if stats else "unknown"
+    if call.deadline_reached or raw in _IPOPT_TIME_LIMIT:
+        if call.solution is None:  # fatrop's process, stopped mid-solve
+            return (
+                OcpStatus.TIME_LIMIT,
+                f"{name}: wall-clock limit {opts.time_limit:g} s reached; the solver was "
+                "stopped mid-solve and its iterate is lost",
+                0,
+            )
+        return (
+            OcpStatus.TIME_LIMIT,
+            f"{name}: wall-clock limit {opts.time_limit:g} s reached after {iterations} iterations",
+            iterations,
+        )
+    if call.solution is None:
+        return OcpStatus.FAILED, f"{name}: {call.error}", 0
+    if stats is None:  # sqpmethod leaves no status when its QP fails without raising
         return OcpStatus.FAILED, f"{name}: the QP solver failed (no status reported)", 0
-    raw = stats.get("return_status", "unknown")
-    iterations = int(stats.get("iter_count", 0))
     unified = str(stats.get("unified_return_status", ""))
     low = str(raw).lower()
     if "acceptable" in low:
@@ -300,7 +328,13 @@ class CompiledOcp:
         self.transcription = tr = MultipleShooting(
             problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives
         )
-        name, solver_opts = _solver_options(opts, tr)
+        # the deadline callback of IPOPT and sqpmethod (fatrop's solves are forked instead)
+        self._deadline = (
+            Deadline(tr.n_w, tr.lbg.size, int(tr.nlp["p"].numel()))
+            if opts.time_limit is not None and opts.solver is not OcpSolver.FATROP
+            else None
+        )
+        name, solver_opts = _solver_options(opts, tr, self._deadline)
         try:
             self.solver = ca.nlpsol("ocp_nlp", name, tr.nlp, solver_opts)
         except RuntimeError as err:
@@ -356,9 +390,11 @@ class CompiledOcp:
         Returns
         -------
         OcpResult with status, cost, iterations, solve time, optimal inputs and the
-        predicted trajectory; never raises for a failed or infeasible solve.
+        predicted trajectory; never raises for a failed or infeasible solve, nor for one
+        stopped by ``OcpOptions.time_limit`` (status ``TIME_LIMIT``: the wall time counts
+        from this call; a wind ramp's solves share it).
         """
-        pr, tr = self.problem, self.transcription
+        pr = self.problem
         nu = pr.inputs.size
         x0v = checked_vector("x0", cast(np.ndarray, pr.x0) if x0 is None else x0, STATE.size)
         pv = checked_vector("p", pr.p if p is None else p, PARAMETERS.size)
@@ -373,40 +409,55 @@ class CompiledOcp:
         ref = pr.reference() if reference is None else np.asarray(reference, dtype=float)
         if ref.shape != pr.reference().shape or not np.all(np.isfinite(ref)):
             raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
+        limit = self.options.time_limit
+        until = math.inf if limit is None else time.perf_counter() + limit
         if warm_start is None and initial_guess is None and self.options.wind_ramp:
             scaled = _wind_scaled(pv, 0.0)
             if not np.array_equal(scaled, pv):
-                return self._solve_ramped(x0v, pv, t0v, u_prev, ref)
+                return self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
+        return self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
+
+    # ----------------------------------------------------------------- helpers
+    def _solve_once(
+        self,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        u_previous: np.ndarray | None,
+        reference: np.ndarray,
+        initial_guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+        warm_start: OcpResult | None,
+        until: float,
+    ) -> OcpResult:
+        """One call of the NLP solver for checked run-time values, stopped at the
+        ``time.perf_counter()`` time ``until`` (+inf: no limit)."""
+        pr, tr = self.problem, self.transcription
         u_fixed = np.where(pr.free, 0.0, pr.lower)
-        P = tr.parameter_vector(x0v, pv, t0v, u_prev, u_fixed, ref)
+        P = tr.parameter_vector(x0, p, t0, u_previous, u_fixed, reference)
         lam_x0, lam_g0 = np.zeros(tr.n_w), np.zeros(tr.lbg.size)
         if warm_start is not None:
             if not isinstance(warm_start, OcpResult) or warm_start.w.size != tr.n_w:
                 raise ParameterError("warm_start", "must be a result of this compiled problem")
             w0, lam_x0, lam_g0 = warm_start.w, warm_start.lam_x, warm_start.lam_g
         else:
-            w0 = tr.pack(*self._guess(x0v, pv, t0v, initial_guess), u_prev)
+            w0 = tr.pack(*self._guess(x0, p, t0, initial_guess), u_previous)
         lbx, ubx = self._bounds
         solver = self.solver if warm_start is None else self._warm_started()
+        args = dict(
+            x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
+        )
         start = time.perf_counter()
-        try:
-            sol = solver(
-                x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
-            )
-        except RuntimeError as err:  # e.g. an evaluation error the solver did not catch
-            status, message = OcpStatus.FAILED, f"{self.options.solver.value}: {err}"
-            w, lam_x, lam_g, iterations = w0, lam_x0, lam_g0, 0
+        if self.options.solver is OcpSolver.FATROP and until < math.inf and can_fork():
+            call = call_forked(solver, args, until - start)
         else:
-            w = np.asarray(sol["x"], dtype=float).ravel()
-            lam_x = np.asarray(sol["lam_x"], dtype=float).ravel()
-            lam_g = np.asarray(sol["lam_g"], dtype=float).ravel()
-            status, message, iterations = _stats(solver, self.options)
+            call = call_solver(solver, args, self._deadline, until)
         solve_time = time.perf_counter() - start
+        status, message, iterations = _status(call, self.options)
+        w, lam_x, lam_g = call.solution or (w0, lam_x0, lam_g0)
         if not np.all(np.isfinite(w)):
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
-        return self._result(w, lam_x, lam_g, P, status, message, iterations, solve_time, t0v)
+        return self._result(w, lam_x, lam_g, P, status, message, iterations, solve_time, t0)
 
-    # ----------------------------------------------------------------- helpers
     def _solve_ramped(
         self,
         x0: np.ndarray,
@@ -414,21 +465,23 @@ class CompiledOcp:
         t0: float,
         u_previous: np.ndarray | None,
         reference: np.ndarray,
+        until: float,
     ) -> OcpResult:
         """Continuation on the wind (OcpOptions.wind_ramp): calm air first, then the wind
         scaled by 1/n .. 1, each solve warm-started from the last. Iterations and solve
-        times add up; the status is the last solve's."""
+        times add up; the status is the last solve's. The steps share one time limit: a
+        step it stops ends the ramp."""
         n = self.options.wind_ramp
         result: OcpResult | None = None
         iterations, seconds, steps = 0, 0.0, []
         for i in range(n + 1):
             pi = _wind_scaled(p, i / n)
-            result = self.solve(
-                x0=x0, p=pi, t0=t0, u_previous=u_previous, reference=reference, warm_start=result
-            )
+            result = self._solve_once(x0, pi, t0, u_previous, reference, None, result, until)
             iterations += result.iterations
             seconds += result.solve_time
             steps.append(f"{i}/{n}: {result.status.value} in {result.iterations}")
+            if result.status is OcpStatus.TIME_LIMIT:
+                break
         assert result is not None
         message = f"{result.message} (wind ramp {', '.join(steps)})"
         return dataclasses.replace(

@@ -12,6 +12,7 @@ at all (symbolic/engine.py): a parameter the data cannot identify by constructio
 from __future__ import annotations
 
 import dataclasses as dc
+import time
 
 import numpy as np
 import pytest
@@ -257,6 +258,9 @@ def test_bad_fit_names_and_options_get_clear_errors(model, fit_map):
         CalibrationOptions(correlation_max=1.5)
     with pytest.raises(OptionError, match="dense"):
         CalibrationOptions(pulse_map=PulseMapOptions(substeps=8, dense=1))
+    for bad in (0.0, -2.0, float("nan"), False):
+        with pytest.raises(OptionError, match=r"CalibrationOptions\.time_limit"):
+            CalibrationOptions(time_limit=bad)
 
 
 def test_max_iter_is_a_status_not_an_exception(model, fit_map):
@@ -273,6 +277,34 @@ def test_max_iter_is_a_status_not_an_exception(model, fit_map):
     assert result.status is CalibrationStatus.MAX_ITER
     assert result.iterations == 1
     assert "max_iter" in result.message
+
+
+def test_a_wall_clock_limit_stops_the_fit_at_its_last_accepted_step(model, fit_map, monkeypatch):
+    """Each residual and Jacobian made to take 0.25 s longer: the start's is ready at
+    0.25 s, the first step's at 0.5 s, past the 0.3 s limit, so the fit stops before its
+    second trial step with status TIME_LIMIT after 1 iteration (Cm is 10 % off: one step
+    cannot converge), at that step's values, within the limit plus one evaluation."""
+    import lightcraft_opt.calibration.fit as fit_module
+
+    t = np.linspace(0.01, 0.3, 12)
+    sim = simulate(truth_model(model, 1.1, 0.5), 0.35)
+    r = np.column_stack([np.interp(t, sim.t, sim.x[:, i]) for i in range(3)])
+    evaluate = fit_module._evaluate
+
+    def slow(problem, theta):
+        time.sleep(0.25)
+        return evaluate(problem, theta)
+
+    monkeypatch.setattr(fit_module, "_evaluate", slow)
+    options = CalibrationOptions(max_iter=50, time_limit=0.3, pulse_map=FIT_MAP)
+    result = calibrate(model, Track(t, r), "cm", options=options, pulse_map=fit_map)
+    assert result.status is CalibrationStatus.TIME_LIMIT
+    assert not result.success
+    assert result.iterations == 1
+    assert result.message == "wall-clock limit 0.3 s reached after 1 iterations"
+    assert result.value("cm") != result.initial[0]  # the accepted step's value
+    assert result.cost < result.initial_cost
+    assert 0.5 <= result.solve_time < 0.3 + 0.25 + 0.5
 
 
 def test_track_validation():

@@ -81,6 +81,23 @@ def test_calibrate_writes_model_report_and_plots(tmp_path, capsys):
     }
 
 
+def test_calibrate_time_limit_flag_stops_the_fit(tmp_path, capsys):
+    """--time-limit reaches the fit: 1 us is over before the first trial step, so the fit
+    stops at its start with status time_limit (exit status 1) and still writes its files."""
+    track = tmp_path / "track.csv"
+    write_track(track)
+    out = tmp_path / "fit"
+    argv = [str(MODEL_FILE), "--track", str(track), "--fit", "cm", "--out", str(out)]
+    assert main(["calibrate", *argv, "--substeps", "8", "--time-limit", "1e-6"]) == 1
+    printed = capsys.readouterr().out
+    assert "time_limit (wall-clock limit 1e-06 s reached after 0 iterations)" in printed
+    report = json.loads((out / "fit_report.json").read_text())
+    assert report["status"] == "time_limit"
+    model = load_model(MODEL_FILE)
+    assert report["parameters"]["cm"]["value"] == model.flight.coupling_coefficient  # the start
+    assert (out / "flight5-fitted.toml").is_file()
+
+
 def test_calibrate_bad_input_exits_2(tmp_path, capsys):
     track = tmp_path / "track.csv"
     track.write_text("t_s,x_m,y_m,z_m\n0.1,0,0,0.1\n0.2,0,0,0.3\n")

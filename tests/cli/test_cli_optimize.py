@@ -25,6 +25,7 @@ from lightcraft_opt.cli import main
 from lightcraft_opt.files.ocp_outputs import solution_columns
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import STATE, initial_state, map_input_layout
+from lightcraft_opt.ocp.options import OCP_TIME_LIMIT
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.solve import rollout
 from lightcraft_opt.ocp.transcription import state_scale
@@ -176,6 +177,29 @@ def test_an_unconverged_solve_exits_1_and_still_writes_its_files(problem_file, t
     _, rows = read_csv(out / "solution.csv")
     assert len(rows) == 4
     for name in FIGURES:
+        assert (out / name).exists()
+
+
+def test_the_time_limit_comes_from_the_file_or_the_flag(problem_file, tmp_path, capsys):
+    """[solver] time_limit_ms reaches OcpOptions in seconds (default OCP_TIME_LIMIT);
+    --time-limit replaces it. A limit of 1 us stops sqpmethod at its first iteration:
+    exit status 1, the limit in the message and the summary, the files written."""
+    assert load_problem(problem_file).options.time_limit == OCP_TIME_LIMIT
+    problem_file.write_text(PROBLEM + "\n[solver]\ntime_limit_ms = 1500\n")
+    assert load_problem(problem_file).options.time_limit == 1.5
+    assert load_problem(problem_file, time_limit=20.0).options.time_limit == 20.0
+
+    out = tmp_path / "out"
+    argv = ["optimize", str(problem_file), "--out", str(out), "--horizon", "3"]
+    assert main([*argv, "--solver", "sqp_qrqp", "--time-limit", "1e-6"]) == 1
+    printed = capsys.readouterr().out
+    assert "solving (wall-clock limit 1e-06 s)" in printed
+    assert "time_limit: cost" in printed
+    assert "sqp_qrqp: wall-clock limit 1e-06 s reached after 0 iterations" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "time_limit" and summary["success"] is False
+    assert summary["iterations"] == 0
+    for name in ("solution.csv", *FIGURES):
         assert (out / name).exists()
 
 

@@ -14,13 +14,15 @@ plant:
 - injected solver failures (raise, NaN, late) are counted, answered by the shifted plan
   and survived.
 
-The controllers are deterministic here: their wall-time budget is one no solve reaches,
-so only an injected fault is late (the unit tests time nothing).
+The controllers are deterministic here: they fly without a wall-clock budget
+(``time_budget=None``), so only an injected fault is late (the unit tests time nothing);
+test_the_deterministic_mode_ignores_a_slow_solve shows the difference.
 """
 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -45,7 +47,7 @@ from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 MODEL = load_model(REPO_ROOT / "models" / "flight5-rcs.toml")
-NO_CLOCK = MpcOptions(time_budget=10.0)
+NO_CLOCK = MpcOptions(time_budget=None)
 HALF_DEGREE = math.radians(0.5)
 #: The plant a controller does not know: inertias 1 %, mass 1 %, impulse, blast angle and
 #: Isp 5 %, spin decay and pitching moment 20 % (1 sigma); noise of a good IMU and
@@ -209,6 +211,58 @@ def test_injected_solver_failures_are_counted_answered_by_the_shifted_plan_and_s
         np.testing.assert_array_equal(run.commanded[k], plan[age])
     settled = run.first_pulse_below(HALF_DEGREE)
     assert settled is not None and settled <= 25
+
+
+class _SlowAt:
+    """The QP Function of an MPC, 50 ms slower at one pulse (a machine under load): ten
+    times the default 5 ms budget, inside the solve time the MPC measures."""
+
+    def __init__(self, controller: MpcController, pulse: int) -> None:
+        self.function, self.pulse, self.step = controller.qp.function, pulse, -1
+        step = controller.step
+
+        def counting(x, t=0.0, *, fault=None):  # type: ignore[no-untyped-def]
+            self.step += 1
+            return step(x, t, fault=fault)
+
+        controller.step = counting  # type: ignore[method-assign]
+        controller.qp.function = self
+
+    def __call__(self, *args):  # type: ignore[no-untyped-def]
+        if self.step == self.pulse:
+            time.sleep(0.05)
+        return self.function(*args)
+
+    def stats(self):  # type: ignore[no-untyped-def]
+        return self.function.stats()
+
+
+def test_the_deterministic_mode_ignores_a_slow_solve(prediction, plant):
+    """The same 0.3 s of coning flown three times. Without a budget (time_budget None)
+    the flight with a 50 ms stall in pulse 3's solve is the calm machine's to the last
+    bit: same states, inputs and log. With the default 5 ms budget the stalled solve is
+    discarded (FALLBACK_LATE at pulse 3) and the shifted plan flies."""
+    x0 = coned(MODEL, 5.0)
+    calm = closed_loop(
+        MODEL, MpcController(MODEL, NO_CLOCK, prediction=prediction), 0.3, x0=x0, pulse_map=plant
+    )
+    slow = MpcController(MODEL, NO_CLOCK, prediction=prediction)
+    _SlowAt(slow, 3)
+    stalled = closed_loop(MODEL, slow, 0.3, x0=x0, pulse_map=plant)
+    assert calm.pulses == stalled.pulses == 8
+    assert stalled.log.solve_time[3] > 0.05
+    np.testing.assert_array_equal(calm.flight.x, stalled.flight.x)
+    np.testing.assert_array_equal(calm.commanded, stalled.commanded)
+    assert list(calm.log.status) == list(stalled.log.status)
+    assert calm.log.count(ControllerStatus.SOLVED) == 8
+    np.testing.assert_array_equal(calm.log.iterations, stalled.log.iterations)
+
+    budget = MpcController(MODEL, MpcOptions(), prediction=prediction)
+    assert budget.options.time_budget == 5e-3
+    _SlowAt(budget, 3)
+    real_time = closed_loop(MODEL, budget, 0.3, x0=x0, pulse_map=plant)
+    assert real_time.log.status[3] is ControllerStatus.FALLBACK_LATE
+    assert not np.array_equal(real_time.commanded[3], calm.commanded[3])
 
 
 # --------------------------------------------------------------------------- the loop itself

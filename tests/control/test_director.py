@@ -52,6 +52,10 @@ from lightcraft_opt.params import BeamSizeModel
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.reduced_map import build_reduced_map
 
+#: No wall-clock budget: the flights below depend on their inputs only (a solve late on a
+#: loaded machine would otherwise fly the fallback).
+NO_CLOCK = DirectorOptions(time_budget=None)
+
 
 @pytest.fixture(scope="module")
 def model():
@@ -125,7 +129,7 @@ def test_director_catches_a_craft_launched_off_axis(model, plant):
     the craft swings through it, 1.4 cm off on average."""
     x0 = initial_state(model).copy()
     x0[STATE.slot("r_L").start] = 0.03
-    director = DirectorController(model, plant.inputs, DirectorOptions(), compiled=False)
+    director = DirectorController(model, plant.inputs, NO_CLOCK, compiled=False)
     steered = closed_loop(model, director, 1.0, x0=x0, pulse_map=plant)
     fixed = closed_loop(model, OpenLoopController(model, plant.inputs), 1.0, x0=x0, pulse_map=plant)
     assert steered.flight.status.value == "duration_reached"
@@ -143,7 +147,7 @@ def test_director_catches_a_craft_launched_off_axis(model, plant):
 
 
 def test_director_falls_back_on_an_injected_failure(model, plant):
-    director = DirectorController(model, plant.inputs, DirectorOptions(), compiled=False)
+    director = DirectorController(model, plant.inputs, NO_CLOCK, compiled=False)
     options = ClosedLoopOptions(faults=(4, 5), fault=ControllerFault.RAISE)
     result = closed_loop(model, director, 0.4, pulse_map=plant, options=options)
     status = result.log.status
@@ -222,7 +226,7 @@ def test_a_dropped_pulse_teaches_the_disturbance_estimate_nothing(model, plant):
     """Seed 7 at a 15 % drop-out rate drops pulse 6 alone: at pulse 7 the climb is a kick
     (1.96 m/s) short of the plan, and the estimate is left as it was; at the other pulses it
     learns (the reduced map misses the plant by a little every pulse)."""
-    director = DirectorController(model, plant.inputs, DirectorOptions(), compiled=False)
+    director = DirectorController(model, plant.inputs, NO_CLOCK, compiled=False)
     seen: list[np.ndarray] = []
     step = director.step
 

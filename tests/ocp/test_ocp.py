@@ -22,6 +22,7 @@ solvers of one problem share one Φ, so its derivatives are built once.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -370,6 +371,59 @@ def test_an_unreachable_height_is_a_status_not_an_exception(vertical):
     assert result.x.shape == (6, STATE.size) and result.u.shape == (5, problem.inputs.size)
 
 
+@pytest.mark.parametrize(
+    ("solver", "hessian"),
+    [
+        (OcpSolver.IPOPT, HessianApproximation.LIMITED_MEMORY),
+        (OcpSolver.FATROP, HessianApproximation.EXACT),
+        (OcpSolver.SQP_HPIPM, HessianApproximation.GAUSS_NEWTON),
+    ],
+)
+def test_a_wall_clock_limit_stops_a_solve_that_would_not_end(vertical, solver, hessian):
+    """1000 m in 5 pulses with 5000 iterations allowed: without a limit IPOPT (L-BFGS) and
+    SQP-HPIPM (Gauss-Newton) were still iterating after 60 s (2193 and 2769 iterations),
+    and fatrop spins inside its restoration phase and never returns. A 0.5 s limit ends
+    each with status TIME_LIMIT, the limit in the message: IPOPT and sqpmethod at their
+    first iteration past it (~30 ms an iteration here), with their last iterate; fatrop's
+    forked process killed at it, the initial guess returned. Bound: the limit plus 1.5 s
+    (an iteration on a loaded machine, the rollout of the guess and the result)."""
+    model, phi = vertical
+    problem = _energy_only(model, 5, (LaserEnergy(),), (TerminalAltitude(minimum=1000.0),))
+    options = OcpOptions(solver=solver, hessian=hessian, max_iter=5000, tol=TOL, time_limit=0.5)
+    compiled = CompiledOcp(problem, options, pulse_map=phi)
+    start = time.perf_counter()
+    result = compiled.solve()
+    elapsed = time.perf_counter() - start
+    assert result.status is OcpStatus.TIME_LIMIT, result.message
+    assert not result.success
+    assert f"{solver.value}: wall-clock limit 0.5 s reached" in result.message
+    assert 0.5 <= elapsed < 2.0
+    assert 0.5 <= result.solve_time <= elapsed
+    assert result.u.shape == (5, problem.inputs.size)
+    if solver is OcpSolver.FATROP:
+        assert result.iterations == 0 and "initial guess, returned as is" in result.message
+    else:
+        assert 0 < result.iterations < 5000
+        assert f"after {result.iterations} iterations" in result.message
+
+
+def test_a_wind_ramps_solves_share_one_limit(lateral):
+    """The ramp's steps (calm air, then the 3 m/s wind in thirds) run against one deadline:
+    a limit already past when the first step starts stops that step at its first
+    iteration and ends the ramp there, instead of granting each step a limit of its own."""
+    problem, phi, _, _ = lateral
+    options = OcpOptions(
+        solver=OcpSolver.SQP_HPIPM,
+        hessian=HessianApproximation.GAUSS_NEWTON,
+        wind_ramp=3,
+        time_limit=1e-6,
+    )
+    result = solve(problem, options, pulse_map=phi)
+    assert result.status is OcpStatus.TIME_LIMIT
+    assert result.message.endswith("(wind ramp 0/3: time_limit in 0)")
+    assert result.iterations == 0
+
+
 def test_bad_problems_and_options_name_the_field():
     model = drag_free_vertical()
     good = (LaserEnergy(),)
@@ -405,6 +459,10 @@ def test_bad_problems_and_options_name_the_field():
         OcpOptions(solver=OcpSolver.SQP_OSQP)
     with pytest.raises(OptionError, match="sums to 4"):
         OcpOptions(move_blocking=(2, 2)).blocks(5)
+    for bad in (0.0, -1.0, math.inf, True):
+        with pytest.raises(OptionError, match=r"OcpOptions\.time_limit"):
+            OcpOptions(time_limit=bad)
+    assert OcpOptions(time_limit=None).time_limit is None
     assert OcpOptions(
         solver=OcpSolver.SQP_OSQP, hessian=HessianApproximation.LIMITED_MEMORY
     ).blocks(5) == (1, 1, 1, 1, 1)
