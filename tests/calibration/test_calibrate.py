@@ -12,7 +12,7 @@ at all (symbolic/engine.py): a parameter the data cannot identify by constructio
 from __future__ import annotations
 
 import dataclasses as dc
-import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -180,7 +180,7 @@ def test_residual_jacobian_matches_ad_and_finite_differences(model, fit_map):
     """The Jacobian of r(θ) over every fit component, on a 0.3 s track (8 pulses): chained
     over Φ's pieces in forward mode (what :func:`calibrate` uses) equal to casadi's AD
     through Φ's graph to rounding (1e-9 relative; ~1e-15 measured), and against central
-    differences (steps 1e-4 of each scale); the wind speed starts away from 0, where its
+    differences (steps 1e-3 of each scale); the wind speed starts away from 0, where its
     direction enters."""
     t = np.linspace(0.01, 0.3, 12)
     track = Track(t, np.zeros((t.size, 3)))
@@ -201,8 +201,11 @@ def test_residual_jacobian_matches_ad_and_finite_differences(model, fit_map):
     np.testing.assert_allclose(r.ravel(), np.asarray(problem.residual(theta)).ravel(), atol=1e-12)
     for k in range(len(comps)):
         assert np.max(np.abs(J[:, k] - J_ad[:, k])) <= 1e-9 * np.max(np.abs(J_ad[:, k]))
+
     for k, c in enumerate(comps):
-        h = 1e-4 * c.scale
+        # steps 1e-3 of each scale: at 1e-4 the residual's rounding over h alone reaches
+        # 1e-9 on the weakest column (health_floor, |J| 3e-6: 1.0e-9 at 1e-4, 1.2e-10 at 1e-3)
+        h = 1e-3 * c.scale
         plus, minus = theta.copy(), theta.copy()
         plus[k] += h
         minus[k] -= h
@@ -280,7 +283,7 @@ def test_max_iter_is_a_status_not_an_exception(model, fit_map):
 
 
 def test_a_wall_clock_limit_stops_the_fit_at_its_last_accepted_step(model, fit_map, monkeypatch):
-    """Each residual and Jacobian made to take 0.25 s longer: the start's is ready at
+    """Each residual and Jacobian made to take 0.25 s of the fit's clock: the start's is ready at
     0.25 s, the first step's at 0.5 s, past the 0.3 s limit, so the fit stops before its
     second trial step with status TIME_LIMIT after 1 iteration (Cm is 10 % off: one step
     cannot converge), at that step's values, within the limit plus one evaluation."""
@@ -290,12 +293,14 @@ def test_a_wall_clock_limit_stops_the_fit_at_its_last_accepted_step(model, fit_m
     sim = simulate(truth_model(model, 1.1, 0.5), 0.35)
     r = np.column_stack([np.interp(t, sim.t, sim.x[:, i]) for i in range(3)])
     evaluate = fit_module._evaluate
+    clock = [0.0]  # the fit's clock: advanced by the evaluations alone, whatever the load
 
     def slow(problem, theta):
-        time.sleep(0.25)
+        clock[0] += 0.25
         return evaluate(problem, theta)
 
     monkeypatch.setattr(fit_module, "_evaluate", slow)
+    monkeypatch.setattr(fit_module, "time", SimpleNamespace(perf_counter=lambda: clock[0]))
     options = CalibrationOptions(max_iter=50, time_limit=0.3, pulse_map=FIT_MAP)
     result = calibrate(model, Track(t, r), "cm", options=options, pulse_map=fit_map)
     assert result.status is CalibrationStatus.TIME_LIMIT
@@ -304,7 +309,7 @@ def test_a_wall_clock_limit_stops_the_fit_at_its_last_accepted_step(model, fit_m
     assert result.message == "wall-clock limit 0.3 s reached after 1 iterations"
     assert result.value("cm") != result.initial[0]  # the accepted step's value
     assert result.cost < result.initial_cost
-    assert 0.5 <= result.solve_time < 0.3 + 0.25 + 0.5
+    assert result.solve_time == pytest.approx(0.5)  # the start's evaluation and one step's
 
 
 def test_track_validation():
