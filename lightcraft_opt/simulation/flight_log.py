@@ -95,6 +95,8 @@ class FlightLog:
         self.pulse_t: list[float] = []
         self.pulse_u: list[np.ndarray] = []
         self.pulse_e: list[np.ndarray] = []
+        #: beam_gap at each pulse [m]; NaN where none fired
+        self.pulse_gap: list[float] = []
         self.status, self.message = SimulationStatus.DURATION_REACHED, ""
         self.outside = 0
         self.on_pad = bool(x0[Z_UP] <= 0.0 and x0[_V_UP] <= 0.0)
@@ -120,6 +122,7 @@ class FlightLog:
         self.pulse_t.append(t)
         self.pulse_u.append(u)
         self.pulse_e.append(np.zeros(n_engine))
+        self.pulse_gap.append(math.nan)
         self.times.append(t + self.period)
         self.states.append(np.array(x, dtype=float))
         self.status = SimulationStatus.NEVER_FIRED
@@ -140,6 +143,12 @@ class FlightLog:
         self.pulse_t.append(t)
         self.pulse_u.append(u)
         self.pulse_e.append(eng)
+        fired = bool(u[self.i_energy] > 0)
+        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser)) if fired else 0.0
+        offset = eng[_OFFSET.start : _OFFSET.stop]
+        radius = float(PARAMETERS.get("capture_radius", self.p))
+        gap = beam_gap(offset, side, radius, self.laser.profile) if fired else math.nan
+        self.pulse_gap.append(gap)
         X = X.T
         tb = t + self.period * np.arange(1, len(X) + 1) / len(X)
         keep = tb <= self.duration + 1e-12
@@ -156,12 +165,9 @@ class FlightLog:
             return True
         self.times.extend(tb[keep])
         self.states.extend(X[keep])
-        if u[self.i_energy] <= 0:  # a dropped pulse neither counts nor resets the count
+        if not fired:  # a dropped pulse neither counts nor resets the count
             return False
-        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser))
-        offset = eng[_OFFSET.start : _OFFSET.stop]
-        radius = float(PARAMETERS.get("capture_radius", self.p))
-        outside = beam_gap(offset, side, radius, self.laser.profile) > 0.0
+        outside = gap > 0.0
         self.outside = self.outside + 1 if outside else 0
         if self.outside < LEFT_BEAM_PULSES:
             return False
