@@ -140,6 +140,21 @@ def test_none_writes_every_file(tmp_path, capsys):
     assert summary["coning_below_0.5deg_from_pulse"] is None
     assert summary["coning_final_deg"] > 4.5
     assert summary["pulses_dropped"] >= 1  # 5 % of 26 pulses, seed 1: pulse 1
+    # the folder reads back as the very result: its numbers are the summary's
+    from lightcraft_opt import ClosedLoopResult, load_result
+
+    loaded = load_result(out)
+    assert isinstance(loaded, ClosedLoopResult) and loaded.pulses == 26
+    assert summary["coning_final_deg"] == math.degrees(loaded.coning[-1])
+    assert summary["max_coning_deg"] == math.degrees(np.max(loaded.coning))
+    assert summary["energy_captured_J"] == np.sum(loaded.flight.pulses.energy_captured)
+    pulses = np.genfromtxt(out / "pulses.csv", delimiter=",", names=True)
+    assert summary["energy_captured_J"] == pytest.approx(np.sum(pulses["energy_captured_J"]))
+    fired = pulses["energy_J"] > 0
+    assert summary["capture_margin_m"] == pytest.approx(-np.max(pulses["beam_gap_m"][fired]))
+    z = loaded.flight.state("r_L")[:, 2]
+    assert summary["apogee_time_s"] == loaded.flight.t[np.argmax(z)]
+    assert "ClosedLoopResult of flight5" in loaded.summary() and "\n" not in repr(loaded)
     printed = capsys.readouterr().out
     assert "deg (never below 0.5 deg), max tilt" in printed and "None" not in printed
 
