@@ -41,8 +41,9 @@ class PulseRecord:
     engine : (k, 11) engine outputs: energy_captured [J], impulse_B (3) [N s, B],
         angular_impulse_B (3) [N m s, B], offset_L (2) [m, L], liner_loss [kg], health [-].
     beam_gap : (k,) clearance between the beam's footprint and the optic at each pulse
-        (:func:`~lightcraft_opt.simulation.flight_log.beam_gap`: negative while they
-        overlap) [m]; NaN for a pulse not fired. None when not recorded (an OCP's pulses).
+        (:func:`~lightcraft_opt.simulation.flight_log.beam_gap`, signed: negative while
+        they overlap, below minus the capture radius while the optic centre is over the
+        footprint) [m]; NaN for a pulse not fired. None when not recorded (an OCP's pulses).
     """
 
     t: np.ndarray
@@ -157,9 +158,10 @@ class SimulationResult(Presentable):
     @property
     def capture_margin(self) -> float | None:
         """Closest approach of the optic's edge to the beam's edge over the fired pulses
-        [m]: the smallest ``-beam_gap``, positive while the optic and the beam overlap (how
-        much further the optic could have strayed before it left the beam). None without
-        a fired pulse or a recorded gap."""
+        [m]: the smallest ``-beam_gap`` (signed), positive while the optic and the beam
+        overlap: how much further out the optic could have strayed at its worst pulse
+        before it left the beam (the capture radius plus the optic centre's depth inside
+        the footprint). None without a fired pulse or a recorded gap."""
         gap = None if self.pulses is None else self.pulses.beam_gap
         if gap is None or not np.any(np.isfinite(gap)):
             return None
