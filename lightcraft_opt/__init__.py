@@ -2,7 +2,9 @@
 
 ``import lightcraft_opt as lc`` reaches the public API of every capability: models and
 files, the pulse map Φ, simulation, optimal control, control (MPC, LQR, closed loop),
-linearisation, calibration and Monte Carlo campaigns, and every result type. The
+linearisation, calibration and Monte Carlo campaigns, and every result type: each has
+``summary()``, ``plot()`` and ``save(folder)``, and :func:`load_result` reads a run folder
+back (lightcraft_opt/outputs.py registers their figures and files). The
 controllers and linearisation load on first use (python-control takes ~2 s to import).
 Frames and units: docs/frames.md; the physics: docs/physics.md; the house:
 docs/architecture.md. Everything inside is SI.
@@ -14,6 +16,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from lightcraft_opt import control
+from lightcraft_opt import outputs as _outputs  # noqa: F401  (registers plot() and save())
 from lightcraft_opt.calibration import (
     CalibrationOptions,
     CalibrationResult,
@@ -37,6 +40,7 @@ from lightcraft_opt.files import (
     load_closed_loop,
     load_model,
     load_problem,
+    load_result,
     read_track,
 )
 from lightcraft_opt.layout import (
@@ -149,6 +153,7 @@ __all__ = [
     "load_closed_loop",
     "load_model",
     "load_problem",
+    "load_result",
     "nominal_inputs",
     "parameter_values",
     "read_track",

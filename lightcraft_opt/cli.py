@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import math
 import os
 import sys
@@ -16,11 +17,11 @@ from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, real, substeps
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
+from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.campaign import load_campaign
-from lightcraft_opt.files.closed_loop import load_closed_loop
-from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
 from lightcraft_opt.files.problem import load_problem
@@ -36,13 +37,13 @@ from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
 from lightcraft_opt.plots.calibration import calibration_figures
-from lightcraft_opt.plots.closed_loop import closed_loop_figures
+from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
 from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 __all__ = ["main"]
 
@@ -129,12 +130,24 @@ def _optimize(args: argparse.Namespace) -> int:
 CONTROLLERS = ("mpc", "lqr", "director", "none")
 
 
-def _closed_loop(args: argparse.Namespace) -> int:
-    # here, not at the top: they import python-control (~1 s) that other commands never need
-    from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
-    from lightcraft_opt.control.mpc import MpcController
-    from lightcraft_opt.control.prediction_model import coning_model
+def controller_list(text: str) -> tuple[str, ...]:
+    """``--controller``: one of :data:`CONTROLLERS` or several, comma-separated
+    (``mpc,lqr,none``), each once."""
+    names = tuple(n.strip() for n in text.split(","))
+    bad = [n for n in names if n not in CONTROLLERS]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown controller {bad[0] if bad else text!r}; choose from "
+            f"{', '.join(CONTROLLERS)}, or several separated by commas (mpc,lqr,none)"
+        )
+    if len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"a controller is listed twice in {text!r}")
+    return names
 
+
+def _closed_loop(args: argparse.Namespace) -> int:
+    """Fly each listed controller; one folder each, plus an overlay (compare.png) in the
+    parent --out when there are several."""
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
     if args.deterministic or args.time_budget_ms is not None:
@@ -144,15 +157,40 @@ def _closed_loop(args: argparse.Namespace) -> int:
             mpc=dataclasses.replace(problem.mpc, time_budget=budget),
             director=dataclasses.replace(problem.director, time_budget=budget),
         )
+    names: tuple[str, ...] = args.controller
     model = problem.model
-    out = output_folder(args.out or Path("runs") / f"{source.stem}-{args.controller}")
-    print(f"building the plant and the {args.controller} controller for {problem.title!r} ...")
+    single = len(names) == 1
+    default = f"{source.stem}-{names[0]}" if single else f"{source.stem}-compare"
+    out = output_folder(args.out or Path("runs") / default)
     plant = build_pulse_map(model, plant_options(model))
+    results = []
+    for name in names:
+        where = out if single else output_folder(out / name)
+        results.append(_fly(problem, plant, name, where))
+    if not single:
+        fig = compare_closed_loops(
+            results, title=problem.title, capture_radius=model.craft.engine.capture_radius
+        )
+        fig.savefig(out / "compare.png", dpi=PLOT_DPI)
+        print(f"{', '.join(names)} overlaid -> {out}/compare.png")
+    ended = any(r.flight.status.value != "duration_reached" for r in results)
+    return 1 if ended else 0
+
+
+def _fly(problem: ClosedLoopProblem, plant: PulseMap, name: str, out: Path) -> ClosedLoopResult:
+    """Fly ``problem`` under controller ``name`` and save its files into ``out``."""
+    # here, not at the top: they import python-control (~1 s) that other commands never need
+    from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
+    from lightcraft_opt.control.mpc import MpcController
+    from lightcraft_opt.control.prediction_model import coning_model
+
+    model = problem.model
+    print(f"building the plant and the {name} controller for {problem.title!r} ...")
     assert plant.inputs is not None  # build_pulse_map always records it
     controller: Controller
-    if args.controller == "none":
+    if name == "none":
         controller = OpenLoopController(model, plant.inputs)
-    elif args.controller == "director":
+    elif name == "director":
         from lightcraft_opt.control.director import DirectorController
 
         nutation = None
@@ -163,7 +201,7 @@ def _closed_loop(args: argparse.Namespace) -> int:
     else:
         # linearised once per model structure and numbers, then read from the disk cache
         prediction = coning_model(model, pulse_map=plant, cache=True)
-        if args.controller == "mpc":
+        if name == "mpc":
             controller = MpcController(model, problem.mpc, prediction=prediction)
         else:
             controller = LqrController(model, prediction, problem.mpc.weights)
@@ -177,31 +215,20 @@ def _closed_loop(args: argparse.Namespace) -> int:
         pulse_map=plant,
         options=problem.loop,
     )
-    write_trajectory_csv(result.flight, out / "trajectory.csv")
-    write_pulses_csv(result.flight, out / "pulses.csv")
-    write_steps_csv(result, out / "steps.csv")
-    summary = write_closed_loop_summary(result, problem, out / "summary.json")
-    figures = closed_loop_figures(
-        result,
-        title=problem.title,
-        capture_radius=model.craft.engine.capture_radius,
-        budget={"mpc": problem.mpc.time_budget, "director": problem.director.time_budget}.get(
-            args.controller
-        ),
-    )
-    for name, fig in figures.items():
-        fig.savefig(out / name, dpi=PLOT_DPI)
+    # the files and figures below are written by the writers registered in outputs.py
+    result.save(out, problem=problem)
+    summary = json.loads((out / "summary.json").read_text())
     pulse = summary["coning_below_0.5deg_from_pulse"]
     settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
     median = summary["solve_time_ms"]["median"]
     solves = "no solves" if median is None else f"solve time median {median:.2f} ms"
     print(
-        f"{summary['status']}: coning {summary['coning_initial_deg']:.2f} -> "
+        f"{name}: {summary['status']}: coning {summary['coning_initial_deg']:.2f} -> "
         f"{summary['coning_final_deg']:.3f} deg ({settled}), max tilt "
         f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, {solves} "
         f"-> {out}/"
     )
-    return 0 if result.flight.status.value == "duration_reached" else 1
+    return result
 
 
 def _montecarlo(args: argparse.Namespace) -> int:
@@ -439,10 +466,18 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     )
     loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
     loop.add_argument(
-        "--controller", choices=CONTROLLERS, default="mpc", help="which controller (default mpc)"
+        "--controller",
+        type=controller_list,
+        default=("mpc",),
+        metavar="{" + ",".join(CONTROLLERS) + "}[,...]",
+        help="which controller (default mpc); several, comma-separated (mpc,lqr,none), fly "
+        "one after the other into <out>/<controller>/ and are overlaid in <out>/compare.png",
     )
     loop.add_argument(
-        "--out", default=None, help="output folder (default runs/<problem>-<controller>)"
+        "--out",
+        default=None,
+        help="output folder (default runs/<problem>-<controller>, or runs/<problem>-compare "
+        "for several controllers)",
     )
     loop.add_argument(
         "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"

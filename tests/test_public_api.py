@@ -56,3 +56,19 @@ def test_importing_the_package_leaves_python_control_unloaded() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
     )
     assert out.stdout.strip() == "False"
+
+
+def test_every_result_type_summarises_plots_and_saves_itself() -> None:
+    """Each result type has summary(), plot() and save() (issue 19), its plot and save
+    registered by lightcraft_opt/outputs.py when the package is imported, and
+    load_result reads a folder back."""
+    lc = importlib.import_module("lightcraft_opt")
+    presenters = importlib.import_module("lightcraft_opt.presenters")
+    kinds = ("SimulationResult", "OcpResult", "ClosedLoopResult", "CalibrationResult")
+    for cls in (*(getattr(lc, k) for k in kinds), lc.CampaignResult):
+        for method in ("summary", "plot", "save"):
+            assert callable(getattr(cls, method, None)), f"{cls.__name__}.{method}"
+        assert cls in presenters._REGISTRY, cls
+        assert "__repr__" in vars(cls), f"{cls.__name__} keeps the dataclass repr"
+    assert "load_result" in lc.__all__
+    assert lc.load_result is importlib.import_module("lightcraft_opt.files").load_result

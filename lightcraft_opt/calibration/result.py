@@ -9,6 +9,8 @@ from enum import Enum
 
 import numpy as np
 
+from lightcraft_opt.presenters import Presentable
+
 __all__ = ["CalibrationResult", "CalibrationStatus", "FitFlag", "FlagKind"]
 
 
@@ -45,7 +47,7 @@ class FitFlag:
 
 
 @dataclass(frozen=True)
-class CalibrationResult:
+class CalibrationResult(Presentable):
     """A fitted model: values, statistics and the fitted flight.
 
     Attributes
@@ -125,3 +127,33 @@ class CalibrationResult:
         POORLY_DETERMINED flag), in fit order."""
         bad = {f.parameter for f in self.flags if f.kind.unidentified}
         return tuple(n for n in self.names if n in bad)
+
+    def summary(self) -> str:
+        """The fit on one screen: how it ended, each value with its standard deviation and
+        unit, the residuals."""
+        lines = [
+            f"CalibrationResult: {self.status.value} ({self.message})",
+            f"  {self.iterations} iterations, {self.solve_time:.2f} s, {self.t.size} tracked "
+            f"points ({self.gaps} gaps dropped)",
+            f"  residual sigma {1e3 * self.sigma:.3f} mm; rms east/north/up "
+            + " / ".join(f"{1e3 * v:.3f}" for v in self.rms)
+            + " mm",
+            f"  cost {self.initial_cost:.4g} -> {self.cost:.4g} m^2, "
+            f"condition {self.condition:.3g}",
+        ]
+        width = max(len(n) for n in self.names) if self.names else 0
+        for i, name in enumerate(self.names):
+            std = "not identifiable" if not np.isfinite(self.std[i]) else f"± {self.std[i]:.3g}"
+            flags = ", ".join(f.kind.value for f in self.flags_of(name))
+            lines.append(
+                f"  {name:<{width}}  {self.values[i]:.6g} {std} {self.units[i]}"
+                + (f"  [{flags}]" if flags else "")
+            )
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        fitted = ", ".join(f"{n}={v:.4g}" for n, v in zip(self.names, self.values, strict=True))
+        return (
+            f"<CalibrationResult {self.status.value}: {fitted}; sigma "
+            f"{1e3 * self.sigma:.3f} mm, {self.iterations} iterations>"
+        )

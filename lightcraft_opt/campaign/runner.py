@@ -32,8 +32,8 @@ import json
 import math
 import time
 import warnings
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -47,6 +47,7 @@ from lightcraft_opt.campaign.run_table import DamagedRowsWarning, RunTable, read
 from lightcraft_opt.campaign.spec import TIMING_COLUMNS, Campaign
 from lightcraft_opt.campaign.summary import campaign_summary
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.presenters import Presentable
 
 __all__ = ["CampaignResult", "campaign_fingerprint", "run_campaign", "write_json"]
 
@@ -54,7 +55,7 @@ MANIFEST, RUNS, TIMINGS, SUMMARY = "campaign.json", "runs.csv", "timings.csv", "
 
 
 @dataclass(frozen=True)
-class CampaignResult:
+class CampaignResult(Presentable):
     """What :func:`run_campaign` did.
 
     Attributes
@@ -63,7 +64,8 @@ class CampaignResult:
     runs : runs asked for; ``made`` of them by this call, ``skipped`` found finished.
     complete : every run 0 .. runs - 1 is in the table.
     table : {column: (n,) array} of runs.csv (sorted by run when complete).
-    summary : :func:`campaign_summary` of the table (empty when not complete).
+    summary : :func:`campaign_summary` of the table (empty when not complete), a dict;
+        ``summary()`` is the one-screen text every result has (:class:`CampaignSummary`).
     engine : "serial", "processes (N workers)" or "dask <address>".
     elapsed : wall time of this call [s].
     dropped : damaged rows of runs.csv this call dropped (their runs made again).
@@ -75,7 +77,8 @@ class CampaignResult:
     skipped: int
     complete: bool
     table: dict[str, np.ndarray]
-    summary: dict[str, Any]
+    # field(): the name is also Presentable.summary, which must not become its default
+    summary: dict[str, Any] = field()  # type: ignore[assignment]
     engine: str
     elapsed: float
     dropped: int = 0
@@ -84,6 +87,67 @@ class CampaignResult:
     def runs_per_minute(self) -> float:
         """Runs made per minute of this call's wall time."""
         return 60.0 * self.made / self.elapsed if self.elapsed > 0 else math.nan
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "summary", CampaignSummary(self.summary, self._text))
+
+    def _text(self) -> str:
+        """The campaign on one screen: runs and statuses, then the statistics with units."""
+        s = self.summary
+        lines = [
+            f"CampaignResult in {self.out_dir}: {self.runs} runs, "
+            + ("complete" if self.complete else "incomplete")
+            + f" ({self.made} made, {self.skipped} found done, {self.engine or 'no engine'})",
+        ]
+        if not s:
+            return "\n".join([*lines, "  no statistics until every run is in"])
+        counts = ", ".join(f"{n} {k}" for k, n in s["status_counts"].items()) or "no runs"
+        beam = s["left_beam"]
+        lines += [
+            f"  status           {counts}",
+            f"  left the beam    {beam['count']} of {s['runs']} (95 % "
+            + "{:.3f}-{:.3f})".format(*(math.nan if v is None else v for v in beam["wilson_95"])),
+        ]
+        for key, name, unit in (
+            ("apogee_m", "apogee", "m"),
+            ("apogee_time_s", "apogee time", "s"),
+            ("max_tilt_deg", "max tilt", "deg"),
+            ("max_coning_deg", "max coning", "deg"),
+            ("max_offset_cm", "max beam offset", "cm"),
+            ("rcs_used_g", "RCS propellant", "g"),
+        ):
+            st = s.get(key) or {}
+            if st.get("mean") is not None:
+                lines.append(
+                    f"  {name:<15}  {st['mean']:.4g} ± {_or_nan(st.get('std')):.3g} {unit} "
+                    f"(range {_or_nan(st.get('min')):.4g} .. {_or_nan(st.get('max')):.4g})"
+                )
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        counts = self.summary.get("status_counts", {})
+        said = ", ".join(f"{n} {k}" for k, n in counts.items()) or "no statistics"
+        return (
+            f"<CampaignResult {self.runs} runs ({'complete' if self.complete else 'incomplete'})"
+            f": {said} -> {self.out_dir}>"
+        )
+
+
+class CampaignSummary(dict[str, Any]):
+    """The campaign's statistics (:func:`campaign_summary`, as in summary.json; empty until
+    the campaign is complete), a dict; called, ``result.summary()``, it is the text of
+    :meth:`CampaignResult.summary` like every other result's."""
+
+    def __init__(self, data: Mapping[str, Any], text: Callable[[], str]) -> None:
+        super().__init__(data)
+        self._text = text
+
+    def __call__(self) -> str:
+        return self._text()
+
+
+def _or_nan(v: float | None) -> float:
+    return math.nan if v is None else float(v)
 
 
 def campaign_fingerprint(campaign: Campaign, seed: int) -> str:

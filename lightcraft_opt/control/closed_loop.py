@@ -202,6 +202,7 @@ def closed_loop(
         t=np.asarray(flight.pulse_t),
         u=np.asarray(flight.pulse_u).reshape(-1, lay.size),
         engine=np.asarray(flight.pulse_e).reshape(k_done, -1),
+        beam_gap=np.asarray(flight.pulse_gap, dtype=float),
     )
     states = np.vstack(flight.states)
     result = flight_result(

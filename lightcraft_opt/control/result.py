@@ -17,6 +17,7 @@ from enum import Enum
 
 import numpy as np
 
+from lightcraft_opt.presenters import Presentable
 from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
@@ -115,7 +116,7 @@ class ControllerLog:
 
 
 @dataclass(frozen=True)
-class ClosedLoopResult:
+class ClosedLoopResult(Presentable):
     """A closed-loop flight: ``u = controller.step(measured x); x = Φ(x, u, p_plant)``.
 
     Attributes
@@ -168,3 +169,44 @@ class ClosedLoopResult:
         """Root mean square of ``coning``, ``tilt`` or ``offset`` from pulse ``start``."""
         v = getattr(self, name)[start:]
         return float(np.sqrt(np.mean(v**2))) if v.size else math.nan
+
+    def summary(self) -> str:
+        """The closed-loop flight on one screen: the controller's measures, then the
+        flight's figures with units."""
+        settled = self.first_pulse_below(math.radians(0.5))
+        times = self.log.solve_time_percentiles()
+        solves = (
+            "no solves"
+            if not math.isfinite(times["median"])
+            else f"median {1e3 * times['median']:.3f} ms, p99 {1e3 * times['p99']:.3f} ms, "
+            f"max {1e3 * times['max']:.3f} ms"
+        )
+        _, *flight = self.flight.summary().splitlines()
+        rows = [
+            f"  controller       {self.controller}",
+            f"  coning           {math.degrees(self.coning[0]):.3f} -> "
+            f"{math.degrees(self.coning[-1]):.3f} deg ("
+            + ("never below 0.5 deg" if settled is None else f"below 0.5 deg from pulse {settled}")
+            + ")",
+            "  max beam offset  "
+            + (f"{100 * float(np.max(self.offset)):.2f} cm" if self.offset.size else "-"),
+            f"  RCS propellant   {1e3 * float(self.rcs_used[-1]):.3f} g",
+            f"  pulses           {self.pulses} ({int(np.sum(self.dropped))} dropped by the laser)",
+            f"  fallbacks        {int(np.sum(self.log.fallbacks))}",
+            f"  solve time       {solves}",
+        ]
+        return "\n".join(
+            [
+                f"ClosedLoopResult of {self.flight.model_name} under {self.controller}",
+                *rows,
+                *flight,
+            ]
+        )
+
+    def __repr__(self) -> str:
+        return (
+            f"<ClosedLoopResult {self.controller} on {self.flight.model_name}: "
+            f"{self.flight.status.value}, {self.pulses} pulses, coning "
+            f"{math.degrees(self.coning[0]):.2f} -> {math.degrees(self.coning[-1]):.3f} deg, "
+            f"max tilt {math.degrees(float(np.max(self.tilt))):.2f} deg>"
+        )

@@ -25,6 +25,7 @@ import numpy as np
 from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.files.model import QUANTITIES, SCHEMA
+from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import finite_or_none, model_hash
 from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.params import Model
@@ -148,12 +149,14 @@ def write_fitted_model(result: CalibrationResult, model_file: str | Path, path: 
 
 def write_calibration_report(
     result: CalibrationResult,
-    model: Model,
+    model: Model | None,
     path: Path,
     **extra: Any,
 ) -> dict[str, Any]:
     """The fit report (JSON) at ``path``; returns it as a dict. ``extra`` entries (file
-    names, options) are added at the top level."""
+    names, options) are added at the top level; without ``model`` its name and hash are
+    null. Beside it, result.json and result.npz: the exact result, trajectories included
+    (:mod:`.result_archive`)."""
     parameters: dict[str, Any] = {}
     for i, name in enumerate(result.names):
         unit = result.units[i]
@@ -173,8 +176,8 @@ def write_calibration_report(
         parameters[name] = entry
     corr = np.where(np.isfinite(result.correlation), result.correlation, 0.0)
     report: dict[str, Any] = {
-        "model": model.name,
-        "model_hash": model_hash(model),
+        "model": None if model is None else model.name,
+        "model_hash": None if model is None else model_hash(model),
         "status": result.status.value,
         "message": result.message,
         "iterations": result.iterations,
@@ -197,4 +200,5 @@ def write_calibration_report(
         **extra,
     }
     path.write_text(json.dumps(report, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    write_archive(result, path.parent)
     return report

@@ -17,7 +17,8 @@ import numpy as np
 
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
-from lightcraft_opt.files.simulation_outputs import model_hash
+from lightcraft_opt.files.result_archive import write_archive
+from lightcraft_opt.files.simulation_outputs import flight_measures, model_hash
 
 __all__ = ["STEP_COLUMNS", "write_closed_loop_summary", "write_steps_csv"]
 
@@ -64,43 +65,59 @@ def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
 
 
 def write_closed_loop_summary(
-    result: ClosedLoopResult, problem: ClosedLoopProblem, path: Path
+    result: ClosedLoopResult, problem: ClosedLoopProblem | None, path: Path
 ) -> dict[str, Any]:
     """summary.json: which problem and controller, how the flight ended, the coning
-    measures (first pulse from which it stays below 0.5 degrees, largest after pulse 25),
-    tilt and offset, propellant, and the controller's statistics (counts by status,
-    fallbacks, solve time median / 99th percentile / max)."""
+    measures (first pulse from which it stays below 0.5 degrees, largest after pulse 25,
+    largest), tilt and offset, the flight's apogee time, top and landing speed, capture
+    margin and energy captured (:func:`~.simulation_outputs.flight_measures`), propellant,
+    and the controller's statistics (counts by status, fallbacks, solve time median /
+    99th percentile / max). Without ``problem`` its entries (title, file, hash,
+    duration, faults) are null. Beside it, result.json and result.npz: the exact result
+    (:mod:`.result_archive`)."""
     log = result.log
     settled = result.first_pulse_below(math.radians(0.5))
     times = {
         k: v * 1e3 if math.isfinite(v) else None for k, v in log.solve_time_percentiles().items()
     }
+    flight = flight_measures(result.flight)
     summary: dict[str, Any] = {
-        "title": problem.title,
-        "problem_file": str(problem.source),
-        "model": problem.model.name,
-        "model_hash": model_hash(problem.model),
+        "title": None if problem is None else problem.title,
+        "problem_file": None if problem is None else str(problem.source),
+        "model": result.flight.model_name,
+        "model_hash": None if problem is None else model_hash(problem.model),
         "controller": result.controller,
         "status": result.flight.status.value,
         "message": result.flight.message,
         "pulses": result.pulses,
-        "duration_s": problem.duration,
+        "duration_s": None if problem is None else problem.duration,
         "coning_initial_deg": math.degrees(result.coning[0]),
         "coning_final_deg": math.degrees(result.coning[-1]),
         "coning_below_0.5deg_from_pulse": settled,
         "max_coning_after_pulse_25_deg": (
             math.degrees(result.max_coning_after(25)) if result.coning.size > 25 else None
         ),
+        "max_coning_deg": math.degrees(float(np.max(result.coning))),
         "max_tilt_deg": math.degrees(float(np.max(result.tilt))),
         "final_tilt_deg": math.degrees(result.tilt[-1]),
         "max_offset_cm": float(np.max(result.offset)) * 100 if result.offset.size else None,
         "max_altitude_m": float(np.max(result.flight.state("r_L")[:, 2])),
+        **{
+            k: flight[k]
+            for k in (
+                "apogee_time_s",
+                "top_speed_mps",
+                "landing_speed_mps",
+                "energy_captured_J",
+                "capture_margin_m",
+            )
+        },
         "rcs_used_g": float(result.rcs_used[-1]) * 1e3,
         "pulses_dropped": int(np.sum(result.dropped)),
         "final_position_m": result.flight.state("r_L")[-1].tolist(),
         "steps_by_status": {s.value: log.count(s) for s in ControllerStatus if log.count(s)},
         "fallbacks": int(np.sum(log.fallbacks)),
-        "faults_injected": len(problem.loop.faults),
+        "faults_injected": None if problem is None else len(problem.loop.faults),
         "solve_time_ms": times,
         "step_time_median_ms": (
             float(np.median(log.step_time)) * 1e3 if log.step_time.size else None
@@ -108,4 +125,5 @@ def write_closed_loop_summary(
         "iterations_max": int(np.max(log.iterations)) if log.iterations.size else 0,
     }
     path.write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
+    write_archive(result, path.parent)
     return summary

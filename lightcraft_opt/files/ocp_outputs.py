@@ -8,23 +8,36 @@ written too: its status is in the summary, its last iterate in the CSV.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from lightcraft_opt.files.problem import ProblemFile, objective_names
+from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS, finite_or_none, model_hash
-from lightcraft_opt.layout import ENGINE, PARAMETERS, VectorLayout
-from lightcraft_opt.ocp.problem import CaptureFraction, OcpProblem
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.ocp.problem import (
+    CaptureFraction,
+    EnergyBudget,
+    NoGroundContact,
+    OcpProblem,
+    RcsEnvelope,
+    TerminalAltitude,
+    TerminalState,
+    TiltLimit,
+)
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.invariants import build_invariants
 
 __all__ = [
     "capture_fractions",
+    "constraint_margins",
     "engine_columns",
     "input_columns",
+    "node_tilt",
     "solution_columns",
     "write_ocp_summary",
     "write_solution_csv",
@@ -105,15 +118,63 @@ def _cell(value: float, *, integer: bool = False) -> str:
     return str(int(value)) if integer else f"{value:.12g}"
 
 
+def node_tilt(result: OcpResult, problem: OcpProblem) -> np.ndarray:
+    """(N + 1,) angle of b1 from L up at the nodes [rad]."""
+    _, _, tilt, _, _ = build_invariants().map(len(result.t))(result.x.T, problem.p)
+    return np.asarray(tilt).ravel()
+
+
+def constraint_margins(result: OcpResult, problem: OcpProblem) -> list[dict[str, Any]]:
+    """Each constraint of ``problem`` with its margin at the returned iterate: the smallest
+    slack over the horizon (positive: met with room to spare, negative: violated), in the
+    unit named by ``unit``. The path constraints are read where the transcription poses
+    them: tilt and ground clearance at nodes 1..N, the capture fraction at every pulse.
+    An RCS envelope's margin is null (its slack is in the NLP's own form)."""
+    z = result.state("r_L")[:, 2]
+    out: list[dict[str, Any]] = []
+    for con in problem.constraints:
+        margin: float | None
+        match con:
+            case CaptureFraction():
+                f = capture_fractions(result, problem)
+                name, unit = "capture_fraction", "-"
+                margin = float(con.fraction - np.max(f)) if f.size else None
+            case TiltLimit():
+                name, unit = "tilt_limit", "deg"
+                margin = math.degrees(con.max_tilt - float(np.max(node_tilt(result, problem)[1:])))
+            case NoGroundContact():
+                name, unit = "no_ground_contact", "m"
+                margin = float(np.min(z[1:]) - con.clearance)
+            case TerminalAltitude():
+                name, unit = "terminal_altitude", "m"
+                margin = float(min(z[-1] - con.minimum, con.maximum - z[-1]))
+            case TerminalState():
+                name, unit = f"terminal_state_{con.slot}", STATE.slot(con.slot).unit
+                x = np.atleast_1d(result.state(con.slot)[-1])
+                slack = np.minimum(x - np.array(con.lower), np.array(con.upper) - x)
+                margin = float(np.min(slack))
+            case EnergyBudget():
+                name, unit = "energy_budget", "J"
+                margin = float(con.total - result.laser_energy)
+            case RcsEnvelope():
+                name, unit, margin = "rcs_envelope", "N", None
+        value = None if margin is None else finite_or_none(margin)  # inf: unbounded
+        out.append({"constraint": name, "margin": value, "unit": unit})
+    return out
+
+
 def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:
     """summary.json: how the solve went (status, cost and its terms by name, iterations,
     times), what it asked (solver, horizon) and what it achieved (laser energy, final
-    altitude, largest beam offset over the capture radius against its limit, constraint
-    violation)."""
+    altitude, largest beam offset over the capture radius against its limit, largest
+    tilt, RCS propellant and liner used, each constraint's margin
+    (:func:`constraint_margins`), constraint violation). Beside it, result.json and
+    result.npz: the exact result (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
     fractions = capture_fractions(result, problem)
     limits = [c.fraction for c in problem.constraints if isinstance(c, CaptureFraction)]
     r_L = result.state("r_L")
+    rcs, liner = result.state("rcs_mass"), result.state("liner_mass")
     summary: dict[str, Any] = {
         "title": problem_file.title,
         "problem_file": str(problem_file.source),
@@ -139,7 +200,12 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
         "max_offset_over_capture_radius": float(np.max(fractions)) if fractions.size else 0.0,
         "capture_fraction_limit": min(limits) if limits else None,
+        "max_tilt_deg": math.degrees(float(np.max(node_tilt(result, problem)))),
+        "propellant_used_kg": float(rcs[0] - rcs[-1]),
+        "liner_used_kg": float(liner[0] - liner[-1]),
+        "constraint_margins": constraint_margins(result, problem),
         "constraint_violation": finite_or_none(result.constraint_violation),
     }
     path.write_text(json.dumps(summary, indent=2) + "\n")
+    write_archive(result, path.parent)
     return summary

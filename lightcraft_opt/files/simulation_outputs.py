@@ -14,12 +14,14 @@ from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
     "finite_or_none",
+    "flight_measures",
     "model_hash",
     "write_pulses_csv",
     "write_summary",
@@ -89,11 +91,14 @@ PULSE_COLUMNS = (
     "pointing_east_m",
     "pointing_north_m",
     "focus_m",
+    "beam_gap_m",
 )
 
 
 def write_pulses_csv(result: SimulationResult, path: Path) -> None:
-    """One row per pulse, columns :data:`PULSE_COLUMNS` (impulses in B, offsets in L)."""
+    """One row per pulse, columns :data:`PULSE_COLUMNS` (impulses in B, offsets in L;
+    beam_gap_m: the beam-to-optic clearance, negative while they overlap, NaN for a pulse
+    not fired)."""
     rec = result.pulses
     if rec is None:
         raise ValueError("this result has no pulse record (a coast without the laser)")
@@ -107,28 +112,49 @@ def write_pulses_csv(result: SimulationResult, path: Path) -> None:
             rec.engine,
             rec.u[:, PULSE_INPUT.index("pointing_L")],
             rec.u[:, PULSE_INPUT.index("focus")],
+            np.full(n, np.nan) if rec.beam_gap is None else rec.beam_gap,
         ]
     )
     np.savetxt(path, table, delimiter=",", header=",".join(PULSE_COLUMNS), comments="", fmt="%.12g")
 
 
+def flight_measures(result: SimulationResult) -> dict[str, Any]:
+    """The figures of a flight that summary.json holds, the unit in each key: apogee and
+    its time, air time, top speed, landing speed (null unless it landed), largest tilt
+    and coning, pulses fired, energy captured (sum over the pulses), capture margin
+    (:attr:`~lightcraft_opt.simulation.result.SimulationResult.capture_margin`, null
+    without a fired pulse), final position."""
+    margin, landing = result.capture_margin, result.landing_speed
+    return {
+        "apogee_m": result.apogee,
+        "apogee_time_s": result.apogee_time,
+        "air_time_s": result.air_time,
+        "top_speed_mps": result.top_speed,
+        "landing_speed_mps": landing,
+        "final_position_m": result.state("r_L")[-1].tolist(),
+        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt)),
+        "max_coning_deg": finite_or_none(math.degrees(result.max_coning)),
+        "pulses_fired": result.pulses_fired,
+        "energy_captured_J": result.energy_captured,
+        "capture_margin_m": margin,
+    }
+
+
 def write_summary(
-    result: SimulationResult, model: Model, path: Path, **extra: Any
+    result: SimulationResult, model: Model | None, path: Path, **extra: Any
 ) -> dict[str, Any]:
-    """summary.json: status, apogee, air time, model hash, plus ``extra`` entries."""
+    """summary.json: model and its hash (null without ``model``), status, the flight's
+    figures (:func:`flight_measures`), plus ``extra`` entries. Beside it, result.json and
+    result.npz (:mod:`.result_archive`): the exact result, for
+    :func:`~lightcraft_opt.files.results.load_result`."""
     summary: dict[str, Any] = {
-        "model": model.name,
-        "model_hash": model_hash(model),
+        "model": result.model_name if model is None else model.name,
+        "model_hash": None if model is None else model_hash(model),
         "status": result.status.value,
         "message": result.message,
-        "apogee_m": result.apogee,
-        "air_time_s": result.air_time,
-        "final_position_m": result.state("r_L")[-1].tolist(),
-        "max_tilt_deg": float(np.degrees(np.max(result.tilt))),
-        "pulses_fired": 0
-        if result.pulses is None
-        else int(np.sum(result.pulses.u[:, PULSE_INPUT.index("energy")] > 0)),
+        **flight_measures(result),
         **extra,
     }
-    path.write_text(json.dumps(summary, indent=2) + "\n")
+    path.write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
+    write_archive(result, path.parent)
     return summary

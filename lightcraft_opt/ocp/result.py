@@ -12,6 +12,7 @@ from enum import Enum
 import numpy as np
 
 from lightcraft_opt.layout import STATE, VectorLayout
+from lightcraft_opt.presenters import Presentable
 
 __all__ = ["OcpResult", "OcpStatus"]
 
@@ -28,7 +29,7 @@ class OcpStatus(Enum):
 
 
 @dataclass(frozen=True, eq=False)
-class OcpResult:
+class OcpResult(Presentable):
     """An optimal control solve: optimal inputs, predicted trajectory, how it went.
 
     Attributes
@@ -96,3 +97,29 @@ class OcpResult:
     def laser_energy(self) -> float:
         """Total energy the laser fires over the horizon [J]."""
         return float(np.sum(self.input("energy")))
+
+    def summary(self) -> str:
+        """The solve on one screen: how it ended, then what it achieved, with units."""
+        r = self.state("r_L")
+        width = max(len(n) for n in ("status", "cost", "final position"))
+        rows = [
+            ("status", f"{self.status.value} ({self.message})"),
+            ("solver", f"{self.solver}, {self.iterations} iterations"),
+            ("times", f"solve {self.solve_time:.3f} s, build {self.build_time:.3f} s"),
+            ("cost", f"{self.cost:.6g} (terms {np.array2string(self.cost_terms, precision=4)})"),
+            ("violation", f"{self.constraint_violation:.3g} (scaled)"),
+            ("horizon", f"{self.horizon} pulses, {float(self.t[-1] - self.t[0]):.3f} s"),
+            ("laser energy", f"{self.laser_energy:.2f} J"),
+            ("final altitude", f"{float(r[-1, 2]):.3f} m"),
+            ("max drift", f"{float(np.max(np.hypot(r[:, 0], r[:, 1]))):.4f} m"),
+            ("final position", f"({r[-1, 0]:.3f}, {r[-1, 1]:.3f}, {r[-1, 2]:.3f}) m"),
+        ]
+        width = max(len(n) for n, _ in rows)
+        return "\n".join(["OcpResult", *(f"  {n:<{width}}  {v}" for n, v in rows)])
+
+    def __repr__(self) -> str:
+        return (
+            f"<OcpResult {self.status.value}: cost {self.cost:.6g}, {self.iterations} "
+            f"iterations, {self.horizon} pulses, laser energy {self.laser_energy:.1f} J, "
+            f"final altitude {float(self.state('r_L')[-1, 2]):.3f} m>"
+        )

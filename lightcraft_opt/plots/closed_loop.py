@@ -21,6 +21,7 @@ from lightcraft_opt.control.result import ClosedLoopResult
 
 __all__ = [
     "closed_loop_figures",
+    "compare_closed_loops",
     "plot_closed_loop_coning",
     "plot_closed_loop_offset",
     "plot_closed_loop_rcs",
@@ -30,7 +31,12 @@ __all__ = [
 
 TIME_LABEL = "time [s]"
 #: Colour of each controller, so that the figures of one problem agree.
-CONTROLLER_COLORS = {"mpc": "tab:blue", "lqr": "tab:orange", "none": "0.45"}
+CONTROLLER_COLORS = {
+    "mpc": "tab:blue",
+    "lqr": "tab:orange",
+    "director": "tab:green",
+    "none": "0.45",
+}
 
 
 def _axes(ax: Axes | None) -> Axes:
@@ -130,6 +136,37 @@ def plot_solve_times(
     return artists
 
 
+def _panels(results: list[ClosedLoopResult], capture_radius: float | None) -> tuple[Figure, Any]:
+    """The 2 x 2 of coning, tilt, offset and RCS use with every result drawn in it."""
+    fig = Figure(figsize=(11, 7.5), layout="constrained")
+    axs = fig.subplots(2, 2, sharex=True)
+    for i, result in enumerate(results):
+        last = i == len(results) - 1
+        plot_closed_loop_coning(result, ax=axs[0, 0], threshold_deg=0.5 if last else None)
+        plot_closed_loop_tilt(result, ax=axs[0, 1])
+        radius = capture_radius if last else None
+        plot_closed_loop_offset(result, ax=axs[1, 0], capture_radius=radius)
+        plot_closed_loop_rcs(result, ax=axs[1, 1])
+    for ax in axs[0]:
+        ax.set_xlabel("")
+        ax.tick_params(labelbottom=False)
+    axs[0, 0].legend(loc="upper right", fontsize=9)
+    return fig, axs
+
+
+def compare_closed_loops(
+    results: list[ClosedLoopResult], *, title: str = "", capture_radius: float | None = None
+) -> Figure:
+    """The flights of several controllers on one figure (coning, tilt, offset, RCS use;
+    one line per controller, labelled and coloured by its name), like
+    :func:`closed_loop_figures`' closed_loop.png."""
+    fig, _ = _panels(results, capture_radius)
+    said = ", ".join(f"{r.controller} {r.flight.status.value}" for r in results)
+    name = title or (results[0].flight.model_name if results else "")
+    fig.suptitle(f"{name}: {said}")
+    return fig
+
+
 def closed_loop_figures(
     result: ClosedLoopResult,
     *,
@@ -139,16 +176,7 @@ def closed_loop_figures(
 ) -> dict[str, Figure]:
     """Every figure of a closed-loop flight by file name: closed_loop.png (coning, tilt,
     offset, RCS use in a 2 x 2) and solve_times.png (the histogram)."""
-    fig = Figure(figsize=(11, 7.5), layout="constrained")
-    axs = fig.subplots(2, 2, sharex=True)
-    plot_closed_loop_coning(result, ax=axs[0, 0])
-    plot_closed_loop_tilt(result, ax=axs[0, 1])
-    plot_closed_loop_offset(result, ax=axs[1, 0], capture_radius=capture_radius)
-    plot_closed_loop_rcs(result, ax=axs[1, 1])
-    for ax in axs[0]:
-        ax.set_xlabel("")
-        ax.tick_params(labelbottom=False)
-    axs[0, 0].legend(loc="upper right", fontsize=9)
+    fig, _ = _panels([result], capture_radius)
     fallbacks = int(np.sum(result.log.fallbacks))
     fig.suptitle(
         f"{title or result.flight.model_name}: {result.controller}, "

@@ -22,7 +22,12 @@ _OFFSET = ENGINE.slot("offset_L")
 
 
 def beam_gap(
-    offset_L: np.ndarray, side: float, capture_radius: float, profile: BeamProfile
+    offset_L: np.ndarray,
+    side: float,
+    capture_radius: float,
+    profile: BeamProfile,
+    *,
+    signed: bool = False,
 ) -> float:
     """Clearance between the beam's footprint and the optic, in the plane across the beam [m].
 
@@ -40,6 +45,10 @@ def beam_gap(
     side : beam size at the craft, :func:`~lightcraft_opt.symbolic.beam.beam_side` [m].
     capture_radius : outer radius of the optic [m].
     profile : the beam's transverse profile.
+    signed : an optic centre over the footprint counts its depth inside: the distance from
+        the centre to the footprint's edge is negative there (0 by default), so the gap
+        keeps falling below ``-capture_radius`` as the optic centres (its sign, hence the
+        end-of-flight rule, is the same either way).
 
     Returns
     -------
@@ -50,8 +59,12 @@ def beam_gap(
     half = 0.5 * side
     if profile is BeamProfile.HOLLOW_SQUARE:
         reach = math.hypot(max(east - half, 0.0), max(north - half, 0.0))
+        inside = max(east, north) - half
     else:
         reach = max(math.hypot(east, north) - half, 0.0)
+        inside = math.hypot(east, north) - half
+    if signed and inside < 0.0:
+        reach = inside
     return reach - capture_radius
 
 
@@ -95,6 +108,8 @@ class FlightLog:
         self.pulse_t: list[float] = []
         self.pulse_u: list[np.ndarray] = []
         self.pulse_e: list[np.ndarray] = []
+        #: beam_gap at each pulse [m]; NaN where none fired
+        self.pulse_gap: list[float] = []
         self.status, self.message = SimulationStatus.DURATION_REACHED, ""
         self.outside = 0
         self.on_pad = bool(x0[Z_UP] <= 0.0 and x0[_V_UP] <= 0.0)
@@ -120,6 +135,7 @@ class FlightLog:
         self.pulse_t.append(t)
         self.pulse_u.append(u)
         self.pulse_e.append(np.zeros(n_engine))
+        self.pulse_gap.append(math.nan)
         self.times.append(t + self.period)
         self.states.append(np.array(x, dtype=float))
         self.status = SimulationStatus.NEVER_FIRED
@@ -140,6 +156,12 @@ class FlightLog:
         self.pulse_t.append(t)
         self.pulse_u.append(u)
         self.pulse_e.append(eng)
+        fired = bool(u[self.i_energy] > 0)
+        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser)) if fired else 0.0
+        offset = eng[_OFFSET.start : _OFFSET.stop]
+        radius = float(PARAMETERS.get("capture_radius", self.p))
+        gap = beam_gap(offset, side, radius, self.laser.profile, signed=True) if fired else math.nan
+        self.pulse_gap.append(gap)
         X = X.T
         tb = t + self.period * np.arange(1, len(X) + 1) / len(X)
         keep = tb <= self.duration + 1e-12
@@ -156,12 +178,9 @@ class FlightLog:
             return True
         self.times.extend(tb[keep])
         self.states.extend(X[keep])
-        if u[self.i_energy] <= 0:  # a dropped pulse neither counts nor resets the count
+        if not fired:  # a dropped pulse neither counts nor resets the count
             return False
-        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser))
-        offset = eng[_OFFSET.start : _OFFSET.stop]
-        radius = float(PARAMETERS.get("capture_radius", self.p))
-        outside = beam_gap(offset, side, radius, self.laser.profile) > 0.0
+        outside = gap > 0.0
         self.outside = self.outside + 1 if outside else 0
         if self.outside < LEFT_BEAM_PULSES:
             return False

@@ -145,6 +145,7 @@ def simulate(
         t=np.asarray(flight.pulse_t),
         u=np.asarray(flight.pulse_u).reshape(-1, lay.size),
         engine=np.asarray(flight.pulse_e).reshape(len(flight.pulse_t), -1),
+        beam_gap=np.asarray(flight.pulse_gap, dtype=float),
     )
     states = np.vstack(flight.states)
     return flight_result(

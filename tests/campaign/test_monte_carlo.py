@@ -9,6 +9,7 @@ the MPC's order independence is checked run by run in one process."""
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 import signal
@@ -65,6 +66,26 @@ def test_serial_campaign_is_complete_and_physical(serial, campaign):
     assert np.all(t["max_tilt_rad"] >= np.abs(t["tilt_rad"]) - 1e-9)
     for name in ("campaign.json", "timings.csv", "summary.json"):
         assert (serial.out_dir / name).exists()
+
+
+def test_the_campaign_folder_reads_back_as_its_result(serial, tmp_path):
+    """load_result of the folder run_campaign wrote (no result.json): the same table and
+    statistics; save() into another folder copies the files and archives the result
+    exactly (made, engine, elapsed too); summary() is text, summary["..."] the dict."""
+    from lightcraft_opt import load_result
+
+    back = load_result(serial.out_dir)
+    assert back.complete and back.runs == RUNS and back.skipped == RUNS
+    assert dict(back.summary) == json.loads((serial.out_dir / "summary.json").read_text())
+    for name, column in serial.table.items():
+        np.testing.assert_array_equal(back.table[name], column, err_msg=name)
+    serial.save(tmp_path, figures=False)
+    again = load_result(tmp_path)
+    assert (again.made, again.engine, again.elapsed) == (RUNS, serial.engine, serial.elapsed)
+    assert (tmp_path / "runs.csv").read_bytes() == _bytes(serial.out_dir)
+    text = serial.summary()
+    assert f"{RUNS} runs, complete" in text and " m (range " in text
+    assert "\n" not in repr(serial)
 
 
 def test_local_processes_give_the_identical_table(serial, campaign, tmp_path):

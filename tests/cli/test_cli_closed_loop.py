@@ -125,6 +125,8 @@ def test_none_writes_every_file(tmp_path, capsys):
         "pulses.csv",
         "steps.csv",
         "summary.json",
+        "result.json",
+        "result.npz",
         "closed_loop.png",
         "solve_times.png",
     }
@@ -138,6 +140,21 @@ def test_none_writes_every_file(tmp_path, capsys):
     assert summary["coning_below_0.5deg_from_pulse"] is None
     assert summary["coning_final_deg"] > 4.5
     assert summary["pulses_dropped"] >= 1  # 5 % of 26 pulses, seed 1: pulse 1
+    # the folder reads back as the very result: its numbers are the summary's
+    from lightcraft_opt import ClosedLoopResult, load_result
+
+    loaded = load_result(out)
+    assert isinstance(loaded, ClosedLoopResult) and loaded.pulses == 26
+    assert summary["coning_final_deg"] == math.degrees(loaded.coning[-1])
+    assert summary["max_coning_deg"] == math.degrees(np.max(loaded.coning))
+    assert summary["energy_captured_J"] == np.sum(loaded.flight.pulses.energy_captured)
+    pulses = np.genfromtxt(out / "pulses.csv", delimiter=",", names=True)
+    assert summary["energy_captured_J"] == pytest.approx(np.sum(pulses["energy_captured_J"]))
+    fired = pulses["energy_J"] > 0
+    assert summary["capture_margin_m"] == pytest.approx(-np.max(pulses["beam_gap_m"][fired]))
+    z = loaded.flight.state("r_L")[:, 2]
+    assert summary["apogee_time_s"] == loaded.flight.t[np.argmax(z)]
+    assert "ClosedLoopResult of flight5" in loaded.summary() and "\n" not in repr(loaded)
     printed = capsys.readouterr().out
     assert "deg (never below 0.5 deg), max tilt" in printed and "None" not in printed
 
@@ -198,3 +215,49 @@ def test_bad_files_name_the_key_and_exit_2(tmp_path, capsys, text, key):
         load_closed_loop(src)
     assert main(["closed-loop", str(src), "--controller", "none", "--out", str(tmp_path)]) == 2
     assert key in capsys.readouterr().err
+
+
+def test_several_controllers_fly_into_one_folder_each_and_overlay(tmp_path, monkeypatch, capsys):
+    """``--controller none,lqr``: each flies into <out>/<name>/ with the usual files, and
+    <out>/compare.png overlays them; the LQR is a stand-in (the open loop under the name
+    "lqr"), so no linear model is built. Each folder reads back as its controller's
+    result, the same flight as the one printed."""
+    import lightcraft_opt.control.controllers as controllers
+    import lightcraft_opt.control.prediction_model as prediction_model
+    from lightcraft_opt import load_result
+
+    class StandIn(controllers.OpenLoopController):
+        name = "lqr"
+
+        def __init__(self, model, prediction, weights):  # type: ignore[no-untyped-def]
+            from lightcraft_opt.control.closed_loop import plant_options
+            from lightcraft_opt.layout import map_input_layout
+
+            rcs = len(model.craft.rcs.thrusters) if model.craft.rcs else 0
+            opts = plant_options(model)  # the plant's: phase-locked RCS levels
+            lay = map_input_layout(rcs, model.craft.has_carrier, opts.rcs_profile)
+            super().__init__(model, lay)
+
+    monkeypatch.setattr(prediction_model, "coning_model", lambda *args, **kw: None)
+    monkeypatch.setattr(controllers, "LqrController", StandIn)
+    out = tmp_path / "cmp"
+    argv = ["closed-loop", str(NUTATION), "--controller", "none,lqr", "--duration", "0.2"]
+    assert main([*argv, "--out", str(out)]) == 0
+    assert {p.name for p in out.iterdir()} == {"none", "lqr", "compare.png"}
+    for name in ("none", "lqr"):
+        summary = json.loads((out / name / "summary.json").read_text())
+        assert summary["controller"] == name and summary["pulses"] == 6
+        loaded = load_result(out / name)
+        assert loaded.controller == name and loaded.pulses == 6
+    printed = capsys.readouterr().out
+    assert "none, lqr overlaid" in printed
+
+
+@pytest.mark.parametrize(
+    ("value", "said"),
+    [("mpc,bogus", "unknown controller 'bogus'"), ("none,none", "listed twice")],
+)
+def test_a_bad_controller_list_is_a_usage_error(tmp_path, capsys, value, said):
+    argv = ["closed-loop", str(NUTATION), "--controller", value, "--out", str(tmp_path)]
+    assert main(argv) == 2
+    assert said in capsys.readouterr().err

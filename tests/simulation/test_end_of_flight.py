@@ -52,6 +52,20 @@ def test_beam_gap_is_the_clearance_between_footprint_and_optic(offset, profile, 
     assert beam_gap(np.array(offset), 0.08, 0.05, profile) == pytest.approx(gap, abs=1e-15)
 
 
+@pytest.mark.parametrize(
+    ("offset", "profile", "gap"),
+    [
+        ((0.02, 0.01), BeamProfile.HOLLOW_SQUARE, 0.02 - 0.04 - 0.05),  # 2 cm in from the east
+        ((0.0, 0.0), BeamProfile.HOLLOW_SQUARE, -0.04 - 0.05),
+        ((0.03, 0.0), BeamProfile.TOP_HAT, 0.03 - 0.04 - 0.05),
+        ((0.10, 0.0), BeamProfile.TOP_HAT, 0.10 - 0.04 - 0.05),  # outside: as unsigned
+    ],
+)
+def test_signed_beam_gap_counts_the_depth_over_the_footprint(offset, profile, gap):
+    got = beam_gap(np.array(offset), 0.08, 0.05, profile, signed=True)
+    assert got == pytest.approx(gap, abs=1e-15)
+
+
 def test_a_huge_offset_leaves_the_beam_at_the_first_pulses(flight5):
     """``lightcraft simulate models/flight5.toml --offset-east-cm 1e12``: outside the beam
     from the first pulse, the flight ends after LEFT_BEAM_PULSES pulses."""

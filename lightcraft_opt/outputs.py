@@ -1,0 +1,247 @@
+"""What each result draws and writes: the CLI's figures and files, registered with
+:mod:`lightcraft_opt.presenters` so that ``result.plot()`` and ``result.save(folder)``
+work from the capability layers, which never import the edges.
+
+An edge module above files/ and plots/ (they are independent siblings, and a save writes
+both); ``import lightcraft_opt`` imports it, so the registry is always filled. The plots
+are imported on the first ``plot()`` or ``save()``: matplotlib takes seconds to load and
+most programs never draw.
+
+Context keywords (what a figure or a file needs beyond the result):
+
+* SimulationResult: ``model`` (summary.json's model hash, the capture circle in
+  track.png), ``capture_radius`` [m]; other keywords go into summary.json (as the CLI's
+  ``launch_speed_mps``).
+* ClosedLoopResult: ``problem`` (a ClosedLoopProblem: title, file, hash, duration, the
+  capture radius and the solve budget), or ``title``, ``capture_radius``, ``budget`` [s].
+* OcpResult: ``problem``, a ProblemFile (from :func:`~lightcraft_opt.files.load_problem`)
+  or an OcpProblem (then ``options`` and ``title`` may be given too): required to save.
+* CalibrationResult: ``model`` (the report's model and hash), ``model_file`` (then the
+  fitted model file is written too).
+* CampaignResult: none; the campaign's files are copied from its folder.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from lightcraft_opt.calibration.result import CalibrationResult
+from lightcraft_opt.campaign.runner import MANIFEST, RUNS, SUMMARY, TIMINGS, CampaignResult
+from lightcraft_opt.control.result import ClosedLoopResult
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem
+from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
+from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
+from lightcraft_opt.files.problem import ProblemFile
+from lightcraft_opt.files.result_archive import write_archive
+from lightcraft_opt.files.simulation_outputs import (
+    write_pulses_csv,
+    write_summary,
+    write_trajectory_csv,
+)
+from lightcraft_opt.ocp.options import OcpOptions
+from lightcraft_opt.ocp.problem import OcpProblem
+from lightcraft_opt.ocp.result import OcpResult
+from lightcraft_opt.params import Model
+from lightcraft_opt.presenters import register
+from lightcraft_opt.simulation.result import SimulationResult
+
+__all__ = ["save_figures"]
+
+
+def save_figures(figures: Mapping[str, Any], folder: Path) -> None:
+    """Save each figure as ``folder``/its name at the CLI's resolution."""
+    from lightcraft_opt.plots.figures import PLOT_DPI
+
+    for name, fig in figures.items():
+        fig.savefig(folder / name, dpi=PLOT_DPI)
+
+
+def _draw(figures: bool, plot: Any, folder: Path, *args: Any, **context: Any) -> None:
+    """``plot(*args, **context)``'s figures saved into ``folder`` when ``figures``."""
+    if figures:
+        save_figures(plot(*args, **context), folder)
+
+
+def _folder(folder: Path) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+# --------------------------------------------------------------------------- flights
+def _flight_plot(
+    result: SimulationResult,
+    *,
+    model: Model | None = None,
+    capture_radius: float | None = None,
+    **_: Any,
+) -> dict[str, Any]:
+    from lightcraft_opt.plots.figures import flight_figures
+
+    if capture_radius is None and model is not None:
+        capture_radius = model.craft.engine.capture_radius
+    return flight_figures(result, capture_radius=capture_radius)
+
+
+def _flight_save(
+    result: SimulationResult,
+    folder: Path,
+    *,
+    figures: bool = True,
+    model: Model | None = None,
+    capture_radius: float | None = None,
+    **extra: Any,
+) -> Path:
+    _folder(folder)
+    if result.pulses is not None:
+        write_pulses_csv(result, folder / "pulses.csv")
+    write_trajectory_csv(result, folder / "trajectory.csv")
+    write_summary(result, model, folder / "summary.json", **extra)
+    _draw(figures, _flight_plot, folder, result, model=model, capture_radius=capture_radius)
+    return folder
+
+
+# --------------------------------------------------------------------------- closed loops
+def _loop_plot(
+    result: ClosedLoopResult,
+    *,
+    problem: ClosedLoopProblem | None = None,
+    title: str | None = None,
+    capture_radius: float | None = None,
+    budget: float | None = None,
+) -> dict[str, Any]:
+    from lightcraft_opt.plots.closed_loop import closed_loop_figures
+
+    if problem is not None:
+        title = problem.title if title is None else title
+        if capture_radius is None:
+            capture_radius = problem.model.craft.engine.capture_radius
+        if budget is None:
+            budgets = {"mpc": problem.mpc.time_budget, "director": problem.director.time_budget}
+            budget = budgets.get(result.controller)
+    return closed_loop_figures(
+        result, title=title or "", capture_radius=capture_radius, budget=budget
+    )
+
+
+def _loop_save(
+    result: ClosedLoopResult,
+    folder: Path,
+    *,
+    figures: bool = True,
+    problem: ClosedLoopProblem | None = None,
+    **context: Any,
+) -> Path:
+    _folder(folder)
+    write_trajectory_csv(result.flight, folder / "trajectory.csv")
+    write_pulses_csv(result.flight, folder / "pulses.csv")
+    write_steps_csv(result, folder / "steps.csv")
+    write_closed_loop_summary(result, problem, folder / "summary.json")
+    _draw(figures, _loop_plot, folder, result, problem=problem, **context)
+    return folder
+
+
+# --------------------------------------------------------------------------- solves
+def _problem_file(
+    problem: ProblemFile | OcpProblem | None, options: OcpOptions | None, title: str
+) -> ProblemFile:
+    if isinstance(problem, ProblemFile):
+        return problem
+    if isinstance(problem, OcpProblem):
+        return ProblemFile(problem, options or OcpOptions(), title, Path(""))
+    raise ParameterError(
+        "problem",
+        "OcpResult.save needs problem=: the ProblemFile (lightcraft_opt.load_problem) or "
+        "the OcpProblem solved (its parameters give the tilt, mass and capture fraction)",
+    )
+
+
+def _ocp_plot(
+    result: OcpResult,
+    *,
+    problem: ProblemFile | OcpProblem | None = None,
+    title: str | None = None,
+    **_: Any,
+) -> dict[str, Any]:
+    from lightcraft_opt.plots.ocp import ocp_figures
+
+    if isinstance(problem, ProblemFile):
+        title = problem.title if title is None else title
+        problem = problem.problem
+    return ocp_figures(result, problem, title=title or "")
+
+
+def _ocp_save(
+    result: OcpResult,
+    folder: Path,
+    *,
+    figures: bool = True,
+    problem: ProblemFile | OcpProblem | None = None,
+    options: OcpOptions | None = None,
+    title: str | None = None,
+) -> Path:
+    pf = _problem_file(problem, options, title or "")
+    _folder(folder)
+    write_solution_csv(result, pf.problem, folder / "solution.csv")
+    write_ocp_summary(result, pf, folder / "summary.json")
+    _draw(figures, _ocp_plot, folder, result, problem=pf, title=title)
+    return folder
+
+
+# --------------------------------------------------------------------------- fits
+def _fit_plot(result: CalibrationResult, **_: Any) -> dict[str, Any]:
+    from lightcraft_opt.plots.calibration import calibration_figures
+
+    return calibration_figures(result)
+
+
+def _fit_save(
+    result: CalibrationResult,
+    folder: Path,
+    *,
+    figures: bool = True,
+    model: Model | None = None,
+    model_file: str | Path | None = None,
+    **extra: Any,
+) -> Path:
+    _folder(folder)
+    if model_file is not None:
+        source = Path(model_file)
+        fitted = write_fitted_model(result, source, folder / f"{source.stem}-fitted.toml")
+        extra = {"model_file": str(source), "fitted_model_file": fitted.name, **extra}
+    write_calibration_report(result, model, folder / "fit_report.json", **extra)
+    _draw(figures, _fit_plot, folder, result)
+    return folder
+
+
+# --------------------------------------------------------------------------- campaigns
+def _campaign_plot(result: CampaignResult, *, title: str | None = None) -> dict[str, Any]:
+    from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
+
+    if title is None:
+        title = str(result.summary.get("title", ""))
+    return monte_carlo_figures(result.table, title=title)
+
+
+def _campaign_save(
+    result: CampaignResult, folder: Path, *, figures: bool = True, **context: Any
+) -> Path:
+    _folder(folder)
+    if folder.resolve() != Path(result.out_dir).resolve():
+        for name in (MANIFEST, RUNS, TIMINGS, SUMMARY):
+            if (Path(result.out_dir) / name).is_file():
+                shutil.copyfile(Path(result.out_dir) / name, folder / name)
+    write_archive(result, folder)
+    _draw(figures, _campaign_plot, folder, result, **context)
+    return folder
+
+
+register(SimulationResult, plot=_flight_plot, save=_flight_save)
+register(ClosedLoopResult, plot=_loop_plot, save=_loop_save)
+register(OcpResult, plot=_ocp_plot, save=_ocp_save)
+register(CalibrationResult, plot=_fit_plot, save=_fit_save)
+register(CampaignResult, plot=_campaign_plot, save=_campaign_save)
