@@ -170,7 +170,14 @@ def test_an_unconverged_solve_exits_1_and_still_writes_its_files(problem_file, t
     out = tmp_path / "out"
     argv = ["optimize", str(problem_file), "--out", str(out), "--horizon", "3"]
     assert main([*argv, "--solver", "sqp_qrqp", "--max-iter", "1"]) == 1
-    assert "max_iter" in capsys.readouterr().out
+    lines = capsys.readouterr().out.splitlines()
+    # progress without --verbose: iteration 0 (the start), then the outcome in words
+    assert lines[2].startswith("  iteration    0: objective ")
+    assert lines[3].startswith("max_iter: cost") and "may be infeasible" not in lines[3]
+    assert "the iteration limit (1) came before the constraints were met" in lines[3]
+    assert lines[-1] == (
+        "iteration limit (1) reached: not converged; run again with a larger --max-iter"
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "max_iter" and summary["success"] is False
     assert summary["solver"] == "sqp_qrqp" and summary["iterations"] == 1
