@@ -385,7 +385,9 @@ def _calibrate(args: argparse.Namespace) -> int:
         options=options,
         compiled=False if args.interpreted else None,
     )
-    fitted = write_fitted_model(result, source, out / f"{source.stem}-fitted.toml")
+    fitted = write_fitted_model(
+        result, source, out / f"{source.stem}-fitted.toml", track_file=args.track
+    )
     report = write_calibration_report(
         result,
         model,
