@@ -108,3 +108,26 @@ def test_the_progress_line_is_rewritten_on_a_terminal_and_thinned_elsewhere():
     assert lines[1] == "  iteration   10: objective 9.09091, infeasibility 1.00e-10"
     assert "\n" not in terminal.getvalue() and terminal.getvalue().count("\r") == 25
     assert terminal.getvalue().endswith("iteration   24: objective 4, infeasibility 1.00e-24\033[K")
+
+
+def test_one_vocabulary_across_the_files_and_its_page():
+    """pulses.csv and solution.csv name a pulse's quantities alike; no file writes an
+    angle in radians; docs/outputs.md names every column."""
+    from lightcraft_opt.campaign.dispersions import DISPERSED
+    from lightcraft_opt.campaign.spec import OUTPUT_COLUMNS
+    from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
+    from lightcraft_opt.files.ocp_outputs import solution_columns
+    from lightcraft_opt.files.simulation_outputs import PULSE_COLUMNS, TRAJECTORY_COLUMNS
+    from lightcraft_opt.layout import map_input_layout
+
+    solution = solution_columns(map_input_layout(4, True))
+    assert set(PULSE_COLUMNS) <= set(solution)
+    runs = [*(column for column, _ in DISPERSED.values()), *OUTPUT_COLUMNS]
+    every = {*TRAJECTORY_COLUMNS, *PULSE_COLUMNS, *solution, *STEP_COLUMNS, *runs}
+    assert not [c for c in every if c.endswith("_rad")]
+    page = (REPO_ROOT / "docs" / "outputs.md").read_text()
+    named = {c for c in every if f"`{c}`" in page}
+    # ranges written once: w1..w3, impulse and angular impulse b1..b3, RCS thrusters
+    ranged = {"w2_radps", "impulse_b2_Ns", "angular_impulse_b2_Nms", "angular_impulse_b3_Nms"}
+    ranged |= {f"rcs_thrust_{i}_N" for i in (2, 3, 4)}
+    assert every - named <= ranged, sorted(every - named - ranged)
