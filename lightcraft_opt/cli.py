@@ -1,4 +1,8 @@
-"""The ``lightcraft`` command line. Units at this edge: degrees, m/s."""
+"""The ``lightcraft`` command line. Units at this edge: degrees, m/s.
+
+:data:`DESCRIPTION` is what ``lightcraft --help`` shows; each ``add_<command>`` adds one
+subcommand with its own description and exit statuses.
+"""
 
 from __future__ import annotations
 
@@ -8,17 +12,21 @@ import json
 import math
 import os
 import sys
+import time
+import tomllib
 import traceback
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TextIO
 
+from lightcraft_opt import __version__
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, real, substeps
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.result import ClosedLoopResult
-from lightcraft_opt.errors import LightcraftError
+from lightcraft_opt.errors import LightcraftError, ProblemFileError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
@@ -45,12 +53,67 @@ from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
-__all__ = ["main"]
+__all__ = ["DESCRIPTION", "file_kind", "main"]
+
+DESCRIPTION = (
+    "Laser-propelled lightcraft flight: simulate a flight, solve an optimal control "
+    "problem, fly a closed loop under a controller, run a Monte Carlo campaign or fit a "
+    "model to a tracked flight. Each command reads one TOML file (models/, problems/) and "
+    "writes CSV, JSON and figures to an output folder named after it under runs/. Units "
+    "are in the names of flags and columns (degrees, cm, m/s). Exit status 0: done; 1: "
+    "not converged or ended early (files still written); 2: bad input."
+)
+
+#: What each kind of input file is, the command that reads it and how to tell it from its
+#: top-level keys (the first kind whose keys it has wins: a campaign file is a closed-loop
+#: file with [campaign] and [dispersions]).
+_KINDS = (
+    ("campaign", "a campaign file", "montecarlo", ("campaign", "dispersions")),
+    ("problem", "a problem file", "optimize", ("horizon_pulses", "objective")),
+    ("closed-loop", "a closed-loop file", "closed-loop", ("duration_s",)),
+    ("model", "a model file", "simulate", ("craft", "flight")),
+)
+#: The kinds each command reads.
+_READS = {
+    "simulate": ("model",),
+    "calibrate": ("model",),
+    "optimize": ("problem",),
+    "closed-loop": ("closed-loop",),
+    "montecarlo": ("campaign",),
+}
+
+
+def file_kind(path: str | Path) -> str | None:
+    """The kind of input file ``path`` is ("model", "problem", "closed-loop" or
+    "campaign") by its top-level keys; None when it cannot be read or has none of them
+    (its loader then says why)."""
+    try:
+        with open(path, "rb") as f:
+            keys = tomllib.load(f).keys()
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return None
+    return next((kind for kind, _, _, marks in _KINDS if any(k in keys for k in marks)), None)
+
+
+def _check_kind(path: str | Path, command: str) -> None:
+    """Raise ProblemFileError when ``path`` is a kind of file ``command`` does not read,
+    naming the command that does."""
+    kind = file_kind(path)
+    if kind is None or kind in _READS[command]:
+        return
+    what, other = next((what, cmd) for k, what, cmd, _ in _KINDS if k == kind)
+    wanted = " or ".join(next(w for k, w, _, _ in _KINDS if k == r) for r in _READS[command])
+    raise ProblemFileError(
+        str(path),
+        None,
+        f"this is {what}, not {wanted}: run lightcraft {other} {path}",
+    )
 
 
 def _simulate(args: argparse.Namespace) -> int:
+    _check_kind(args.model, "simulate")
     model = load_model(args.model)
-    out = output_folder(args.out)
+    out = output_folder(args.out or Path("runs") / Path(args.model).stem)
     x0 = initial_state(
         model,
         r_L=(args.offset_east_cm / 100, args.offset_north_cm / 100, 0.0),
@@ -87,6 +150,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
 def _optimize(args: argparse.Namespace) -> int:
     source = Path(args.problem)
+    _check_kind(source, "optimize")
     pf = load_problem(
         source,
         horizon=args.horizon,
@@ -103,13 +167,16 @@ def _optimize(args: argparse.Namespace) -> int:
         f"{options.solver.value} ({options.hessian.value} Hessian) ...",
         flush=True,
     )
-    compiled = CompiledOcp(problem, options)
+    progress = None if args.verbose else _progress_line(sys.stdout)
+    compiled = CompiledOcp(problem, options, progress=progress)
     limit = "none" if options.time_limit is None else f"{options.time_limit:g} s"
     print(
         f"built in {compiled.build_time:.1f} s; solving (wall-clock limit {limit}) ...",
         flush=True,
     )
     result = compiled.solve(initial_guess=pf.initial_guess())
+    if progress is not None and _in_place(sys.stdout):
+        print(flush=True)  # end the progress line
     print(
         f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
         f"{result.solve_time:.2f} s ({result.message})"
@@ -124,7 +191,41 @@ def _optimize(args: argparse.Namespace) -> int:
         f"{summary['final_altitude_m']:.3f} m, largest beam offset "
         f"{summary['max_offset_over_capture_radius']:.3f} of the capture radius -> {out}/"
     )
+    if result.status.value == "max_iter":
+        print(_ITERATION_LIMIT.format(n=options.max_iter))
     return 0 if result.success else 1
+
+
+#: What an iteration limit means, the last line of optimize and calibrate when it came.
+_ITERATION_LIMIT = (
+    "iteration limit ({n}) reached: not converged; run again with a larger --max-iter"
+)
+
+
+#: Iterations between two progress lines when they cannot be rewritten in place.
+PROGRESS_EVERY = 10
+
+
+def _in_place(stream: TextIO) -> bool:
+    """Whether ``stream`` is a terminal, where a progress line is rewritten in place."""
+    return bool(getattr(stream, "isatty", lambda: False)())
+
+
+def _progress_line(stream: TextIO) -> Callable[[int, float, float], None]:
+    """The solver's progress hook of ``lightcraft optimize``: iteration, objective and
+    constraint violation on one line, rewritten in place on a terminal, else printed
+    every :data:`PROGRESS_EVERY` iterations."""
+    in_place = _in_place(stream)
+
+    def show(iteration: int, objective: float, violation: float) -> None:
+        if not in_place and iteration % PROGRESS_EVERY:
+            return
+        line = f"  iteration {iteration:4d}: objective {objective:.6g}, "
+        line += f"infeasibility {violation:.2e}"
+        stream.write(f"\r{line}\033[K" if in_place else line + "\n")
+        stream.flush()
+
+    return show
 
 
 CONTROLLERS = ("mpc", "lqr", "director", "none")
@@ -148,6 +249,7 @@ def controller_list(text: str) -> tuple[str, ...]:
 def _closed_loop(args: argparse.Namespace) -> int:
     """Fly each listed controller; one folder each, plus an overlay (compare.png) in the
     parent --out when there are several."""
+    _check_kind(args.problem, "closed-loop")
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
     if args.deterministic or args.time_budget_ms is not None:
@@ -162,7 +264,10 @@ def _closed_loop(args: argparse.Namespace) -> int:
     single = len(names) == 1
     default = f"{source.stem}-{names[0]}" if single else f"{source.stem}-compare"
     out = output_folder(args.out or Path("runs") / default)
+    print(f"{problem.title!r}: building the plant's pulse map ...", flush=True)
+    start = time.perf_counter()
     plant = build_pulse_map(model, plant_options(model))
+    print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
     results = []
     for name in names:
         where = out if single else output_folder(out / name)
@@ -185,7 +290,13 @@ def _fly(problem: ClosedLoopProblem, plant: PulseMap, name: str, out: Path) -> C
     from lightcraft_opt.control.prediction_model import coning_model
 
     model = problem.model
-    print(f"building the plant and the {name} controller for {problem.title!r} ...")
+    if name != "none":
+        print(
+            f"building the {name} controller (its linear prediction model: ~25 s the first "
+            "time for a model, then read from the disk cache) ...",
+            flush=True,
+        )
+    start = time.perf_counter()
     assert plant.inputs is not None  # build_pulse_map always records it
     controller: Controller
     if name == "none":
@@ -205,6 +316,8 @@ def _fly(problem: ClosedLoopProblem, plant: PulseMap, name: str, out: Path) -> C
             controller = MpcController(model, problem.mpc, prediction=prediction)
         else:
             controller = LqrController(model, prediction, problem.mpc.weights)
+    if name != "none":
+        print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
     print(f"flying {problem.duration:g} s ...", flush=True)
     result = closed_loop(
         model,
@@ -234,6 +347,7 @@ def _fly(problem: ClosedLoopProblem, plant: PulseMap, name: str, out: Path) -> C
 def _montecarlo(args: argparse.Namespace) -> int:
 
     source = Path(args.problem)
+    _check_kind(source, "montecarlo")
     campaign = load_campaign(source, duration=args.duration)
     out = output_folder(args.out or Path("runs") / f"{source.stem}-seed{args.seed}")
     where = f"Dask at {args.scheduler}" if args.scheduler else "local processes"
@@ -273,6 +387,7 @@ def _counts(counts: dict[str, int]) -> str:
 def _calibrate(args: argparse.Namespace) -> int:
 
     source = Path(args.model)
+    _check_kind(source, "calibrate")
     model = load_model(source)
     track = read_track(args.track)
     initial = dict(args.initial)
@@ -297,7 +412,9 @@ def _calibrate(args: argparse.Namespace) -> int:
         options=options,
         compiled=False if args.interpreted else None,
     )
-    fitted = write_fitted_model(result, source, out / f"{source.stem}-fitted.toml")
+    fitted = write_fitted_model(
+        result, source, out / f"{source.stem}-fitted.toml", track_file=args.track
+    )
     report = write_calibration_report(
         result,
         model,
@@ -318,6 +435,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         f"{result.status.value} ({result.message}): {result.iterations} iterations, "
         f"{result.solve_time:.1f} s, residual sigma {1e3 * result.sigma:.2f} mm -> {out}/"
     )
+    if result.status.value == "max_iter":
+        print(_ITERATION_LIMIT.format(n=args.max_iter))
     return 0 if result.success else 1
 
 
@@ -356,10 +475,18 @@ RUNS = integer(1, 1_000_000, why="the summary reads every run's row into memory"
 
 def add_simulate(sub: argparse._SubParsersAction) -> None:
     """Add ``lightcraft simulate`` to the subcommands ``sub``."""
-    sim = sub.add_parser("simulate", help="simulate a flight from a model file")
+    sim = sub.add_parser(
+        "simulate",
+        help="simulate a flight from a model file",
+        description="Fly the model file's craft under the laser (or coasting, --coast-only) "
+        "from the pad or a given initial state until the duration, a landing or the loss of "
+        "the beam, and write trajectory.csv, pulses.csv, summary.json and figures. Exit "
+        "status 0: the flight was simulated (whatever ended it); 2: bad input or the "
+        "integration failed.",
+    )
     sim.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
     sim.add_argument("--duration", type=DURATION, default=10.0, help="seconds (default 10)")
-    sim.add_argument("--out", default="runs/out", help="output folder")
+    sim.add_argument("--out", default=None, help="output folder (default runs/<model name>)")
     sim.add_argument(
         "--launch-speed",
         type=LAUNCH_SPEED,
@@ -593,7 +720,8 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``lightcraft`` parser: one ``add_<command>`` per subcommand."""
-    parser = argparse.ArgumentParser(prog="lightcraft", description=__doc__)
+    parser = argparse.ArgumentParser(prog="lightcraft", description=DESCRIPTION)
+    parser.add_argument("--version", action="version", version=f"lightcraft {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for add in (add_simulate, add_optimize, add_closed_loop, add_montecarlo, add_calibrate):
         add(sub)

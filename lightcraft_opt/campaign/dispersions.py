@@ -31,11 +31,13 @@ from lightcraft_opt.errors import OptionError
 __all__ = [
     "DISPERSED",
     "DOMAINS",
+    "IN_DEGREES",
     "Dispersions",
     "Distribution",
     "Domain",
     "Normal",
     "Uniform",
+    "column_value",
     "domain_problem",
     "draw",
     "draw_many",
@@ -56,11 +58,19 @@ DISPERSED: dict[str, tuple[str, str]] = {
     ),
     "offset_east": ("offset_east_m", "added to the initial position, east [m, L]"),
     "offset_north": ("offset_north_m", "added to the initial position, north [m, L]"),
-    "tilt": ("tilt_rad", "an initial tilt composed on top of the file's attitude [rad]"),
-    "tilt_azimuth": ("tilt_azimuth_rad", "direction of that tilt, clockwise from north [rad]"),
+    "tilt": ("tilt_deg", "an initial tilt composed on top of the file's attitude [rad]"),
+    "tilt_azimuth": ("tilt_azimuth_deg", "direction of that tilt, clockwise from north [rad]"),
     "wind_speed": ("wind_speed_mps", "wind_speed_ref: the plant's reference wind [m/s]"),
-    "wind_direction_from": ("wind_direction_from_rad", "wind_direction_from [rad]"),
+    "wind_direction_from": ("wind_direction_from_deg", "wind_direction_from [rad]"),
 }
+#: The quantities drawn in radians and written to the run table in degrees (the column's
+#: unit): every file holds degrees.
+IN_DEGREES = frozenset(("tilt", "tilt_azimuth", "wind_direction_from"))
+
+
+def column_value(name: str, value: float) -> float:
+    """The drawn SI ``value`` of quantity ``name`` in its run-table column's unit."""
+    return math.degrees(value) if name in IN_DEGREES else value
 
 
 @dataclass(frozen=True)

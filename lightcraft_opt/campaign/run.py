@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lightcraft_opt.campaign.dispersions import draw, loop_seed
+from lightcraft_opt.campaign.dispersions import column_value, draw, loop_seed
 from lightcraft_opt.campaign.spec import (
     DISPERSED_PARAMETER,
     INTEGER_OUTPUTS,
@@ -76,7 +76,7 @@ def run_one(campaign: Campaign, seed: int, index: int) -> RunOutcome:
     for a failing run: its row has status ``error`` and the exception's message."""
     draws = draw(campaign.dispersions, seed, index)
     names = zip(campaign.dispersions.names, campaign.dispersions.columns, strict=True)
-    inputs: dict[str, Any] = {col: draws[name] for name, col in names}
+    inputs: dict[str, Any] = {col: column_value(name, draws[name]) for name, col in names}
     inputs["loop_seed"] = loop_seed(seed, index)
     start = time.perf_counter()
     try:
@@ -119,8 +119,8 @@ def row_problem(campaign: Campaign, seed: int, row: Mapping[str, str]) -> str | 
         value = _float(text)
         if value is None or not math.isfinite(value):
             return f"{column}: {text!r} is not a finite number"
-        if value != draws[name]:
-            return f"{column}: {text} is not run {index}'s draw {draws[name]!r}"
+        if value != column_value(name, draws[name]):
+            return f"{column}: {text} is not run {index}'s draw {column_value(name, draws[name])!r}"
     if row["loop_seed"] != str(loop_seed(seed, index)):
         return f"loop_seed: {row['loop_seed']!r} is not run {index}'s {loop_seed(seed, index)}"
     for column in OUTPUT_COLUMNS:
@@ -170,9 +170,9 @@ def _outputs(result: ClosedLoopResult) -> dict[str, Any]:
         "left_beam": int(flight.status is SimulationStatus.LEFT_BEAM),
         "pulses": result.pulses,
         "dropped_pulses": int(np.sum(result.dropped)),
-        "max_tilt_rad": float(np.max(flight.tilt)),
-        "max_coning_rad": float(np.max(flight.coning)),
-        "final_coning_rad": float(result.coning[-1]),
+        "max_tilt_deg": math.degrees(float(np.max(flight.tilt))),
+        "max_coning_deg": math.degrees(float(np.max(flight.coning))),
+        "final_coning_deg": math.degrees(float(result.coning[-1])),
         "max_offset_m": float(np.max(result.offset)) if result.offset.size else math.nan,
         "rcs_used_kg": float(result.rcs_used[-1]),
         "fallbacks": int(np.sum(log.fallbacks)),

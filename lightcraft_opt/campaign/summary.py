@@ -119,9 +119,9 @@ def campaign_summary(
             "probability": left / n if n else math.nan,
             "wilson_95": list(wilson_interval(left, n)),
         },
-        "max_tilt_deg": _stats(np.degrees(col("max_tilt_rad"))),
-        "max_coning_deg": _stats(np.degrees(col("max_coning_rad"))),
-        "final_coning_deg": _stats(np.degrees(col("final_coning_rad"))),
+        "max_tilt_deg": _stats(col("max_tilt_deg")),
+        "max_coning_deg": _stats(col("max_coning_deg")),
+        "final_coning_deg": _stats(col("final_coning_deg")),
         "max_offset_cm": _stats(100.0 * col("max_offset_m")),
         "rcs_used_g": _stats(1000.0 * col("rcs_used_kg")),
     }

@@ -1,12 +1,17 @@
 """Writing a calibration to disk: the fitted model file and the fit report (edge).
 
-The fitted model file is the original flight file's tables with each fitted value put in
-its key, in SI with the unit in the key (``impulse_per_pulse_ns``, ``blast_angle_rad``,
-``speed_ref_mps`` ...) so that it reloads to the very same float; the key it replaces
-(``blast_angle_deg``) is dropped. The site and laser paths are rewritten relative to the
-new file; a fitted beam divergence goes into a copy of the laser file beside it. The
-initial offset and tilt are not model parameters: they are in the report only. Comments
-of the original are not kept. The report (JSON) holds everything in
+The fitted model file is the original flight file's text, comments and all, with the line
+of each fitted value replaced in place: the value in SI with the unit in the key
+(``impulse_per_pulse_ns``, ``blast_angle_rad``, ``speed_ref_mps`` ...) so that it reloads
+to the very same float, marked by an end-of-line comment ``# fitted: <value> ± <std>
+<unit> (calibrate, <track file>); was <the old line's key = value>``. A value the file did
+not give is added at the end of its table (or in a new table). The site and laser paths
+are rewritten relative to the new file; a fitted beam divergence goes into a copy of the
+laser file beside it, edited the same way. Should the edited text not read back to the
+same tables as the original with the fitted values put in (a layout the line editor does
+not know, e.g. an inline table), the file is written from the tables instead, without the
+comments. The initial offset and tilt are not model parameters: they are in the report
+only. The report (JSON) holds everything in
 :class:`~lightcraft_opt.calibration.result.CalibrationResult` but the trajectories, with
 the unit in every key; a standard deviation that is infinite (not identifiable) is null.
 """
@@ -15,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -63,6 +69,21 @@ def _read(path: Path) -> dict[str, Any]:
         ) from err
 
 
+def _is_key_of(key: str, table: str, field: str) -> bool:
+    """Whether ``key`` gives ``field`` of the SCHEMA ``table`` (bare or with a unit)."""
+    units = QUANTITIES.get(SCHEMA[table][field].kind)
+    return key == field or bool(
+        units and key.startswith(field + "_") and key[len(field) + 1 :] in units
+    )
+
+
+def _si_key(table: str, field: str) -> str:
+    """The key of ``field`` in SI: ``blast_angle`` -> ``blast_angle_rad``."""
+    units = QUANTITIES.get(SCHEMA[table][field].kind)
+    si = next((u for u, f in units.items() if f == "1"), None) if units else None
+    return f"{field}_{si}" if si else field
+
+
 def _put(
     data: dict[str, Any], where: tuple[str, ...], table: str, field: str, value: float
 ) -> None:
@@ -70,15 +91,90 @@ def _put(
     node = data
     for name in where:
         node = node.setdefault(name, {})
-    kind = SCHEMA[table][field].kind
-    units = QUANTITIES.get(kind)
     for key in list(node):
-        if key == field or (
-            units and key.startswith(field + "_") and key[len(field) + 1 :] in units
-        ):
+        if _is_key_of(key, table, field):
             del node[key]
-    si = next((u for u, f in units.items() if f == "1"), None) if units else None
-    node[f"{field}_{si}" if si else field] = float(value)
+    node[_si_key(table, field)] = float(value)
+
+
+_HEADER = re.compile(r"^\s*\[\[?\s*([^\[\]#]+?)\s*\]\]?\s*(#.*)?$")
+_KEY = re.compile(r"^(\s*)([A-Za-z0-9_-]+)\s*=\s*(.*)$")
+
+
+def _sections(lines: list[str]) -> list[tuple[tuple[str, ...] | None, int, int]]:
+    """(table path, first line, end line) of each table of a TOML text: the root table
+    first (path ()), arrays of tables with path None (never edited)."""
+    out: list[tuple[tuple[str, ...] | None, int, int]] = []
+    path: tuple[str, ...] | None = ()
+    start = 0
+    for i, line in enumerate(lines):
+        m = _HEADER.match(line)
+        if m:
+            out.append((path, start, i))
+            array = line.lstrip().startswith("[[")
+            name = tuple(part.strip().strip('"') for part in m.group(1).split("."))
+            path, start = (None if array else name), i + 1
+    out.append((path, start, len(lines)))
+    return out
+
+
+def _set_line(
+    lines: list[str], where: tuple[str, ...], match: Any, key: str, value: str, note: str
+) -> None:
+    """Replace the line of table ``where`` whose key ``match(key)`` accepts by
+    ``key = value  # note`` (``note`` given the old ``key = value``), in place; add it at
+    the end of the table (or in a new table at the end of the text) when there is none."""
+    for path, start, end in _sections(lines):
+        if path != where:
+            continue
+        for i in range(start, end):
+            m = _KEY.match(lines[i])
+            if m and match(m.group(2)):
+                old = m.group(3).split("#", 1)[0].strip()
+                was = f"; was {m.group(2)} = {old}" if note else ""
+                comment = f"  # {note}{was}" if note else ""
+                lines[i] = f"{m.group(1)}{key} = {value}{comment}"
+                return
+        last = max((i for i in range(start, end) if lines[i].strip()), default=start - 1)
+        lines.insert(last + 1, f"{key} = {value}" + (f"  # {note}" if note else ""))
+        return
+    lines += ["", f"[{'.'.join(where)}]", f"{key} = {value}" + (f"  # {note}" if note else "")]
+
+
+def _edited(
+    text: str,
+    edits: list[tuple[tuple[str, ...], str, str, float, str]],
+    paths: Mapping[str, str],
+) -> str:
+    """``text`` with each (table path, SCHEMA table, field, SI value, note) of ``edits``
+    and each root key -> string of ``paths`` set by :func:`_set_line`."""
+    lines = text.splitlines()
+    for where, table, field, value, note in edits:
+        match = lambda k, t=table, f=field: _is_key_of(k, t, f)  # noqa: E731
+        _set_line(lines, where, match, _si_key(table, field), repr(float(value)), note)
+    for key, where_to in paths.items():
+        _set_line(lines, (), lambda k, key=key: k == key, key, json.dumps(where_to), "")
+    return "\n".join(lines) + "\n"
+
+
+def _write_edited(
+    path: Path,
+    header: list[str],
+    source_text: str,
+    edits: list[tuple[tuple[str, ...], str, str, float, str]],
+    paths: Mapping[str, str],
+    data: dict[str, Any],
+) -> None:
+    """Write ``source_text`` edited (:func:`_edited`) to ``path`` under ``header`` if it
+    reads back to ``data``; else ``data`` itself as TOML (module docstring)."""
+    text = "\n".join(header) + "\n" + _edited(source_text, edits, paths)
+    try:
+        same = tomllib.loads(text) == data
+    except tomllib.TOMLDecodeError:
+        same = False
+    if not same:
+        text = "\n".join([*header, *_toml(data)]) + "\n"
+    path.write_text(text, encoding="utf-8")
 
 
 def _toml_value(v: Any) -> str:
@@ -114,36 +210,53 @@ def _table_array(v: Any) -> bool:
     return isinstance(v, list) and bool(v) and all(isinstance(x, dict) for x in v)
 
 
-def write_fitted_model(result: CalibrationResult, model_file: str | Path, path: Path) -> Path:
+def write_fitted_model(
+    result: CalibrationResult,
+    model_file: str | Path,
+    path: Path,
+    *,
+    track_file: str | Path | None = None,
+) -> Path:
     """Write the fitted model file ``path`` (module docstring) from the flight file
-    ``model_file`` the fit started from; returns ``path``."""
+    ``model_file`` the fit started from; ``track_file`` (the tracked flight fitted) is
+    named in the fitted values' comments. Returns ``path``."""
     source = Path(model_file)
     data = _read(source)
+    text = source.read_text(encoding="utf-8")
     out_dir = path.parent
     laser_path = source.parent / data["laser"]
     laser: dict[str, Any] | None = None
+    laser_edits: list[tuple[tuple[str, ...], str, str, float, str]] = []
+    edits: list[tuple[tuple[str, ...], str, str, float, str]] = []
+    track = f", {Path(track_file).name}" if track_file is not None else ""
     header = [
-        f"# Fitted by `lightcraft calibrate` from {source.name}: {', '.join(result.names)}",
+        f"# Fitted by lightcraft calibrate from {source.name}{track}: {', '.join(result.names)}",
         f"# status {result.status.value}; see the fit report for standard deviations and flags.",
         "",
     ]
-    for name in result.names:
+    for i, name in enumerate(result.names):
         if name not in MODEL_KEYS:
             continue
         file, where, table, field, slot = MODEL_KEYS[name]
         value = float(result.p[PARAMETERS.slot(slot).start])
+        std = "not identifiable" if not np.isfinite(result.std[i]) else f"± {result.std[i]:.3g}"
+        note = f"fitted: {name} = {result.values[i]:.6g} {std} {result.units[i]} (calibrate{track})"
         if file == "laser":
             laser = laser if laser is not None else _read(laser_path)
             _put(laser, where, table, field, value)
+            laser_edits.append((where, table, field, value, note))
         else:
             _put(data, where, table, field, value)
+            edits.append((where, table, field, value, note))
     if laser is not None:
         fitted_laser = out_dir / f"{laser_path.stem}-fitted.toml"
-        fitted_laser.write_text("\n".join([*header, *_toml(laser)]) + "\n", encoding="utf-8")
+        laser_text = laser_path.read_text(encoding="utf-8")
+        _write_edited(fitted_laser, header, laser_text, laser_edits, {}, laser)
         laser_path = fitted_laser
     data["site"] = Path(os.path.relpath(source.parent / data["site"], out_dir)).as_posix()
     data["laser"] = Path(os.path.relpath(laser_path, out_dir)).as_posix()
-    path.write_text("\n".join([*header, *_toml(data)]) + "\n", encoding="utf-8")
+    paths = {"site": data["site"], "laser": data["laser"]}
+    _write_edited(path, header, text, edits, paths, data)
     return path
 
 

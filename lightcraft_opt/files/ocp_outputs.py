@@ -70,9 +70,9 @@ def input_columns(inputs: VectorLayout) -> list[str]:
 
 def engine_columns() -> list[str]:
     """Column names of Φ's engine outputs (energy_captured_J, impulse_b1_Ns ...,
-    offset_x_m, offset_y_m, liner_loss_kg, health), then capture_fraction."""
+    offset_x_m, offset_y_m, liner_loss_kg, health), then offset_over_capture_radius."""
     return [c for s in ENGINE.slots for c in _columns(s.name, s.size, s.unit)] + [
-        "capture_fraction"
+        "offset_over_capture_radius"
     ]
 
 
@@ -199,7 +199,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "final_position_m": r_L[-1].tolist(),
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
         "max_offset_over_capture_radius": float(np.max(fractions)) if fractions.size else 0.0,
-        "capture_fraction_limit": min(limits) if limits else None,
+        "max_offset_over_capture_radius_limit": min(limits) if limits else None,
         "max_tilt_deg": math.degrees(float(np.max(node_tilt(result, problem)))),
         "propellant_used_kg": float(rcs[0] - rcs[-1]),
         "liner_used_kg": float(liner[0] - liner[-1]),

@@ -85,7 +85,7 @@ def _flight(where: Path) -> SimulationResult:
         pc = {name: i for i, name in enumerate(PULSE_COLUMNS)}
         u = np.zeros((len(rows), PULSE_INPUT.size))
         u[:, PULSE_INPUT.slot("pointing_L").start : PULSE_INPUT.slot("pointing_L").stop] = rows[
-            :, [pc["pointing_east_m"], pc["pointing_north_m"]]
+            :, [pc["pointing_x_m"], pc["pointing_y_m"]]
         ]
         u[:, PULSE_INPUT.slot("focus").start] = rows[:, pc["focus_m"]]
         u[:, PULSE_INPUT.slot("energy").start] = rows[:, pc["energy_J"]]

@@ -1,7 +1,9 @@
 """Writing a simulated flight to disk: CSV, JSON summary (the edge).
 
-Column names carry their units (``z_m``, ``w1_radps``); positions are in L
-(x east, y north, z up), as docs/frames.md says.
+Column names carry their units (``z_m``, ``w1_radps``, angles in degrees); positions are
+in L (x east, y north, z up), as docs/frames.md says, vectors in B have components b1, b2,
+b3. The names are solution.csv's too (:mod:`.ocp_outputs`); docs/outputs.md lists every
+column and key of every file.
 """
 
 from __future__ import annotations
@@ -78,18 +80,18 @@ PULSE_COLUMNS = (
     "t_s",
     "energy_J",
     "energy_captured_J",
-    "impulse_axial_Ns",
+    "impulse_b1_Ns",
     "impulse_b2_Ns",
     "impulse_b3_Ns",
     "angular_impulse_b1_Nms",
     "angular_impulse_b2_Nms",
     "angular_impulse_b3_Nms",
-    "offset_east_m",
-    "offset_north_m",
+    "offset_x_m",
+    "offset_y_m",
     "liner_loss_kg",
     "health",
-    "pointing_east_m",
-    "pointing_north_m",
+    "pointing_x_m",
+    "pointing_y_m",
     "focus_m",
     "beam_gap_m",
 )

@@ -39,7 +39,14 @@ from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver, PredictionMap
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
-from lightcraft_opt.ocp.time_limit import Deadline, SolverCall, call_forked, call_solver, can_fork
+from lightcraft_opt.ocp.time_limit import (
+    Deadline,
+    Progress,
+    SolverCall,
+    call_forked,
+    call_solver,
+    can_fork,
+)
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.pulse_map import PulseMap
@@ -262,6 +269,8 @@ class CompiledOcp:
         ``problem.pulse_map_options(options.pulse_map)`` (the problem's RCS profile).
         Problems and solvers that share one Φ share the derivatives casadi caches on it,
         so only the first build pays for the exact Hessian.
+    progress : called at each iterate of IPOPT or sqpmethod with (iteration from 0,
+        objective, largest constraint violation in scaled units); fatrop calls none.
 
     Attributes
     ----------
@@ -281,6 +290,7 @@ class CompiledOcp:
         options: OcpOptions | None = None,
         *,
         pulse_map: PulseMap | None = None,
+        progress: Progress | None = None,
     ) -> None:
         if not isinstance(problem, OcpProblem):
             raise ParameterError("problem", f"must be an OcpProblem, got {problem!r}")
@@ -329,9 +339,18 @@ class CompiledOcp:
             problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives
         )
         # the deadline callback of IPOPT and sqpmethod (fatrop's solves are forked instead)
+        # and of the progress hook (if any)
         self._deadline = (
-            Deadline(tr.n_w, tr.lbg.size, int(tr.nlp["p"].numel()))
-            if opts.time_limit is not None and opts.solver is not OcpSolver.FATROP
+            Deadline(
+                tr.n_w,
+                tr.lbg.size,
+                int(tr.nlp["p"].numel()),
+                lbg=tr.lbg,
+                ubg=tr.ubg,
+                progress=progress,
+            )
+            if (opts.time_limit is not None or progress is not None)
+            and opts.solver is not OcpSolver.FATROP
             else None
         )
         name, solver_opts = _solver_options(opts, tr, self._deadline)
@@ -555,9 +574,12 @@ class CompiledOcp:
         if status not in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE) and viol > self.options.tol:
             message += f"; constraints violated by up to {viol:.3g} (scaled units) at the "
             message += (
-                "returned iterate: the problem may be infeasible"
-                if iterations
-                else "initial guess, returned as is"
+                "initial guess, returned as is"
+                if not iterations
+                else f"returned iterate: the iteration limit ({self.options.max_iter}) came "
+                "before the constraints were met (raise max_iter)"
+                if status is OcpStatus.MAX_ITER
+                else "returned iterate: the problem may be infeasible"
             )
         return OcpResult(
             status=status,

@@ -12,6 +12,10 @@ Three solvers, three mechanisms:
   Python code runs. :func:`call_forked` runs such a solve in a forked process and stops
   that process at the limit; the iterate is lost with it.
 
+The same callback reports progress: given a :attr:`Deadline.progress` hook, it passes the
+iteration number, the objective and the constraint violation of each iterate to it (the
+command line's progress line).
+
 Both calls return a :class:`SolverCall`: the solution (or None), the solver's statistics
 and whether the deadline ended it, never an exception for a failed solve.
 """
@@ -26,13 +30,14 @@ import signal
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, cast
 
 import casadi as ca
 import numpy as np
 
-__all__ = ["Deadline", "SolverCall", "call_forked", "call_solver", "can_fork"]
+__all__ = ["Deadline", "Progress", "SolverCall", "call_forked", "call_solver", "can_fork"]
 
 #: Solver statistics the result needs (ocp/solve.py reads them into an OcpStatus).
 _STATS = ("return_status", "iter_count", "success", "unified_return_status")
@@ -57,21 +62,41 @@ class SolverCall:
     deadline_reached: bool = False
 
 
+#: A progress hook: (iteration, objective, largest constraint violation) of an iterate.
+Progress = Callable[[int, float, float], None]
+
+
 class Deadline(ca.Callback):
     """casadi iteration callback that asks the NLP solver to stop once ``time.perf_counter()``
-    passes :attr:`deadline` (returns 1). Disarmed (deadline +inf) outside
-    :meth:`armed` calls, so calls of the compiled casadi.Function run unlimited.
+    passes :attr:`deadline` (returns 1), and tells :attr:`progress` (if any) of each
+    iterate. Disarmed (deadline +inf) outside :func:`call_solver` calls, so calls of the
+    compiled casadi.Function run unlimited.
 
     Parameters
     ----------
     n_x, n_g, n_p : sizes of the NLP's variables, constraints and parameters.
+    lbg, ubg : (n_g,) the constraints' bounds, for the violation :attr:`progress` is told
+        (scaled units, as OcpResult.constraint_violation); None: violation NaN.
+    progress : called with (iteration from 0, objective, violation) at each iterate.
     """
 
-    def __init__(self, n_x: int, n_g: int, n_p: int) -> None:
+    def __init__(
+        self,
+        n_x: int,
+        n_g: int,
+        n_p: int,
+        *,
+        lbg: np.ndarray | None = None,
+        ubg: np.ndarray | None = None,
+        progress: Progress | None = None,
+    ) -> None:
         ca.Callback.__init__(self)
         self._sizes = {"x": n_x, "f": 1, "g": n_g, "lam_x": n_x, "lam_g": n_g, "lam_p": n_p}
         self.deadline = math.inf
         self.reached = False
+        self.progress = progress
+        self.iteration = 0
+        self._bounds = None if lbg is None or ubg is None else (np.asarray(lbg), np.asarray(ubg))
         self.construct("ocp_deadline", {})
 
     def get_n_in(self) -> int:
@@ -90,10 +115,20 @@ class Deadline(ca.Callback):
         return ca.Sparsity.dense(self._sizes[ca.nlpsol_out(i)], 1)
 
     def eval(self, arg: Any) -> list[int]:
+        if self.progress is not None:
+            self.progress(self.iteration, float(arg[1]), self._violation(arg[2]))
+        self.iteration += 1
         if time.perf_counter() > self.deadline:
             self.reached = True
             return [1]
         return [0]
+
+    def _violation(self, g: Any) -> float:
+        if self._bounds is None:
+            return math.nan
+        lbg, ubg = self._bounds
+        gv = np.asarray(g, dtype=float).ravel()
+        return float(np.max(np.concatenate([lbg - gv, gv - ubg, np.zeros(1)])))
 
 
 def call_solver(
@@ -102,7 +137,7 @@ def call_solver(
     """Call ``solver`` (an nlpsol Function) on ``args`` in this process, ``deadline`` (if
     any) armed until ``until`` (a ``time.perf_counter()`` time, +inf for none)."""
     if deadline is not None:
-        deadline.deadline, deadline.reached = until, False
+        deadline.deadline, deadline.reached, deadline.iteration = until, False, 0
     try:
         sol = solver(**args)
     except RuntimeError as err:  # e.g. an evaluation error the solver did not catch

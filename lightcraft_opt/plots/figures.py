@@ -122,7 +122,7 @@ def track_figure(
     plot_track_xy(result, ax=ax_xy, capture_radius=capture_radius, length_unit=unit)
     dots = plot_pulse_offsets(result, ax=ax_xy, length_unit=unit)
     if dots:
-        fig.colorbar(dots[0], ax=ax_xy, shrink=0.85, label="captured / pulse energy [-]")
+        fig.colorbar(dots[0], ax=ax_xy, shrink=0.85, label="captured energy fraction [-]")
     ax_xy.legend(loc="best", fontsize=9)
     ax_xy.set_title("beam plane, seen from above")
     fig.suptitle(_title(result))

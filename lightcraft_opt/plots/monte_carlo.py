@@ -112,8 +112,8 @@ def plot_run_extremes(table: Table, *, axes: tuple[Axes, Axes] | None = None) ->
     status = _status(table)
     run = np.asarray(table["run"])
     artists: list[Any] = []
-    tilt = np.degrees(np.asarray(table["max_tilt_rad"], dtype=float))
-    coning = np.degrees(np.asarray(table["max_coning_rad"], dtype=float))
+    tilt = np.asarray(table["max_tilt_deg"], dtype=float)
+    coning = np.asarray(table["max_coning_deg"], dtype=float)
     offset = 100.0 * np.asarray(table["max_offset_m"], dtype=float)
     for name in sorted(set(status) - {"error"}):
         sel = status == name

@@ -177,7 +177,7 @@ def plot_pulse_offsets(
     result: SimulationResult, *, ax: Axes | None = None, length_unit: str = "cm"
 ) -> list[Any]:
     """Optic centre at each fired pulse (pointing_L + offset_L, east/north [length_unit]),
-    coloured by the fraction of the pulse energy the optic captured (0..1).
+    coloured by the captured energy fraction: captured over pulse energy (0..1).
 
     Nothing is drawn for a result without fired pulses.
     """

@@ -63,7 +63,7 @@ def test_serial_campaign_is_complete_and_physical(serial, campaign):
     assert np.all(np.abs(t["mass_kg"] / campaign.model.craft.mass - 1) <= 3 * 0.02 + 1e-12)
     assert np.corrcoef(t["mass_kg"], t["apogee_m"])[0, 1] < 0
     assert np.all(t["pulses"] == 8)
-    assert np.all(t["max_tilt_rad"] >= np.abs(t["tilt_rad"]) - 1e-9)
+    assert np.all(t["max_tilt_deg"] >= np.abs(t["tilt_deg"]) - np.degrees(1e-9))
     for name in ("campaign.json", "timings.csv", "summary.json"):
         assert (serial.out_dir / name).exists()
 

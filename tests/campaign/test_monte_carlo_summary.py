@@ -67,9 +67,9 @@ def _table(n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
         "landing_north_m": np.where(landed, north, np.nan),
     }
     for name in (
-        "max_tilt_rad",
-        "max_coning_rad",
-        "final_coning_rad",
+        "max_tilt_deg",
+        "max_coning_deg",
+        "final_coning_deg",
         "max_offset_m",
         "rcs_used_kg",
         "fallbacks",

@@ -114,7 +114,7 @@ def test_summary_json_figures_agree_with_the_trajectory_and_the_pulses(flight, s
     for row in rows[fired]:
         z_at = np.interp(row[col["t_s"]], flight.t, z)
         side = float(beam_side(z_at, row[col["focus_m"]], p, model.laser))
-        offset = row[[col["offset_east_m"], col["offset_north_m"]]]
+        offset = row[[col["offset_x_m"], col["offset_y_m"]]]
         gaps.append(beam_gap(offset, side, radius, model.laser.profile, signed=True))
     assert s["capture_margin_m"] == pytest.approx(-max(gaps), rel=1e-9)
     # near the axis: the capture radius plus about half the beam
