@@ -12,6 +12,8 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, real, substeps
@@ -21,7 +23,7 @@ from lightcraft_opt.files.calibration_outputs import write_calibration_report, w
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
-from lightcraft_opt.files.model import load_model
+from lightcraft_opt.files.model import load_model, load_record
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.simulation_outputs import (
@@ -30,17 +32,20 @@ from lightcraft_opt.files.simulation_outputs import (
     write_trajectory_csv,
 )
 from lightcraft_opt.files.track import read_track
-from lightcraft_opt.layout import initial_state
+from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
+from lightcraft_opt.params import Laser
 from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.plots.closed_loop import closed_loop_figures
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
+from lightcraft_opt.plots.flight3d import BeamSize
 from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
@@ -74,7 +79,13 @@ def _simulate(args: argparse.Namespace) -> int:
     write_trajectory_csv(result, out / "trajectory.csv")
     summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
     # Figures not registered with pyplot: nothing to close, freed with the dict.
-    figures = flight_figures(result, capture_radius=model.craft.engine.capture_radius)
+    figures = flight_figures(
+        result,
+        capture_radius=model.craft.engine.capture_radius,
+        record=load_record(args.model),
+        laser=model.laser,
+        beam_size=_beam_size(model.laser, parameter_values(model)),
+    )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     print(
@@ -82,6 +93,11 @@ def _simulate(args: argparse.Namespace) -> int:
         f"{summary['air_time_s']:.2f} s -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
+
+
+def _beam_size(laser: Laser, p: np.ndarray) -> BeamSize:
+    """The beam's size at altitudes z for a focus, with the flight's parameters ``p``."""
+    return lambda z, focus: beam_sides(z, focus, p, laser)
 
 
 def _optimize(args: argparse.Namespace) -> int:
@@ -188,6 +204,8 @@ def _closed_loop(args: argparse.Namespace) -> int:
         budget={"mpc": problem.mpc.time_budget, "director": problem.director.time_budget}.get(
             args.controller
         ),
+        laser=model.laser,
+        beam_size=_beam_size(model.laser, parameter_values(model, problem.plant_parameters)),
     )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)

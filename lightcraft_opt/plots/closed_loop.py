@@ -18,6 +18,8 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lightcraft_opt.control.result import ClosedLoopResult
+from lightcraft_opt.params import Laser
+from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
 
 __all__ = [
     "closed_loop_figures",
@@ -136,9 +138,13 @@ def closed_loop_figures(
     title: str = "",
     capture_radius: float | None = None,
     budget: float | None = None,
+    laser: Laser | None = None,
+    beam_size: BeamSize | None = None,
 ) -> dict[str, Figure]:
     """Every figure of a closed-loop flight by file name: closed_loop.png (coning, tilt,
-    offset, RCS use in a 2 x 2) and solve_times.png (the histogram)."""
+    offset, RCS use in a 2 x 2), solve_times.png (the histogram) and flight3d.png (the
+    path in the beam, ``laser`` and ``beam_size`` as in
+    :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`)."""
     fig = Figure(figsize=(11, 7.5), layout="constrained")
     axs = fig.subplots(2, 2, sharex=True)
     plot_closed_loop_coning(result, ax=axs[0, 0])
@@ -157,4 +163,8 @@ def closed_loop_figures(
     hist = Figure(figsize=(6.5, 4.5), layout="constrained")
     plot_solve_times(result, ax=hist.add_subplot(), budget=budget)
     hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses} pulses)")
-    return {"closed_loop.png": fig, "solve_times.png": hist}
+    return {
+        "closed_loop.png": fig,
+        "solve_times.png": hist,
+        "flight3d.png": flight3d_figure(result.flight, laser=laser, beam_size=beam_size),
+    }
