@@ -205,7 +205,8 @@ def _closed_loop(args: argparse.Namespace) -> int:
             args.controller
         ),
         laser=model.laser,
-        beam_size=_beam_size(model.laser, parameter_values(model, problem.plant_parameters)),
+        beam_size=_beam_size(model.laser, result.p_plant),
+        inputs=plant.inputs,
     )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
