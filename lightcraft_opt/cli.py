@@ -243,7 +243,13 @@ def _montecarlo(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         progress=not args.quiet,
     )
-    for name, fig in monte_carlo_figures(result.table, title=campaign.title).items():
+    figures = monte_carlo_figures(
+        result.table,
+        title=campaign.title,
+        dispersed=campaign.dispersions.columns,
+        capture_radius=campaign.model.craft.engine.capture_radius,
+    )
+    for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     s = result.summary
     apogee, beam = s["apogee_m"], s["left_beam"]
