@@ -304,7 +304,25 @@ def _calibrate(args: argparse.Namespace) -> int:
         track_file=str(args.track),
         fitted_model_file=fitted.name,
     )
-    for name, fig in calibration_figures(result).items():
+    # track_fit.png: the fitted and the starting flights from launch to landing, or to twice
+    # the track's span (a track of a whole flight shows its landing; the cost stays bounded)
+    whole = min(max(2.0 * float(track.t[-1]), 1.0), MAX_DURATION)
+    flights = {
+        label: simulate(
+            model,
+            whole,
+            x0=x0,
+            p=p,
+            options=options.pulse_map,
+            compiled=False if args.interpreted else None,
+        )
+        for label, p, x0 in (
+            ("fitted", result.p, result.x0),
+            ("before the fit", result.initial_p, result.initial_x0),
+        )
+        if p.size and np.all(np.isfinite(p)) and np.all(np.isfinite(x0))
+    }
+    for name, fig in calibration_figures(result, flights=flights).items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     for name, entry in report["parameters"].items():
         std = "not identifiable" if entry["std"] is None else f"± {entry['std']:.3g}"
