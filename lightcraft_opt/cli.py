@@ -20,6 +20,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TextIO
 
+import numpy as np
+
 from lightcraft_opt import __version__
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
@@ -30,7 +32,7 @@ from lightcraft_opt.errors import LightcraftError, ProblemFileError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
-from lightcraft_opt.files.model import load_model
+from lightcraft_opt.files.model import load_model, load_record
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.simulation_outputs import (
@@ -39,11 +41,12 @@ from lightcraft_opt.files.simulation_outputs import (
     write_trajectory_csv,
 )
 from lightcraft_opt.files.track import read_track
-from lightcraft_opt.layout import initial_state
+from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
+from lightcraft_opt.outputs import beam_size_of
 from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
@@ -138,7 +141,13 @@ def _simulate(args: argparse.Namespace) -> int:
     write_trajectory_csv(result, out / "trajectory.csv")
     summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
     # Figures not registered with pyplot: nothing to close, freed with the dict.
-    figures = flight_figures(result, capture_radius=model.craft.engine.capture_radius)
+    figures = flight_figures(
+        result,
+        capture_radius=model.craft.engine.capture_radius,
+        record=load_record(args.model),
+        laser=model.laser,
+        beam_size=beam_size_of(model.laser, parameter_values(model)),
+    )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     print(
@@ -329,7 +338,7 @@ def _fly(problem: ClosedLoopProblem, plant: PulseMap, name: str, out: Path) -> C
         options=problem.loop,
     )
     # the files and figures below are written by the writers registered in outputs.py
-    result.save(out, problem=problem)
+    result.save(out, problem=problem, inputs=plant.inputs)
     summary = json.loads((out / "summary.json").read_text())
     pulse = summary["coning_below_0.5deg_from_pulse"]
     settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
@@ -365,7 +374,13 @@ def _montecarlo(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         progress=not args.quiet,
     )
-    for name, fig in monte_carlo_figures(result.table, title=campaign.title).items():
+    figures = monte_carlo_figures(
+        result.table,
+        title=campaign.title,
+        dispersed=campaign.dispersions.columns,
+        capture_radius=campaign.model.craft.engine.capture_radius,
+    )
+    for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     s = result.summary
     apogee, beam = s["apogee_m"], s["left_beam"]
@@ -423,7 +438,25 @@ def _calibrate(args: argparse.Namespace) -> int:
         track_file=str(args.track),
         fitted_model_file=fitted.name,
     )
-    for name, fig in calibration_figures(result).items():
+    # track_fit.png: the fitted and the starting flights from launch to landing, or to twice
+    # the track's span (a track of a whole flight shows its landing; the cost stays bounded)
+    whole = min(max(2.0 * float(track.t[-1]), 1.0), MAX_DURATION)
+    flights = {
+        label: simulate(
+            model,
+            whole,
+            x0=x0,
+            p=p,
+            options=options.pulse_map,
+            compiled=False if args.interpreted else None,
+        )
+        for label, p, x0 in (
+            ("fitted", result.p, result.x0),
+            ("before the fit", result.initial_p, result.initial_x0),
+        )
+        if p.size and np.all(np.isfinite(p)) and np.all(np.isfinite(x0))
+    }
+    for name, fig in calibration_figures(result, flights=flights).items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     for name, entry in report["parameters"].items():
         std = "not identifiable" if entry["std"] is None else f"± {entry['std']:.3g}"

@@ -24,9 +24,11 @@ Context keywords (what a figure or a file needs beyond the result):
 from __future__ import annotations
 
 import shutil
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.campaign.runner import MANIFEST, RUNS, SUMMARY, TIMINGS, CampaignResult
@@ -43,14 +45,22 @@ from lightcraft_opt.files.simulation_outputs import (
     write_summary,
     write_trajectory_csv,
 )
+from lightcraft_opt.layout import VectorLayout, parameter_values
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult
-from lightcraft_opt.params import Model
+from lightcraft_opt.params import FlightRecord, Laser, Model
 from lightcraft_opt.presenters import register
+from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.result import SimulationResult
 
-__all__ = ["save_figures"]
+__all__ = ["beam_size_of", "save_figures"]
+
+
+def beam_size_of(laser: Laser, p: np.ndarray) -> Callable[[np.ndarray, float], np.ndarray]:
+    """The beam's size [m] at altitudes z [m] for a focus [m], with a flight's parameter
+    vector ``p`` (plots.flight3d's ``beam_size``)."""
+    return lambda z, focus: beam_sides(z, focus, p, laser)
 
 
 def save_figures(figures: Mapping[str, Any], folder: Path) -> None:
@@ -78,13 +88,20 @@ def _flight_plot(
     *,
     model: Model | None = None,
     capture_radius: float | None = None,
+    record: FlightRecord | None = None,
     **_: Any,
 ) -> dict[str, Any]:
     from lightcraft_opt.plots.figures import flight_figures
 
-    if capture_radius is None and model is not None:
-        capture_radius = model.craft.engine.capture_radius
-    return flight_figures(result, capture_radius=capture_radius)
+    laser, beam_size = None, None
+    if model is not None:
+        if capture_radius is None:
+            capture_radius = model.craft.engine.capture_radius
+        laser = model.laser
+        beam_size = beam_size_of(laser, parameter_values(model))
+    return flight_figures(
+        result, capture_radius=capture_radius, record=record, laser=laser, beam_size=beam_size
+    )
 
 
 def _flight_save(
@@ -94,6 +111,7 @@ def _flight_save(
     figures: bool = True,
     model: Model | None = None,
     capture_radius: float | None = None,
+    record: FlightRecord | None = None,
     **extra: Any,
 ) -> Path:
     _folder(folder)
@@ -101,7 +119,15 @@ def _flight_save(
         write_pulses_csv(result, folder / "pulses.csv")
     write_trajectory_csv(result, folder / "trajectory.csv")
     write_summary(result, model, folder / "summary.json", **extra)
-    _draw(figures, _flight_plot, folder, result, model=model, capture_radius=capture_radius)
+    _draw(
+        figures,
+        _flight_plot,
+        folder,
+        result,
+        model=model,
+        capture_radius=capture_radius,
+        record=record,
+    )
     return folder
 
 
@@ -113,9 +139,11 @@ def _loop_plot(
     title: str | None = None,
     capture_radius: float | None = None,
     budget: float | None = None,
+    inputs: VectorLayout | None = None,
 ) -> dict[str, Any]:
     from lightcraft_opt.plots.closed_loop import closed_loop_figures
 
+    laser, beam_size = None, None
     if problem is not None:
         title = problem.title if title is None else title
         if capture_radius is None:
@@ -123,8 +151,16 @@ def _loop_plot(
         if budget is None:
             budgets = {"mpc": problem.mpc.time_budget, "director": problem.director.time_budget}
             budget = budgets.get(result.controller)
+        laser = problem.model.laser
+        beam_size = beam_size_of(laser, result.p_plant)
     return closed_loop_figures(
-        result, title=title or "", capture_radius=capture_radius, budget=budget
+        result,
+        title=title or "",
+        capture_radius=capture_radius,
+        budget=budget,
+        laser=laser,
+        beam_size=beam_size,
+        inputs=inputs,
     )
 
 

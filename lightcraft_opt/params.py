@@ -29,6 +29,7 @@ __all__ = [
     "Engine",
     "Environment",
     "Flight",
+    "FlightRecord",
     "ImpulseModel",
     "Laser",
     "Liner",
@@ -668,6 +669,20 @@ class Laser:
         _set(self, "focus_range", (lo, hi))
         if self.pulse_duration * self.pulse_rate >= 1.0:
             raise ParameterError("laser.pulse_duration", "pulses would overlap at this rate")
+
+
+@dataclass(frozen=True)
+class FlightRecord:
+    """A flight a model file flies, as its accounts give it (docs/physics.md#records):
+    what plots mark beside the simulated flight. Not read by any simulation."""
+
+    name: str
+    apogee: float  # [m] above the pad
+    air_time: float  # [s], launch to landing
+
+    def __post_init__(self) -> None:
+        _set(self, "apogee", _positive("record.apogee", self.apogee))
+        _set(self, "air_time", _positive("record.air_time", self.air_time))
 
 
 @dataclass(frozen=True)

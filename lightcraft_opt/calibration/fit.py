@@ -377,6 +377,7 @@ def _result(
         std, sv = np.full(n, np.nan), np.full(n, np.nan)
         flags = ()
     p, x0 = (np.asarray(v).ravel() for v in problem.setup(theta))
+    p_start, x0_start = (np.asarray(v).ravel() for v in problem.setup(start))
     X = np.asarray(problem.flight(theta)).T
     residuals = r.reshape(-1, 3)
     return CalibrationResult(
@@ -408,4 +409,6 @@ def _result(
         x0=x0,
         solve_time=solve_time,
         gaps=track.gaps,
+        initial_p=p_start,
+        initial_x0=x0_start,
     )

@@ -4,7 +4,7 @@ tell."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
@@ -72,7 +72,8 @@ class CalibrationResult(Presentable):
     flight_t : (k,) times of the fitted flight's dense states [s].
     flight_x : (k, STATE.size) fitted flight's states (docs/frames.md).
     p : (PARAMETERS.size,) fitted parameter vector; ``x0`` (STATE.size,) fitted initial
-        state.
+        state; ``initial_p``, ``initial_x0`` those of the starting values (the flight
+        before the fit; empty when not recorded).
     solve_time : wall time of the fit [s]; ``gaps`` track rows dropped as gaps.
     """
 
@@ -104,6 +105,8 @@ class CalibrationResult(Presentable):
     x0: np.ndarray
     solve_time: float
     gaps: int = 0
+    initial_p: np.ndarray = field(default_factory=lambda: np.empty(0))
+    initial_x0: np.ndarray = field(default_factory=lambda: np.empty(0))
 
     @property
     def success(self) -> bool:

@@ -12,7 +12,7 @@ with units to SI for all of them. Writers: :mod:`.simulation_outputs`, :mod:`.oc
 
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
-from lightcraft_opt.files.model import load_laser, load_model, load_site
+from lightcraft_opt.files.model import load_laser, load_model, load_record, load_site
 from lightcraft_opt.files.problem import ProblemFile, load_problem
 from lightcraft_opt.files.results import load_result
 from lightcraft_opt.files.track import read_track
@@ -25,6 +25,7 @@ __all__ = [
     "load_laser",
     "load_model",
     "load_problem",
+    "load_record",
     "load_result",
     "load_site",
     "read_track",

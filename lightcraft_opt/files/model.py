@@ -56,11 +56,20 @@ from lightcraft_opt.files.schema import (
     read_toml,
 )
 
-__all__ = ["QUANTITIES", "SCHEMA", "load_laser", "load_model", "load_site", "model_from_tables"]
+__all__ = [
+    "QUANTITIES",
+    "SCHEMA",
+    "load_laser",
+    "load_model",
+    "load_record",
+    "load_site",
+    "model_from_tables",
+]
 
 #: Table name -> field of the params dataclass -> what the file holds for it.
 SCHEMA: Mapping[str, Mapping[str, Spec]] = {
     "model": {"name": TEXT, "site": TEXT, "laser": TEXT},
+    "record": {"name": TEXT, "apogee": quantity("length"), "air_time": quantity("time")},
     "craft": {
         "name": TEXT,
         "diameter": quantity("length"),
@@ -228,12 +237,24 @@ def load_model(path: str | Path) -> params.Model:
     return model_from_tables(src, file, data)
 
 
+def load_record(path: str | Path) -> params.FlightRecord | None:
+    """The ``[record]`` table of a flight file: the flight it reproduces, as its accounts
+    give it (``name``, ``apogee_m``, ``air_time_s``; docs/physics.md#records), for plots to
+    mark; None when the file has none."""
+    src, data = read_toml(Path(path))
+    table = _table(src, data, "record")
+    if table is None:
+        return None
+    values, keys = read_fields(src, table, "record", SCHEMA["record"], params.FlightRecord)
+    return build(src, {"record": ("record", keys)}, params.FlightRecord, values)
+
+
 def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.Model:
     """:func:`load_model` on the tables of a flight file already read (``src`` names it in
     errors; ``file`` locates the site and laser files), e.g. with a problem file's
     overrides merged in (problem_files)."""
     top, _ = read_fields(
-        src, data, "", SCHEMA["model"], params.Model, ("craft", "flight", "environment")
+        src, data, "", SCHEMA["model"], params.Model, ("craft", "flight", "environment", "record")
     )
     site = load_site(_component(src, file, top, "site"))
     laser = load_laser(_component(src, file, top, "laser"))

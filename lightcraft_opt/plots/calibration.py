@@ -7,6 +7,7 @@ builds the figures the CLI saves.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from matplotlib.axes import Axes
@@ -15,6 +16,7 @@ from matplotlib.figure import Figure
 from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.layout import ENU, STATE
 from lightcraft_opt.plots.labels import state_label
+from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
     "calibration_figures",
@@ -22,6 +24,14 @@ __all__ = [
     "plot_residuals",
     "plot_track_fit",
 ]
+
+
+#: Line styles of the flights drawn on track_fit.png, in the order given (fitted first).
+FLIGHT_STYLES: tuple[dict[str, Any], ...] = (
+    {"color": "tab:blue"},
+    {"color": "0.45", "ls": "--"},
+    {"color": "tab:green", "ls": ":"},
+)
 
 
 def _axes(ax: Axes | None) -> Axes:
@@ -43,16 +53,32 @@ def plot_residuals(result: CalibrationResult, axis: int, *, ax: Axes | None = No
     return artists
 
 
-def plot_track_fit(result: CalibrationResult, axis: int, *, ax: Axes | None = None) -> list[Any]:
-    """Tracked positions (dots) and the fitted flight (line), r_L component ``axis`` [m]."""
+def plot_track_fit(
+    result: CalibrationResult,
+    axis: int,
+    *,
+    ax: Axes | None = None,
+    flights: Mapping[str, SimulationResult] | None = None,
+) -> list[Any]:
+    """Tracked positions (dots) and the flights, r_L component ``axis`` [m].
+
+    ``flights`` ({label: flight}, e.g. the fitted model's whole flight and the one before
+    the fit, launch to landing) are drawn dense over their whole time; without them the
+    fitted flight over the track's pulses (``result.flight_x``).
+    """
     ax = _axes(ax)
     i = STATE.slot("r_L").start + axis
-    artists = [
-        *ax.plot(
-            result.t, result.r_measured[:, axis], ".", ms=3, color="tab:orange", label="tracked"
-        ),
-        *ax.plot(result.flight_t, result.flight_x[:, i], color="tab:blue", lw=1.0, label="fitted"),
-    ]
+    artists: list[Any] = []
+    if flights:
+        for (label, flight), style in zip(flights.items(), FLIGHT_STYLES, strict=False):
+            artists += ax.plot(flight.t, flight.x[:, i], lw=1.0, label=label, **style)
+    else:
+        artists += ax.plot(
+            result.flight_t, result.flight_x[:, i], color="tab:blue", lw=1.0, label="fitted"
+        )
+    artists += ax.plot(
+        result.t, result.r_measured[:, axis], ".", ms=3, color="tab:orange", label="tracked"
+    )
     ax.set_ylabel(state_label("position", "r_L", ENU[axis]))
     ax.set_xlabel("time since the first pulse, t [s]")
     return artists
@@ -84,9 +110,12 @@ def plot_correlation(result: CalibrationResult, *, ax: Axes | None = None) -> li
     return artists
 
 
-def calibration_figures(result: CalibrationResult) -> dict[str, Figure]:
+def calibration_figures(
+    result: CalibrationResult, *, flights: Mapping[str, SimulationResult] | None = None
+) -> dict[str, Figure]:
     """File name -> figure: ``residuals.png`` (per axis over time), ``track_fit.png``
-    (tracked and fitted positions per axis), ``correlation.png``."""
+    (tracked positions and the ``flights`` per axis, :func:`plot_track_fit`),
+    ``correlation.png``."""
     title = f"calibration: {result.status.value}, σ = {1e3 * result.sigma:.2f} mm"
     res = Figure(figsize=(8.5, 7.5), layout="constrained")
     for axis, ax in enumerate(res.subplots(3, 1, sharex=True)):
@@ -97,7 +126,7 @@ def calibration_figures(result: CalibrationResult) -> dict[str, Figure]:
     fit = Figure(figsize=(8.5, 7.5), layout="constrained")
     axes = fit.subplots(3, 1, sharex=True)
     for axis, ax in enumerate(axes):
-        plot_track_fit(result, axis, ax=ax)
+        plot_track_fit(result, axis, ax=ax, flights=flights)
         if axis < 2:
             ax.set_xlabel("")
     axes[0].legend(loc="best", fontsize=8)

@@ -18,14 +18,23 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lightcraft_opt.control.result import ClosedLoopResult
+from lightcraft_opt.layout import PULSE_INPUT, VectorLayout
+from lightcraft_opt.params import Laser
+from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
+from lightcraft_opt.plots.labels import state_label
 
 __all__ = [
     "closed_loop_figures",
     "compare_closed_loops",
+    "fallback_times",
+    "inputs_figure",
+    "mark_fallbacks",
+    "plot_closed_loop_altitude",
     "plot_closed_loop_coning",
     "plot_closed_loop_offset",
     "plot_closed_loop_rcs",
     "plot_closed_loop_tilt",
+    "plot_commanded",
     "plot_solve_times",
 ]
 
@@ -106,6 +115,102 @@ def plot_closed_loop_rcs(result: ClosedLoopResult, *, ax: Axes | None = None) ->
     return lines
 
 
+def fallback_times(result: ClosedLoopResult) -> np.ndarray:
+    """(m,) times of the pulses whose input came from the shifted previous plan (a failed
+    or late solve) [s]."""
+    return result.pulse_t[result.log.fallbacks[: result.pulse_t.size]]
+
+
+def mark_fallbacks(result: ClosedLoopResult, *, ax: Axes | None = None) -> list[Any]:
+    """Red ticks along the top of ``ax`` at the fallback pulses (none drawn without one)."""
+    ax = _axes(ax)
+    t = fallback_times(result)
+    if not t.size:
+        return []
+    return [
+        ax.vlines(
+            t,
+            0.94,
+            1.0,
+            transform=ax.get_xaxis_transform(),
+            color="tab:red",
+            lw=1.2,
+            label=f"fallback steps ({t.size})",
+        )
+    ]
+
+
+def plot_closed_loop_altitude(result: ClosedLoopResult, *, ax: Axes | None = None) -> list[Any]:
+    """Altitude above the pad, r_L[up] [m], of the plant's flight (dense in time)."""
+    ax = _axes(ax)
+    flight = result.flight
+    style = {k: v for k, v in _style(result).items() if k in ("label", "color")}
+    lines = ax.plot(flight.t, flight.state("r_L")[:, 2], **style)
+    _finish(ax, state_label("altitude above pad", "r_L", "up"))
+    return lines
+
+
+def plot_commanded(
+    result: ClosedLoopResult,
+    slot: str,
+    *,
+    ax: Axes | None = None,
+    inputs: VectorLayout = PULSE_INPUT,
+    scale: float = 1.0,
+    unit: str | None = None,
+) -> list[Any]:
+    """The controller's input ``slot`` per pulse (before drop-outs), each component as
+    steps held to the next pulse, times ``scale`` (shown in ``unit``; default the slot's)."""
+    ax = _axes(ax)
+    values = scale * result.commanded[:, inputs.index(slot)]
+    t = _node_times(result)
+    lines: list[Any] = []
+    names = inputs.slot(slot).components
+    for i in range(values.shape[1]):
+        label = names[i] if names and len(names) == values.shape[1] else f"{slot}[{i}]"
+        lines += ax.step(t, np.append(values[:, i], values[-1:, i]), where="post", label=label)
+    if values.shape[1] > 1:
+        ax.legend(loc="best", fontsize=8, ncol=2)
+    _finish(ax, f"{slot} [{unit or inputs.slot(slot).unit}]")
+    return lines
+
+
+def inputs_figure(
+    result: ClosedLoopResult, *, inputs: VectorLayout | None = None, title: str = ""
+) -> Figure:
+    """closed_loop_inputs.png: the altitude over the controller's inputs per pulse (those
+    that vary), sharing time, with the fallback pulses ticked in red on every axes.
+    ``inputs`` is the map-input layout of ``result.commanded`` (None: the pulse's own
+    slots, pointing, focus and energy)."""
+    lay = inputs if inputs is not None else PULSE_INPUT
+    slots = [s.name for s in lay.slots if s.name in PULSE_INPUT or inputs is not None]
+    varying = [
+        name
+        for name in slots
+        if result.commanded.size and np.any(np.ptp(result.commanded[:, lay.index(name)], axis=0))
+    ]
+    shown = varying or ["energy"]
+    fig = Figure(figsize=(9.0, 2.3 * (len(shown) + 1) + 0.8), layout="constrained")
+    axes = fig.subplots(len(shown) + 1, 1, sharex=True, squeeze=False)[:, 0]
+    plot_closed_loop_altitude(result, ax=axes[0])
+    for name, ax in zip(shown, axes[1:], strict=True):
+        if name == "pointing_L":
+            plot_commanded(result, name, ax=ax, inputs=lay, scale=100.0, unit="cm")
+        else:
+            plot_commanded(result, name, ax=ax, inputs=lay)
+    for ax in axes:
+        mark_fallbacks(result, ax=ax)
+    for ax in axes[:-1]:
+        ax.label_outer()
+    if fallback_times(result).size:
+        axes[0].legend(loc="best", fontsize=8)
+    fig.suptitle(
+        f"{title or result.flight.model_name}: {result.controller}'s inputs, "
+        f"{fallback_times(result).size} fallbacks"
+    )
+    return fig
+
+
 def plot_solve_times(
     result: ClosedLoopResult,
     *,
@@ -173,10 +278,18 @@ def closed_loop_figures(
     title: str = "",
     capture_radius: float | None = None,
     budget: float | None = None,
+    laser: Laser | None = None,
+    beam_size: BeamSize | None = None,
+    inputs: VectorLayout | None = None,
 ) -> dict[str, Figure]:
     """Every figure of a closed-loop flight by file name: closed_loop.png (coning, tilt,
-    offset, RCS use in a 2 x 2) and solve_times.png (the histogram)."""
-    fig, _ = _panels([result], capture_radius)
+    offset, RCS use in a 2 x 2, fallback pulses ticked), closed_loop_inputs.png
+    (:func:`inputs_figure`, ``inputs`` the map-input layout), solve_times.png (the
+    histogram) and flight3d.png (the path in the beam, ``laser`` and ``beam_size`` as in
+    :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`)."""
+    fig, axs = _panels([result], capture_radius)
+    for ax in axs.ravel():
+        mark_fallbacks(result, ax=ax)
     fallbacks = int(np.sum(result.log.fallbacks))
     fig.suptitle(
         f"{title or result.flight.model_name}: {result.controller}, "
@@ -185,4 +298,9 @@ def closed_loop_figures(
     hist = Figure(figsize=(6.5, 4.5), layout="constrained")
     plot_solve_times(result, ax=hist.add_subplot(), budget=budget)
     hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses} pulses)")
-    return {"closed_loop.png": fig, "solve_times.png": hist}
+    return {
+        "closed_loop.png": fig,
+        "closed_loop_inputs.png": inputs_figure(result, inputs=inputs, title=title),
+        "solve_times.png": hist,
+        "flight3d.png": flight3d_figure(result.flight, laser=laser, beam_size=beam_size),
+    }

@@ -10,10 +10,15 @@ origin at the pad).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 
+from lightcraft_opt.params import FlightRecord, Laser
+from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
 from lightcraft_opt.plots.labels import auto_length_unit
 from lightcraft_opt.plots.track import (
     beam_axis_L,
@@ -39,6 +44,7 @@ __all__ = [
     "attitude_figure",
     "flight_figures",
     "flight_overview",
+    "mark_record",
     "track_figure",
 ]
 
@@ -53,17 +59,58 @@ def _title(result: SimulationResult) -> str:
     )
 
 
-def altitude_figure(result: SimulationResult) -> Figure:
+def _altitude_limits(result: SimulationResult, record: FlightRecord | None) -> tuple[float, float]:
+    """y-limits of the altitude axes from the flight's data (and the record's apogee, when
+    marked) [m]: head room above for the apogee label, a little below the lowest point."""
+    z = result.state("r_L")[:, 2]
+    low, high = float(np.min(z)), float(np.max(z))
+    if record is not None:
+        high = max(high, record.apogee)
+    span = max(high - low, 1e-3)
+    return low - 0.05 * span, high + 0.2 * span
+
+
+def mark_record(
+    result: SimulationResult, record: FlightRecord, *, ax: Axes | None = None
+) -> list[Any]:
+    """The record's apogee [m] as a dashed level and its landing (air time after the first
+    sample [s]) as a dashed time, both labelled with the record's name."""
+    ax = ax if ax is not None else Figure().add_subplot()
+    landing = float(result.t[0]) + record.air_time
+    return [
+        ax.axhline(
+            record.apogee,
+            color="tab:green",
+            ls="--",
+            lw=1.0,
+            label=f"{record.name}: apogee {record.apogee:g} m",
+        ),
+        ax.axvline(
+            landing,
+            color="tab:green",
+            ls=":",
+            lw=1.0,
+            label=f"{record.name}: air time {record.air_time:g} s",
+        ),
+    ]
+
+
+def altitude_figure(result: SimulationResult, *, record: FlightRecord | None = None) -> Figure:
     """Altitude above the pad [m] over vertical speed [m/s], sharing time [s].
 
     Paper Figs. 7-9. The highest point is marked, and a rug along the bottom of each
-    axes shows the laser pulse instants (dropped pulses in red).
+    axes shows the laser pulse instants (dropped pulses in red). The altitude axis spans
+    the flight's data; ``record`` (the flight the model reproduces,
+    :func:`~lightcraft_opt.files.model.load_record`) adds its apogee and air time as marks.
     """
     fig = Figure(figsize=(8.5, 7.0), layout="constrained")
     ax_z, ax_v = fig.subplots(2, 1, sharex=True)
     plot_altitude(result, ax=ax_z)
     mark_apogee(result, ax=ax_z)
+    if record is not None:
+        mark_record(result, record, ax=ax_z)
     plot_pulse_times(result, ax=ax_z)
+    ax_z.set_ylim(*_altitude_limits(result, record))
     plot_vertical_speed(result, ax=ax_v)
     ax_v.axhline(0.0, color="0.5", lw=0.8, zorder=1)
     plot_pulse_times(result, ax=ax_v)
@@ -74,9 +121,12 @@ def altitude_figure(result: SimulationResult) -> Figure:
 
 
 def attitude_figure(result: SimulationResult) -> Figure:
-    """Tilt of b1 from L up [deg] over the coning (nutation) angle b1 to H [deg], sharing time.
+    """Tilt from L up [deg] over the coning (nutation) angle b1 to H [deg], sharing time.
 
-    A rug along the bottom of each axes shows the laser pulse instants.
+    The tilt is that of the angular momentum H, inside the band b1's tilt takes over
+    each pulse interval (:func:`~lightcraft_opt.plots.trajectory.plot_tilt`): b1's own
+    samples alias against its coning. A rug along the bottom of each axes shows the laser
+    pulse instants.
     """
     fig = Figure(figsize=(8.5, 6.5), layout="constrained")
     ax_tilt, ax_cone = fig.subplots(2, 1, sharex=True)
@@ -142,13 +192,21 @@ def flight_overview(result: SimulationResult) -> Figure:
 
 
 def flight_figures(
-    result: SimulationResult, *, capture_radius: float | None = None
+    result: SimulationResult,
+    *,
+    capture_radius: float | None = None,
+    record: FlightRecord | None = None,
+    laser: Laser | None = None,
+    beam_size: BeamSize | None = None,
 ) -> dict[str, Figure]:
     """Every figure of a flight by file name: flight.png (the overview), altitude.png,
-    track.png and attitude.png. ``capture_radius`` [m] as in :func:`track_figure`."""
+    track.png, attitude.png and flight3d.png. ``capture_radius`` [m] as in
+    :func:`track_figure`, ``record`` as in :func:`altitude_figure`, ``laser`` and
+    ``beam_size`` as in :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`."""
     return {
         "flight.png": flight_overview(result),
-        "altitude.png": altitude_figure(result),
+        "altitude.png": altitude_figure(result, record=record),
         "track.png": track_figure(result, capture_radius=capture_radius),
         "attitude.png": attitude_figure(result),
+        "flight3d.png": flight3d_figure(result, laser=laser, beam_size=beam_size),
     }

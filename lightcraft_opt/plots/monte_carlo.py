@@ -10,7 +10,7 @@ degrees; data SI.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,9 @@ __all__ = [
     "monte_carlo_figures",
     "plot_apogee_histogram",
     "plot_end_points",
+    "plot_offset_against",
     "plot_run_extremes",
+    "plot_tilt_coning",
 ]
 
 Table = Mapping[str, np.ndarray]
@@ -55,9 +57,13 @@ def _ellipse_xy(mean: np.ndarray, cov: np.ndarray, scale: float) -> np.ndarray:
     return mean[:, None] + vectors @ circle
 
 
-def plot_end_points(table: Table, *, ax: Axes | None = None) -> list[Any]:
+def plot_end_points(
+    table: Table, *, ax: Axes | None = None, capture_radius: float | None = None
+) -> list[Any]:
     """Where each run ends (its landing point when it landed, else its last position),
-    east against north, by status, with the 1σ and 95 % ellipses of all the points."""
+    east against north, by status, with the 1σ and 95 % ellipses of all the points and,
+    given ``capture_radius`` [m], the optic's capture circle about the pad (the beam axis
+    of a beam held there) for scale."""
     ax = _axes(ax)
     status = _status(table)
     east = 100.0 * np.asarray(table["final_east_m"], dtype=float)
@@ -76,6 +82,12 @@ def plot_end_points(table: Table, *, ax: Axes | None = None) -> list[Any]:
             ex, ey = _ellipse_xy(mean, cov, scale)
             artists += ax.plot(ex, ey, style, color="0.2", lw=1, label=f"{label} ellipse")
         artists += ax.plot(*mean, "+", color="0.2", ms=10)
+    if capture_radius is not None:
+        a = np.linspace(0.0, 2.0 * math.pi, 121)
+        r = 100.0 * capture_radius
+        artists += ax.plot(
+            r * np.cos(a), r * np.sin(a), color="tab:green", lw=1.0, label="capture radius"
+        )
     ax.set_xlabel("east [cm]")
     ax.set_ylabel("north [cm]")
     ax.set_aspect("equal", adjustable="datalim")
@@ -95,51 +107,106 @@ def plot_apogee_histogram(table: Table, *, ax: Axes | None = None) -> list[Any]:
         bins = max(5, min(40, int(math.sqrt(apogee.size)) + 1))
         _, _, patches = ax.hist(apogee, bins=bins, color="tab:blue", alpha=0.7)
         artists.append(patches)
-        artists.append(ax.axvline(float(apogee.mean()), color="0.2", label="mean"))
-        for q in np.percentile(apogee, [5, 95]):
-            artists.append(ax.axvline(float(q), color="0.2", ls="--", lw=1))
+        mean = float(apogee.mean())
+        artists.append(ax.axvline(mean, color="0.2", label=f"mean {mean:.2f} m"))
+        for pct, q in zip((5, 95), np.percentile(apogee, [5, 95]), strict=True):
+            artists.append(
+                ax.axvline(float(q), color="0.2", ls="--", lw=1, label=f"{pct} %: {q:.2f} m")
+            )
+        ax.legend(fontsize="small")
     ax.set_xlabel("apogee [m]")
     ax.set_ylabel("runs")
     ax.grid(True, alpha=0.3)
     return artists
 
 
-def plot_run_extremes(table: Table, *, axes: tuple[Axes, Axes] | None = None) -> list[Any]:
-    """Per run: largest tilt and coning [deg], and largest beam offset [cm], by status."""
-    if axes is None:
-        fig = Figure(figsize=(9, 4))
-        axes = (fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2))
+def plot_offset_against(
+    table: Table, column: str, *, ax: Axes | None = None, capture_radius: float | None = None
+) -> list[Any]:
+    """Each run's largest beam offset [cm] against its drawn input ``column`` (a run-table
+    column of a dispersed quantity, in its SI unit), by status; the capture radius [m]
+    dashed when given."""
+    ax = _axes(ax)
     status = _status(table)
-    run = np.asarray(table["run"])
-    artists: list[Any] = []
-    tilt = np.asarray(table["max_tilt_deg"], dtype=float)
-    coning = np.asarray(table["max_coning_deg"], dtype=float)
+    x = np.asarray(table[column], dtype=float)
     offset = 100.0 * np.asarray(table["max_offset_m"], dtype=float)
+    artists: list[Any] = []
     for name in sorted(set(status) - {"error"}):
         sel = status == name
-        color = STATUS_COLORS.get(name)
-        artists.append(axes[0].scatter(tilt[sel], coning[sel], s=12, color=color, label=name))
-        artists.append(axes[1].scatter(run[sel], offset[sel], s=12, color=color, label=name))
-    axes[0].set_xlabel("largest tilt [deg]")
-    axes[0].set_ylabel("largest coning [deg]")
-    axes[1].set_xlabel("run")
-    axes[1].set_ylabel("largest beam offset [cm]")
-    for ax in axes:
-        ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize="small")
+        artists.append(
+            ax.scatter(x[sel], offset[sel], s=12, color=STATUS_COLORS.get(name), label=name)
+        )
+    if capture_radius is not None:
+        artists.append(
+            ax.axhline(100.0 * capture_radius, color="0.3", ls="--", lw=1, label="capture radius")
+        )
+    ax.set_xlabel(column)
+    ax.set_ylabel("largest beam offset [cm]")
+    ax.grid(True, alpha=0.3)
     return artists
 
 
-def monte_carlo_figures(table: Table, *, title: str = "") -> dict[str, Figure]:
-    """{file name: figure} of a campaign: end points with ellipses, apogee histogram,
-    per-run extremes."""
+def plot_tilt_coning(table: Table, *, ax: Axes | None = None) -> list[Any]:
+    """Per run: largest coning against largest tilt [deg], by status."""
+    ax = _axes(ax)
+    status = _status(table)
+    tilt = np.asarray(table["max_tilt_deg"], dtype=float)
+    coning = np.asarray(table["max_coning_deg"], dtype=float)
+    artists: list[Any] = []
+    for name in sorted(set(status) - {"error"}):
+        sel = status == name
+        color = STATUS_COLORS.get(name)
+        artists.append(ax.scatter(tilt[sel], coning[sel], s=12, color=color, label=name))
+    ax.set_xlabel("largest tilt [deg]")
+    ax.set_ylabel("largest coning [deg]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small")
+    return artists
+
+
+def plot_run_extremes(table: Table, *, axes: tuple[Axes, Axes] | None = None) -> list[Any]:
+    """Per run: largest tilt and coning [deg] (:func:`plot_tilt_coning`), and largest beam
+    offset [cm] against the run number, by status."""
+    if axes is None:
+        fig = Figure(figsize=(9, 4))
+        axes = (fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2))
+    return plot_tilt_coning(table, ax=axes[0]) + plot_offset_against(table, "run", ax=axes[1])
+
+
+def monte_carlo_figures(
+    table: Table,
+    *,
+    title: str = "",
+    dispersed: Sequence[str] = (),
+    capture_radius: float | None = None,
+) -> dict[str, Figure]:
+    """{file name: figure} of a campaign: end points with ellipses (and the capture circle
+    of ``capture_radius`` [m]), apogee histogram, per-run extremes. With ``dispersed``
+    (the run-table columns of the drawn inputs, ``Campaign.dispersions.columns``),
+    run_extremes.png puts the largest tilt against the largest coning beside the largest
+    beam offset against each drawn input; without, against the run number."""
     figures: dict[str, Figure] = {}
-    for name, draw in (("end_points.png", plot_end_points), ("apogee.png", plot_apogee_histogram)):
-        fig = Figure(figsize=(6, 4.5), layout="constrained")
-        draw(table, ax=fig.add_subplot())
-        figures[name] = fig
-    fig = Figure(figsize=(10, 4), layout="constrained")
-    plot_run_extremes(table, axes=(fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)))
+    fig = Figure(figsize=(6, 4.5), layout="constrained")
+    plot_end_points(table, ax=fig.add_subplot(), capture_radius=capture_radius)
+    figures["end_points.png"] = fig
+    fig = Figure(figsize=(6, 4.5), layout="constrained")
+    plot_apogee_histogram(table, ax=fig.add_subplot())
+    figures["apogee.png"] = fig
+    columns = [c for c in dispersed if c in table]
+    if columns:
+        n = 1 + len(columns)
+        ncols = min(n, 3)
+        nrows = -(-n // ncols)
+        fig = Figure(figsize=(4.2 * ncols, 3.6 * nrows), layout="constrained")
+        axs = fig.subplots(nrows, ncols, squeeze=False).ravel()
+        plot_tilt_coning(table, ax=axs[0])
+        for column, ax in zip(columns, axs[1:], strict=False):
+            plot_offset_against(table, column, ax=ax, capture_radius=capture_radius)
+        for ax in axs[n:]:
+            ax.set_visible(False)
+    else:
+        fig = Figure(figsize=(10, 4), layout="constrained")
+        plot_run_extremes(table, axes=(fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)))
     figures["run_extremes.png"] = fig
     if title:
         for fig in figures.values():

@@ -10,27 +10,37 @@ y north, z up, origin at the pad).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.ocp.problem import CaptureFraction, OcpProblem
+from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.ocp.problem import (
+    CaptureFraction,
+    NoGroundContact,
+    OcpProblem,
+    TerminalAltitude,
+    TiltLimit,
+)
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.plots.labels import auto_length_unit, length_factor, state_label
 from lightcraft_opt.simulation.result import PulseRecord
 
 __all__ = [
+    "Bounds",
     "capture_figure",
     "controls_figure",
+    "input_bounds",
     "ocp_figures",
     "ocp_trajectory_figure",
     "plot_beam_offset",
     "plot_drift",
     "plot_focus",
     "plot_node_altitude",
+    "plot_node_tilt",
     "plot_pointing",
     "plot_pulse_energy",
     "plot_rcs_thrust",
@@ -60,59 +70,132 @@ def _steps(ax: Axes, result: OcpResult, values: np.ndarray, **style: Any) -> lis
     return ax.step(t, np.append(values, values[-1:]), where="post", **style)
 
 
+#: (lower, upper) bounds of an input slot per component, in its unit (None: none drawn).
+Bounds = tuple[np.ndarray, np.ndarray] | None
+
+
+def input_bounds(problem: OcpProblem, slot: str) -> tuple[np.ndarray, np.ndarray]:
+    """The problem's (lower, upper) bounds of map-input slot ``slot`` [its unit]."""
+    idx = problem.inputs.index(slot)
+    return np.atleast_1d(problem.lower[idx]), np.atleast_1d(problem.upper[idx])
+
+
+def _draw_bounds(ax: Axes, bounds: Bounds, scale: float = 1.0) -> list[Any]:
+    """Dashed lines at the finite bounds, each distinct value once."""
+    if bounds is None:
+        return []
+    values = np.unique(np.concatenate([np.ravel(b) for b in bounds]))
+    artists: list[Any] = []
+    for i, v in enumerate(values[np.isfinite(values)]):
+        label = "bounds" if i == 0 else None
+        artists.append(ax.axhline(scale * v, color="0.3", ls="--", lw=0.9, label=label))
+    return artists
+
+
+def _tilt(x: np.ndarray) -> np.ndarray:
+    """(n,) angle between b1 and L up [rad] from the states' q_LB (w, x, y, z):
+    b1's up component is R_LB[2, 0] = 2 (x z - w y) / |q|^2."""
+    q = x[:, STATE.index("q_LB")]
+    w, qx, qy, qz = q.T
+    up = 2.0 * (qx * qz - w * qy) / np.sum(q * q, axis=1)
+    return np.arccos(np.clip(up, -1.0, 1.0))
+
+
 def _offset_L(result: OcpResult) -> np.ndarray:
     """(N, 2) the optic centre's offset from the beam axis at each pulse [m, L]."""
     return PulseRecord(result.t[:-1], result.u, result.engine).offset_L
 
 
 def plot_pointing(
-    result: OcpResult, *, ax: Axes | None = None, length_unit: str | None = None
+    result: OcpResult,
+    *,
+    ax: Axes | None = None,
+    length_unit: str | None = None,
+    bounds: Bounds = None,
 ) -> list[Any]:
-    """Beam axis east and north of the pad per pulse, pointing_L [m, cm or mm]."""
+    """Beam axis east and north of the pad per pulse, pointing_L [m, cm or mm]; the
+    problem's ``bounds`` [m] dashed."""
     ax = _axes(ax)
     pointing = result.input("pointing_L")
     unit = length_unit or auto_length_unit(float(np.max(np.abs(pointing), initial=0.0)))
     scale = length_factor(unit)
     lines = _steps(ax, result, scale * pointing[:, 0], label="east")
     lines += _steps(ax, result, scale * pointing[:, 1], label="north")
+    lines += _draw_bounds(ax, bounds, scale)
     ax.legend(loc="best", fontsize=9)
     _finish(ax, _input_label(result, "beam pointing", "pointing_L", unit))
     return lines
 
 
-def plot_pulse_energy(result: OcpResult, *, ax: Axes | None = None) -> list[Any]:
-    """Pulse energy per pulse, energy [J]."""
+def plot_pulse_energy(
+    result: OcpResult, *, ax: Axes | None = None, bounds: Bounds = None
+) -> list[Any]:
+    """Pulse energy per pulse, energy [J]; the problem's ``bounds`` dashed."""
     ax = _axes(ax)
     lines = _steps(ax, result, result.input("energy"), color="C3")
+    lines += _draw_bounds(ax, bounds)
     _finish(ax, _input_label(result, "pulse energy", "energy"))
     return lines
 
 
-def plot_focus(result: OcpResult, *, ax: Axes | None = None) -> list[Any]:
-    """Focus distance per pulse, focus [m]."""
+def plot_focus(result: OcpResult, *, ax: Axes | None = None, bounds: Bounds = None) -> list[Any]:
+    """Focus distance per pulse, focus [m]; the problem's ``bounds`` dashed."""
     ax = _axes(ax)
     lines = _steps(ax, result, result.input("focus"), color="C4")
+    lines += _draw_bounds(ax, bounds)
     _finish(ax, _input_label(result, "focus distance", "focus"))
     return lines
 
 
-def plot_rcs_thrust(result: OcpResult, *, ax: Axes | None = None) -> list[Any]:
-    """Each RCS thruster's level per pulse, rcs_thrust [N]."""
+def plot_rcs_thrust(
+    result: OcpResult, *, ax: Axes | None = None, bounds: Bounds = None
+) -> list[Any]:
+    """Each RCS thruster's level per pulse, rcs_thrust [N]; the problem's ``bounds`` dashed."""
     ax = _axes(ax)
     thrust = result.u[:, result.inputs.index("rcs_thrust")]
     lines: list[Any] = []
     for i in range(thrust.shape[1]):
         lines += _steps(ax, result, thrust[:, i], label=f"thruster {i + 1}")
+    lines += _draw_bounds(ax, bounds)
     ax.legend(loc="best", fontsize=9, ncol=2)
     _finish(ax, _input_label(result, "RCS thrust", "rcs_thrust"))
     return lines
 
 
-def plot_node_altitude(result: OcpResult, *, ax: Axes | None = None) -> list[Any]:
-    """Altitude above the pad at the nodes, r_L[up] [m]."""
+def plot_node_altitude(
+    result: OcpResult, *, ax: Axes | None = None, limits: Sequence[tuple[float, str]] = ()
+) -> list[Any]:
+    """Altitude above the pad at the nodes, r_L[up] [m]; ``limits`` (altitude [m], label)
+    dashed (the problem's ground clearance and terminal altitude bounds)."""
     ax = _axes(ax)
     lines = ax.plot(result.t, result.state("r_L")[:, 2], marker=".", color="C0")
+    for value, label in limits:
+        lines.append(ax.axhline(value, color="C3", ls="--", lw=0.9, label=label))
+    if limits:
+        ax.legend(loc="best", fontsize=9)
     _finish(ax, state_label("altitude above pad", "r_L", "up"))
+    return lines
+
+
+def plot_node_tilt(
+    result: OcpResult, *, ax: Axes | None = None, max_tilt: float | None = None
+) -> list[Any]:
+    """Tilt of b1 from L up at the nodes [deg]; the problem's tilt limit [rad] dashed."""
+    ax = _axes(ax)
+    lines = ax.plot(result.t, np.degrees(_tilt(result.x)), marker=".", color="tab:purple")
+    if max_tilt is not None:
+        lines.append(
+            ax.axhline(
+                np.degrees(max_tilt),
+                color="C3",
+                ls="--",
+                lw=0.9,
+                label=f"limit {np.degrees(max_tilt):.3g} deg",
+            )
+        )
+        ax.legend(loc="best", fontsize=9)
+    ax.set_ylim(bottom=0.0)
+    _finish(ax, "tilt of b1 from L up [deg]")
     return lines
 
 
@@ -175,30 +258,65 @@ def _title(result: OcpResult, title: str) -> str:
     )
 
 
-def controls_figure(result: OcpResult, *, focus: bool | None = None, title: str = "") -> Figure:
-    """Inputs per pulse, sharing time: pointing, energy, then focus (when ``focus``; None:
-    when it varies) and the RCS thrust (when the model has thrusters)."""
-    show_focus = bool(np.ptp(result.input("focus")) > 0) if focus is None else focus
-    panels = [plot_pointing, plot_pulse_energy]
-    panels += [plot_focus] if show_focus else []
-    panels += [plot_rcs_thrust] if "rcs_thrust" in result.inputs else []
+def controls_figure(
+    result: OcpResult,
+    *,
+    focus: bool | None = None,
+    title: str = "",
+    problem: OcpProblem | None = None,
+) -> Figure:
+    """Inputs per pulse, sharing time: pointing, energy, focus and the RCS thrust (when
+    the model has thrusters), each with the ``problem``'s bounds dashed. Inputs the problem
+    holds fixed (lower = upper) are left out; without a problem all are drawn but the
+    focus, which is drawn when ``focus`` (None: when it varies)."""
+    slots = [(plot_pointing, "pointing_L"), (plot_pulse_energy, "energy")]
+    slots += [(plot_focus, "focus")]
+    slots += [(plot_rcs_thrust, "rcs_thrust")] if "rcs_thrust" in result.inputs else []
+    panels: list[tuple[Any, Bounds]] = []
+    for plot, slot in slots:
+        if problem is not None:
+            lower, upper = input_bounds(problem, slot)
+            if np.all(lower >= upper):
+                continue  # held fixed: not a decision
+            panels.append((plot, (lower, upper)))
+        elif slot != "focus" or (
+            bool(np.ptp(result.input("focus")) > 0) if focus is None else focus
+        ):
+            panels.append((plot, None))
+    if not panels:  # every input held: show the energy the problem fixed
+        energy = input_bounds(problem, "energy") if problem is not None else None
+        panels = [(plot_pulse_energy, energy)]
     fig = Figure(figsize=(8.5, 2.6 * len(panels) + 0.8), layout="constrained")
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
-    for plot, ax in zip(panels, axes, strict=True):
-        plot(result, ax=ax)
+    for (plot, bounds), ax in zip(panels, axes, strict=True):
+        plot(result, ax=ax, bounds=bounds)
     for ax in axes[:-1]:
         ax.label_outer()
     fig.suptitle(_title(result, title))
     return fig
 
 
-def ocp_trajectory_figure(result: OcpResult, *, title: str = "") -> Figure:
-    """Altitude over east/north drift at the nodes, sharing time."""
-    fig = Figure(figsize=(8.5, 6.5), layout="constrained")
-    ax_z, ax_d = fig.subplots(2, 1, sharex=True)
-    plot_node_altitude(result, ax=ax_z)
+def ocp_trajectory_figure(
+    result: OcpResult, *, title: str = "", problem: OcpProblem | None = None
+) -> Figure:
+    """Altitude, east/north drift and tilt at the nodes, sharing time, with the
+    ``problem``'s altitude and tilt limits dashed."""
+    fig = Figure(figsize=(8.5, 8.5), layout="constrained")
+    ax_z, ax_d, ax_t = fig.subplots(3, 1, sharex=True)
+    limits: list[tuple[float, str]] = []
+    tilts: list[float] = []
+    for c in problem.constraints if problem is not None else ():
+        if isinstance(c, NoGroundContact):
+            limits.append((c.clearance, "ground clearance"))
+        elif isinstance(c, TerminalAltitude):
+            limits += [(v, "terminal altitude") for v in (c.minimum, c.maximum) if np.isfinite(v)]
+        elif isinstance(c, TiltLimit):
+            tilts.append(c.max_tilt)
+    plot_node_altitude(result, ax=ax_z, limits=limits)
     plot_drift(result, ax=ax_d)
-    ax_z.label_outer()
+    plot_node_tilt(result, ax=ax_t, max_tilt=min(tilts) if tilts else None)
+    for ax in (ax_z, ax_d):
+        ax.label_outer()
     fig.suptitle(_title(result, title))
     return fig
 
@@ -223,7 +341,8 @@ def ocp_figures(
     """Every figure of a solve by file name: controls.png, trajectory.png, capture.png.
 
     ``problem`` (the one solved) gives the capture radius, the tightest
-    :class:`~lightcraft_opt.ocp.problem.CaptureFraction` and whether the focus is free.
+    :class:`~lightcraft_opt.ocp.problem.CaptureFraction`, the input bounds (inputs it holds
+    fixed are left out), the altitude limits and the tilt limit.
     """
     radius = fraction = focus = None
     if problem is not None:
@@ -232,8 +351,8 @@ def ocp_figures(
         fraction = min(limits) if limits else None
         focus = bool(np.any(problem.free[problem.inputs.index("focus")]))
     return {
-        "controls.png": controls_figure(result, focus=focus, title=title),
-        "trajectory.png": ocp_trajectory_figure(result, title=title),
+        "controls.png": controls_figure(result, focus=focus, title=title, problem=problem),
+        "trajectory.png": ocp_trajectory_figure(result, title=title, problem=problem),
         "capture.png": capture_figure(
             result, capture_radius=radius, fraction=fraction, title=title
         ),

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from lightcraft_opt.layout import PULSE_INPUT
 from lightcraft_opt.plots.labels import state_label
+from lightcraft_opt.plots.per_pulse import h_tilt, pulse_speeds, tilt_envelope
 from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "plot_coning",
     "plot_pulse_times",
     "plot_tilt",
+    "plot_tilt_envelope",
     "plot_track",
     "plot_vertical_speed",
 ]
@@ -54,9 +56,20 @@ def plot_altitude(result: SimulationResult, *, ax: Axes | None = None) -> list[A
 
 
 def plot_vertical_speed(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """Vertical speed, v_L[up] [m/s], against time [s] (paper Fig. 7)."""
+    """Vertical speed, v_L[up] [m/s], against time [s] (paper Fig. 7).
+
+    Under the laser: its values just before and just after each pulse, joined (a sawtooth
+    through the pulse record, :func:`~lightcraft_opt.plots.per_pulse.pulse_speeds`), not the
+    dense samples, which alias against the pulses. A coast: the dense samples.
+    """
     ax = _axes(ax)
-    lines = ax.plot(result.t, result.state("v_L")[:, 2], label=result.model_name)
+    speeds = pulse_speeds(result)
+    if speeds.t.size:
+        t = np.repeat(speeds.t, 2)
+        v = np.column_stack([speeds.before, speeds.after]).ravel()
+        lines = ax.plot(t, v, label=result.model_name, lw=1.0)
+    else:
+        lines = ax.plot(result.t, result.state("v_L")[:, 2], label=result.model_name)
     ax.set_ylabel(state_label("vertical speed", "v_L", "up"))
     _finish(ax)
     return lines
@@ -80,12 +93,33 @@ def plot_track(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]
 
 
 def plot_tilt(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """Tilt, the angle between b1 and L up [deg], against time [s]."""
+    """Tilt of the angular momentum H from L up [deg], against time [s], inside the band
+    b1's tilt can take over each pulse interval (:mod:`lightcraft_opt.plots.per_pulse`).
+
+    b1 itself cones about H faster than the dense samples resolve; its samples would draw
+    beats that are not there, so only their honest envelope is drawn.
+    """
     ax = _axes(ax)
-    lines = ax.plot(result.t, np.degrees(result.tilt), color="tab:purple", label="tilt")
-    ax.set_ylabel("tilt, b1 from L up [deg]")
+    artists: list[Any] = plot_tilt_envelope(result, ax=ax)
+    artists += ax.plot(result.t, np.degrees(h_tilt(result)), color="tab:purple", label="tilt of H")
+    ax.set_ylabel("tilt from L up [deg]")
     _finish(ax)
-    return lines
+    return artists
+
+
+def plot_tilt_envelope(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
+    """The band of b1's tilt from L up per pulse interval [deg]: from |tilt_H - coning| to
+    tilt_H + coning, its lowest and highest over the interval."""
+    ax = _axes(ax)
+    env = tilt_envelope(result)
+    t = np.column_stack([env.t, env.t_end]).ravel()
+    low = np.repeat(np.degrees(env.low), 2)
+    high = np.repeat(np.degrees(env.high), 2)
+    return [
+        ax.fill_between(
+            t, low, high, color="tab:purple", alpha=0.2, lw=0, label="b1 tilt range per pulse"
+        )
+    ]
 
 
 def plot_coning(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
@@ -98,15 +132,17 @@ def plot_coning(result: SimulationResult, *, ax: Axes | None = None) -> list[Any
 
 
 def plot_attitude(result: SimulationResult, *, ax: Axes | None = None) -> list[Any]:
-    """Tilt of b1 from vertical and coning (nutation) angle [deg] on one axes."""
+    """Tilt of H from vertical (with b1's band per pulse) and coning angle [deg] on one
+    axes."""
     ax = _axes(ax)
-    lines = ax.plot(result.t, np.degrees(result.tilt), label="tilt") + ax.plot(
-        result.t, np.degrees(result.coning), label="coning (b1 to H)"
+    artists = plot_tilt(result, ax=ax)
+    artists += ax.plot(
+        result.t, np.degrees(result.coning), color="tab:orange", label="coning (b1 to H)"
     )
     ax.set_ylabel("angle [deg]")
-    ax.legend(loc="best")
+    ax.legend(loc="best", fontsize=8)
     _finish(ax)
-    return lines
+    return artists
 
 
 def plot_pulse_times(

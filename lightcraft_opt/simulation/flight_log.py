@@ -11,7 +11,7 @@ from lightcraft_opt.params import BeamProfile, Laser
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.beam import beam_side
 
-__all__ = ["LEFT_BEAM_PULSES", "Z_UP", "FlightLog", "beam_gap"]
+__all__ = ["LEFT_BEAM_PULSES", "Z_UP", "FlightLog", "beam_gap", "beam_sides"]
 
 #: Leaving the beam: the optic and the beam do not overlap for this many fired pulses in a row.
 LEFT_BEAM_PULSES = 3
@@ -19,6 +19,14 @@ LEFT_BEAM_PULSES = 3
 Z_UP = STATE.slot("r_L").start + 2
 _V_UP = STATE.slot("v_L").start + 2
 _OFFSET = ENGINE.slot("offset_L")
+
+
+def beam_sides(z: np.ndarray, focus: float, p: np.ndarray, laser: Laser) -> np.ndarray:
+    """The beam's size :func:`~lightcraft_opt.symbolic.beam.beam_side` at altitudes ``z``
+    (any shape) [m], as numbers [m], for callers that hold no casadi (plots)."""
+    z = np.asarray(z, dtype=float)
+    sides = [float(beam_side(float(zi), float(focus), p, laser)) for zi in z.ravel()]
+    return np.array(sides).reshape(z.shape)
 
 
 def beam_gap(

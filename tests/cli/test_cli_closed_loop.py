@@ -129,6 +129,8 @@ def test_none_writes_every_file(tmp_path, capsys):
         "result.npz",
         "closed_loop.png",
         "solve_times.png",
+        "flight3d.png",
+        "closed_loop_inputs.png",
     }
     rows = (out / "steps.csv").read_text().splitlines()
     assert rows[0].split(",") == list(STEP_COLUMNS) and len(rows) == 1 + 26

@@ -250,14 +250,15 @@ def test_ocp_figures_draw_the_results_numbers(problem_file):
     figures = ocp_figures(result, problem, title="made up")
     assert list(figures) == list(FIGURES)
 
-    pointing, energy = figures["controls.png"].axes  # focus held, no RCS: two panels
+    (pointing,) = figures["controls.png"].axes  # focus and energy held, no RCS: one panel
     assert pointing.get_ylabel() == "beam pointing, pointing_L [cm]"
-    east, north = pointing.get_lines()
+    east, north, *bounds = pointing.get_lines()
     assert east.get_ydata() == pytest.approx([1.0, 2.0, 0.0, 0.0], abs=1e-12)  # steps
     assert north.get_ydata() == pytest.approx([0.0, -1.0, 0.0, 0.0], abs=1e-12)
-    assert energy.get_lines()[0].get_ydata() == pytest.approx([420.0, 300.0, 0.0, 0.0])
+    limit = 100 * problem.upper[problem.inputs.index("pointing_L")][0]
+    assert [b.get_ydata()[0] for b in bounds] == pytest.approx([-limit, limit])
 
-    altitude, drift = figures["trajectory.png"].axes
+    altitude, drift, _ = figures["trajectory.png"].axes
     assert altitude.get_lines()[0].get_ydata() == pytest.approx([2.0, 2.2, 2.5, 2.9])
     assert drift.get_ylabel().endswith("[cm]")
     assert drift.get_lines()[1].get_ydata() == pytest.approx([0.0, 0.0, -1.0, 0.0])

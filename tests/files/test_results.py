@@ -123,7 +123,13 @@ def test_summary_json_figures_agree_with_the_trajectory_and_the_pulses(flight, s
 
 def test_plot_returns_the_cli_figures_by_name(flight, model):
     figures = flight.plot(model=model)
-    assert set(figures) == {"flight.png", "altitude.png", "track.png", "attitude.png"}
+    assert set(figures) == {
+        "flight.png",
+        "altitude.png",
+        "track.png",
+        "attitude.png",
+        "flight3d.png",
+    }
     assert all(type(f).__name__ == "Figure" for f in figures.values())
 
 

@@ -12,18 +12,25 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from support.models import table1_flight5
+from support.paths import MODELS
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import PULSE_INPUT, STATE, initial_state
+from lightcraft_opt.files.model import load_record
+from lightcraft_opt.layout import PULSE_INPUT, STATE, initial_state, parameter_values
+from lightcraft_opt.params import FlightRecord
 from lightcraft_opt.plots import (
     altitude_figure,
     attitude_figure,
     flight_figures,
     track_figure,
 )
+from lightcraft_opt.plots.flight3d import beam_outline
+from lightcraft_opt.plots.per_pulse import tilt_envelope
 from lightcraft_opt.plots.track import plot_track_xy
+from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.beam import beam_side
 
 R = STATE.slot("r_L").start
 V = STATE.slot("v_L").start
@@ -62,7 +69,10 @@ def test_altitude_figure_draws_r_L_up_over_v_L_up_against_t(flight):
     line_z, line_v = ax_z.lines[0], ax_v.lines[0]
     np.testing.assert_array_equal(line_z.get_xdata(), flight.t)
     np.testing.assert_array_equal(line_z.get_ydata(), flight.x[:, R + 2])
-    np.testing.assert_array_equal(line_v.get_ydata(), flight.x[:, V + 2])
+    # v_L[up] before each pulse is a drawn point (the sawtooth: its own test below)
+    assert set(flight.x[np.searchsorted(flight.t, flight.pulses.t - 1e-9), V + 2]) <= set(
+        np.asarray(line_v.get_ydata())
+    )
     assert ax_z.get_ylabel().endswith("[m]") and ax_v.get_ylabel().endswith("[m/s]")
     assert ax_v.get_xlabel() == "time [s]"
     # apogee marker at the highest sample
@@ -84,13 +94,103 @@ def test_dropped_pulses_get_their_own_rug(flight):
     assert len(fired.get_segments()) == len(flight.pulses.t) - len(dropped)
 
 
-def test_attitude_figure_draws_tilt_and_coning_in_degrees(flight):
+def _pulse_groups(flight):
+    """Indices of the dense samples after each pulse, up to the next one."""
+    starts = np.searchsorted(flight.t, flight.pulses.t + 1e-9)
+    stops = np.append(starts[1:], len(flight.t))
+    return [np.arange(a, b) for a, b in zip(starts, stops, strict=True)]
+
+
+def test_attitude_figure_draws_the_tilt_of_H_without_the_coning_alias(flight):
+    """b1 cones at 216 Hz, sampled every 1/208 s: its samples alias. The drawn tilt is H's,
+    smooth between pulses: its second difference inside each pulse interval stays below
+    1 % of the coning amplitude, while b1's own samples jump by a sizeable part of it."""
     fig = attitude_figure(flight)
     ax_tilt, ax_cone = fig.axes
-    np.testing.assert_allclose(ax_tilt.lines[0].get_ydata(), np.degrees(flight.tilt))
+    (tilt_H,) = [ln for ln in ax_tilt.lines if ln.get_label() == "tilt of H"]
+    H = flight.H_L
+    expected = np.degrees(np.arccos(H[:, 2] / np.linalg.norm(H, axis=1)))
+    np.testing.assert_allclose(tilt_H.get_ydata(), expected, atol=1e-9)
+    coning = np.degrees(flight.coning).max()
+    y = np.asarray(tilt_H.get_ydata())
+    body = np.degrees(flight.tilt)
+    inside_H = max(np.abs(np.diff(y[g], 2)).max() for g in _pulse_groups(flight) if g.size > 2)
+    inside_b1 = max(np.abs(np.diff(body[g], 2)).max() for g in _pulse_groups(flight) if g.size > 2)
+    assert inside_H < 0.01 * coning < 0.1 * inside_b1
     np.testing.assert_allclose(ax_cone.lines[0].get_ydata(), np.degrees(flight.coning))
     assert ax_tilt.get_ylabel().endswith("[deg]") and ax_cone.get_ylabel().endswith("[deg]")
     assert flight.tilt.max() > 0.0  # an offset start tips the craft: the curve is not flat
+
+
+def test_tilt_band_holds_every_b1_sample_of_its_pulse_interval(flight):
+    """b1 lies on the cone of half-angle coning about H (spherical triangle inequality):
+    every dense sample of b1's tilt lies in the band drawn for its pulse interval."""
+    env = tilt_envelope(flight)
+    groups = _pulse_groups(flight)
+    assert len(env.t) == len(groups)
+    for k, g in enumerate(groups):
+        assert np.all(flight.tilt[g] >= env.low[k] - 1e-12)
+        assert np.all(flight.tilt[g] <= env.high[k] + 1e-12)
+    (band,) = [c for c in attitude_figure(flight).axes[0].collections if "range" in c.get_label()]
+    ys = band.get_paths()[0].vertices[:, 1]
+    assert ys.min() == pytest.approx(np.degrees(env.low.min()))
+    assert ys.max() == pytest.approx(np.degrees(env.high.max()))
+
+
+def test_vertical_speed_is_a_sawtooth_at_the_pulse_times(flight):
+    """Two points per pulse, both at its time: v_L[up] just before (the dense sample there)
+    and just after; the jump is the pulse's impulse over the mass, to 1 % (the craft tilts
+    by about a degree, and the after value is extrapolated)."""
+    ax_v = altitude_figure(flight).axes[1]
+    line = ax_v.lines[0]
+    t = np.asarray(line.get_xdata())
+    np.testing.assert_array_equal(t, np.repeat(flight.pulses.t, 2))
+    v = np.asarray(line.get_ydata()).reshape(-1, 2)
+    i = np.searchsorted(flight.t, flight.pulses.t - 1e-9)
+    np.testing.assert_array_equal(v[:, 0], flight.x[i, V + 2])
+    jump = flight.pulses.impulse_B[:, 0] / flight.mass[i]
+    np.testing.assert_allclose(v[:, 1] - v[:, 0], jump, rtol=0.01)
+
+
+def test_altitude_axis_spans_the_flight_and_the_record_marks(flight):
+    z = flight.x[:, R + 2]
+    low, high = altitude_figure(flight).axes[0].get_ylim()
+    span = z.max() - z.min()
+    assert low == pytest.approx(z.min() - 0.05 * span) and high == pytest.approx(
+        z.max() + 0.2 * span
+    )
+    record = FlightRecord("record", apogee=2 * flight.apogee, air_time=0.8)
+    ax_z = altitude_figure(flight, record=record).axes[0]
+    (level,) = [ln for ln in ax_z.lines if "apogee" in ln.get_label()]
+    (landing,) = [ln for ln in ax_z.lines if "air time" in ln.get_label()]
+    assert level.get_ydata()[0] == record.apogee
+    assert landing.get_xdata()[0] == flight.t[0] + record.air_time
+    assert ax_z.get_ylim()[1] > record.apogee
+
+
+def test_the_record_model_file_names_its_record():
+    record = load_record(MODELS / "record-2000-10-02.toml")
+    assert (record.apogee, record.air_time) == (71.0, 12.7)  # docs/physics.md#records
+    assert load_record(MODELS / "flight5.toml") is None
+
+
+def test_flight3d_draws_r_L_inside_the_beam_outline(flight):
+    model = table1_flight5()
+    p = parameter_values(model)
+    figures = flight_figures(
+        flight, laser=model.laser, beam_size=lambda z, f: beam_sides(z, f, p, model.laser)
+    )
+    (ax,) = figures["flight3d.png"].axes
+    east, north, up = ax.lines[0].get_data_3d()
+    np.testing.assert_allclose(np.c_[east, north, up], flight.x[:, R : R + 3])
+    assert len(ax.collections) == 1  # the beam's surface
+    focus = flight.pulses.u[0, PULSE_INPUT.slot("focus").start]
+    z = np.array([0.0, 10.0])
+    side = [float(beam_side(zi, focus, p, model.laser)) for zi in z]
+    e, n = beam_outline(beam_sides(z, focus, p, model.laser), model.laser.profile)
+    # the outline's half-width along east (angle 0) is half the beam's size at that altitude
+    np.testing.assert_allclose(e[:, 0], 0.5 * np.array(side))
+    np.testing.assert_allclose(n[:, 0], 0.0, atol=1e-15)
 
 
 def test_track_figure_draws_r_L_in_cm_with_the_capture_circle(flight):
@@ -130,7 +230,13 @@ def test_track_beyond_2_m_is_drawn_in_metres(flight):
 def test_a_coast_without_pulses_draws_every_figure_without_rug_or_beam(flight):
     coast = replace(flight, pulses=None)
     figures = flight_figures(coast, capture_radius=CAPTURE_RADIUS)
-    assert set(figures) == {"flight.png", "altitude.png", "track.png", "attitude.png"}
+    assert set(figures) == {
+        "flight.png",
+        "altitude.png",
+        "track.png",
+        "attitude.png",
+        "flight3d.png",
+    }
     assert not _rug(figures["altitude.png"].axes[0], "laser pulses")
     ax_3d, ax_xy = figures["track.png"].axes  # no colorbar: no pulses
     assert "beam axis" not in [ln.get_label() for ln in ax_xy.lines + ax_3d.lines]

@@ -129,7 +129,7 @@ def test_cli_simulate_writes_trajectory_pulses_summary_and_plot(tmp_path):
     assert len(rows) >= 8 * len(pulses)  # dense: >= 8 rows per pulse interval
     assert pulses[0, 4] == pytest.approx(0.0637, rel=1e-12)
     assert (out / "summary.json").exists()
-    for name in ("flight.png", "altitude.png", "track.png", "attitude.png"):
+    for name in ("flight.png", "altitude.png", "track.png", "attitude.png", "flight3d.png"):
         png = (out / name).read_bytes()
         assert png.startswith(b"\x89PNG\r\n\x1a\n"), name
         assert len(png) > 10_000, name  # drawn, not an empty canvas
