@@ -49,6 +49,7 @@ __all__ = ["main"]
 
 def _simulate(args: argparse.Namespace) -> int:
     model = load_model(args.model)
+    track = None if args.track is None else read_track(args.track)
     out = output_folder(args.out)
     x0 = initial_state(
         model,
@@ -74,7 +75,7 @@ def _simulate(args: argparse.Namespace) -> int:
     write_trajectory_csv(result, out / "trajectory.csv")
     summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
     # Figures not registered with pyplot: nothing to close, freed with the dict.
-    figures = flight_figures(result, capture_radius=model.craft.engine.capture_radius)
+    figures = flight_figures(result, capture_radius=model.craft.engine.capture_radius, track=track)
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
     print(
@@ -370,6 +371,13 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
         help="probability that the laser drops a pulse (default 0)",
     )
     sim.add_argument("--seed", type=SEED, default=None, help="seed of the pulse drop-outs")
+    sim.add_argument(
+        "--track",
+        default=None,
+        metavar="FILE",
+        help="a tracked flight CSV (t_s,x_m,y_m,z_m, as lightcraft calibrate reads), drawn "
+        "as points on altitude.png and track.png",
+    )
     sim.add_argument(
         "--interpreted",
         action="store_true",
