@@ -57,8 +57,11 @@ class MeasuredTrack(Protocol):
     """Tracked positions, as :class:`~lightcraft_opt.calibration.problem.Track` holds them:
     ``t`` (m,) [s] since the first pulse, ``r_L`` (m, 3) [m] in L (east, north, up)."""
 
-    t: np.ndarray
-    r_L: np.ndarray
+    @property
+    def t(self) -> np.ndarray: ...
+
+    @property
+    def r_L(self) -> np.ndarray: ...
 
 
 def _title(result: SimulationResult) -> str:
