@@ -116,6 +116,7 @@ def _check_kind(path: str | Path, command: str) -> None:
 def _simulate(args: argparse.Namespace) -> int:
     _check_kind(args.model, "simulate")
     model = load_model(args.model)
+    track = None if args.track is None else read_track(args.track)
     out = output_folder(args.out or Path("runs") / Path(args.model).stem)
     x0 = initial_state(
         model,
@@ -147,6 +148,7 @@ def _simulate(args: argparse.Namespace) -> int:
         record=load_record(args.model),
         laser=model.laser,
         beam_size=beam_size_of(model.laser, parameter_values(model)),
+        track=track,
     )
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=PLOT_DPI)
@@ -557,6 +559,13 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
         help="probability that the laser drops a pulse (default 0)",
     )
     sim.add_argument("--seed", type=SEED, default=None, help="seed of the pulse drop-outs")
+    sim.add_argument(
+        "--track",
+        default=None,
+        metavar="FILE",
+        help="a tracked flight CSV (t_s,x_m,y_m,z_m, as lightcraft calibrate reads), drawn "
+        "as points on altitude.png and track.png",
+    )
     sim.add_argument(
         "--interpreted",
         action="store_true",

@@ -28,29 +28,33 @@
 #
 # The optimal control problem is multiple shooting over pulses with the pulse map Φ as the
 # dynamics (one node per pulse), solved by IPOPT; the wind is ramped from calm in continuation
-# steps (12 for the climb, about 7 min on a 2-core machine). `LIGHTCRAFT_QUICK=1` (the test
-# suite sets it) solves the climb's launch second instead, `problems/crosswind_launch.toml`
-# (30 pulses, 3 wind steps, about 15 s): the same craft, wind, objective and constraints.
+# steps (12 for the climb, about 7 min on a 2-core machine). By default the notebook runs its
+# quick size: it solves the climb's launch second, `problems/crosswind_launch.toml` (30 pulses,
+# 3 wind steps, about 15 s): the same craft, wind, objective and constraints.
+# `LIGHTCRAFT_FULL=1` in the environment solves the whole climb.
 
 # %%
 import os
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 import lightcraft_opt as lc
+from lightcraft_opt.layout import nominal_inputs
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.plots.ocp import plot_beam_offset, plot_drift, plot_pointing
 from lightcraft_opt.plots.track import plot_track_xy
-from lightcraft_opt.layout import nominal_inputs
 
+# the repository root, wherever Jupyter was started (notebooks/ or the root)
+ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "pyproject.toml").is_file())
+QUICK = os.environ.get("LIGHTCRAFT_FULL") != "1"  # the quick size unless LIGHTCRAFT_FULL=1
 
 # %% [markdown]
 # ## The problem, as the file states it
 
 # %%
-QUICK = os.environ.get("LIGHTCRAFT_QUICK") == "1"
-loaded = lc.load_problem(f"problems/crosswind_{'launch' if QUICK else 'climb'}.toml")
+loaded = lc.load_problem(ROOT / "problems" / f"crosswind_{'launch' if QUICK else 'climb'}.toml")
 problem, options = loaded.problem, loaded.options
 print(loaded.title)
 print(f"horizon {problem.horizon} pulses, {problem.horizon * problem.period:.2f} s")
@@ -64,8 +68,10 @@ print("solver:", options.solver.value, "| wind ramp:", options.wind_ramp, "steps
 # %%
 compiled = CompiledOcp(problem, options)
 result = compiled.solve()
-print(f"{result.status.value}: cost {result.cost:.4g}, {result.iterations} iterations, "
-      f"{result.solve_time:.1f} s (build {compiled.build_time:.1f} s)")
+print(
+    f"{result.status.value}: cost {result.cost:.4g}, {result.iterations} iterations, "
+    f"{result.solve_time:.1f} s (build {compiled.build_time:.1f} s)"
+)
 print(result.message)
 
 # %% [markdown]
@@ -87,10 +93,12 @@ fixed = lc.simulate(model, duration, inputs=nominal_inputs(model), p=problem.p, 
 capture = model.craft.engine.capture_radius
 for name, flight in (("optimal pointing", steered), ("fixed pointing", fixed)):
     offset = np.hypot(*flight.pulses.offset_L.T) / capture
-    print(f"{name:17s}: {flight.status.value:16s} t_end {flight.t[-1]:.2f} s, "
-          f"altitude {flight.state('r_L')[-1, 2]:6.2f} m, drift "
-          f"{100 * np.max(np.hypot(*flight.state('r_L')[:, :2].T)):6.2f} cm, "
-          f"worst beam offset {offset.max():.2f} x capture radius")
+    print(
+        f"{name:17s}: {flight.status.value:16s} t_end {flight.t[-1]:.2f} s, "
+        f"altitude {flight.state('r_L')[-1, 2]:6.2f} m, drift "
+        f"{100 * np.max(np.hypot(*flight.state('r_L')[:, :2].T)):6.2f} cm, "
+        f"worst beam offset {offset.max():.2f} x capture radius"
+    )
 
 # %%
 t = result.t[result.t <= steered.t[-1]]  # the replay's positions at the OCP's nodes
@@ -101,8 +109,10 @@ ax.semilogy(np.arange(1, t.size), np.maximum(gap, 1e-16))
 ax.set_xlabel("pulse")
 ax.set_ylabel("|replay - prediction| [m]")
 ax.set_title("open-loop replay of the optimal inputs against the OCP's prediction")
-print(f"replay against prediction: {max(gap[:30]):.1e} m over the first 30 pulses, "
-      f"{gap[-1]:.1e} m at the last")
+print(
+    f"replay against prediction: {max(gap[:30]):.1e} m over the first 30 pulses, "
+    f"{gap[-1]:.1e} m at the last"
+)
 
 # %% [markdown]
 # ## Plots: the pointing, the beam offset against the capture radius, the tracks
@@ -138,7 +148,7 @@ ax.legend()
 # on the reduced map Ψ (10 pulses ahead) for the beam's pointing and focus, the pulse energy and
 # the RCS's held torque, and the plant (the full Φ, with noise, drop-outs, a dispersed craft and
 # a gust the director does not know) flies its first input. The fixed beam flies the same plant.
-# `LIGHTCRAFT_QUICK=1` flies the first second.
+# The quick size flies the first second.
 
 # %%
 from lightcraft_opt.control import DirectorController, OpenLoopController, closed_loop
@@ -146,19 +156,28 @@ from lightcraft_opt.control.closed_loop import plant_options
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.plots.closed_loop import plot_closed_loop_offset
 
-loop = load_closed_loop("problems/director_crosswind.toml", duration=1.0 if QUICK else None)
+loop_file = ROOT / "problems" / "director_crosswind.toml"
+loop = load_closed_loop(loop_file, duration=1.0 if QUICK else None)
 plant = lc.build_pulse_map(loop.model, plant_options(loop.model))
 director = DirectorController(loop.model, plant.inputs, loop.director)
 flights = {}
-for name, controller in (("director", director),
-                         ("fixed beam", OpenLoopController(loop.model, plant.inputs))):
-    flights[name] = closed_loop(loop.model, controller, loop.duration, x0=loop.x0,
-                                parameters=loop.plant_parameters, pulse_map=plant,
-                                options=loop.loop)
+fixed_beam = OpenLoopController(loop.model, plant.inputs)
+for name, controller in (("director", director), ("fixed beam", fixed_beam)):
+    flights[name] = closed_loop(
+        loop.model,
+        controller,
+        loop.duration,
+        x0=loop.x0,
+        parameters=loop.plant_parameters,
+        pulse_map=plant,
+        options=loop.loop,
+    )
     f = flights[name].flight
-    print(f"{name:10s}: {f.status.value:16s} t_end {f.t[-1]:.2f} s, highest "
-          f"{f.state('r_L')[:, 2].max():5.1f} m, largest offset "
-          f"{100 * flights[name].offset.max():5.1f} cm")
+    print(
+        f"{name:10s}: {f.status.value:16s} t_end {f.t[-1]:.2f} s, highest "
+        f"{f.state('r_L')[:, 2].max():5.1f} m, largest offset "
+        f"{100 * flights[name].offset.max():5.1f} cm"
+    )
 steps = 1e3 * flights["director"].log.step_time
 print(f"director step: median {np.median(steps):.1f} ms, max {steps.max():.1f} ms")
 
@@ -166,7 +185,8 @@ print(f"director step: median {np.median(steps):.1f} ms, max {steps.max():.1f} m
 fig, axes = plt.subplots(1, 3, figsize=(13, 3.5), layout="constrained")
 for name, result_cl in flights.items():
     axes[0].plot(result_cl.flight.t, result_cl.flight.state("r_L")[:, 2], label=name)
-    plot_closed_loop_offset(result_cl, ax=axes[1], capture_radius=loop.model.craft.engine.capture_radius)
+    radius = loop.model.craft.engine.capture_radius
+    plot_closed_loop_offset(result_cl, ax=axes[1], capture_radius=radius)
 commanded = flights["director"].commanded
 axes[2].plot(flights["director"].pulse_t, commanded[:, 2], label="focus [m]")
 axes[2].set_yscale("log")
@@ -182,7 +202,7 @@ axes[0].legend()
 # The largest beam-riding multiplier of Φ, linearised about an upright 10 m/s climb 1 cm off the
 # beam axis, against altitude, for the director's beam with the far focus and with the focus
 # matched to keep the launch side at the craft (docs/beam_riding.md; `|λ| > 1` grows an offset
-# every pulse). `LIGHTCRAFT_QUICK=1` takes two altitudes.
+# every pulse). The quick size takes two altitudes.
 
 # %%
 from dataclasses import replace
@@ -190,10 +210,11 @@ from dataclasses import replace
 from lightcraft_opt.linearize import altitude_stability
 from lightcraft_opt.plots.stability import plot_altitude_stability
 
-waist = replace(lc.load_model("models/flight5.toml"), laser=loop.model.laser)
+waist = replace(lc.load_model(ROOT / "models" / "flight5.toml"), laser=loop.model.laser)
 altitudes = [20.0, 60.0] if QUICK else [10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0]
-study = altitude_stability(waist, altitudes, [0.01], ["far", "matched"],
-                           options=lc.PulseMapOptions(substeps=8))
+study = altitude_stability(
+    waist, altitudes, [0.01], ["far", "matched"], options=lc.PulseMapOptions(substeps=8)
+)
 fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
 plot_altitude_stability(study, ax=ax)
 print(np.round(study.beam_riding[:, :, 0], 4))

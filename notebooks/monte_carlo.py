@@ -22,8 +22,8 @@
 # number of workers, or the engine (local processes, or a Dask cluster with
 # `lightcraft montecarlo ... --scheduler tcp://host:8786`).
 #
-# `LIGHTCRAFT_QUICK=1` (the test suite) makes 8 runs of 0.8 s in this process instead of
-# 200 runs of 3 s on every CPU.
+# By default the notebook runs its quick size: 8 runs of 0.8 s in this process;
+# `LIGHTCRAFT_FULL=1` in the environment makes 200 runs of 3 s on every CPU.
 
 # %%
 import json
@@ -43,9 +43,12 @@ from lightcraft_opt.plots.monte_carlo import (
     plot_run_extremes,
 )
 
-QUICK = os.environ.get("LIGHTCRAFT_QUICK") == "1"
+# the repository root, wherever Jupyter was started (notebooks/ or the root)
+ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "pyproject.toml").is_file())
+QUICK = os.environ.get("LIGHTCRAFT_FULL") != "1"  # the quick size unless LIGHTCRAFT_FULL=1
 RUNS = 8 if QUICK else 200
-campaign = load_campaign("problems/montecarlo_open_loop.toml", duration=0.8 if QUICK else None)
+campaign_file = ROOT / "problems" / "montecarlo_open_loop.toml"
+campaign = load_campaign(campaign_file, duration=0.8 if QUICK else None)
 print(campaign.title, f"| {campaign.duration} s flights, controller {campaign.controller.value}")
 for name, dist in campaign.dispersions.items:
     print(f"  {name:20s} {dist}")

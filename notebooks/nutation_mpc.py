@@ -25,13 +25,15 @@
 # 3. designs the LQR and the MPC on it (one objective: coning, tilt, beam offset, thrust);
 # 4. flies both, and the uncontrolled craft, on the full plant.
 #
-# `LIGHTCRAFT_QUICK=1` (the test suite) shortens the flights. The scheduled model takes ~25 s
+# By default the notebook runs its quick size (0.6 s flights); `LIGHTCRAFT_FULL=1` in the
+# environment flies 1 s. The scheduled model takes ~25 s
 # to build the first time and is then read from the cache (`$LIGHTCRAFT_CACHE` or
 # `~/.cache/lightcraft_opt`).
 
 # %%
 import math
 import os
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -39,10 +41,16 @@ import numpy as np
 import lightcraft_opt as lc
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop
 from lightcraft_opt.control.controllers import LqrController, OpenLoopController
-from lightcraft_opt.linearize import ModeKind, climb_point, linearize, multipliers, pulse_map_jacobian
-from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.options import MpcOptions
+from lightcraft_opt.control.prediction_model import coning_model
+from lightcraft_opt.linearize import (
+    ModeKind,
+    climb_point,
+    linearize,
+    multipliers,
+    pulse_map_jacobian,
+)
 from lightcraft_opt.plots.closed_loop import (
     plot_closed_loop_coning,
     plot_closed_loop_offset,
@@ -51,10 +59,12 @@ from lightcraft_opt.plots.closed_loop import (
 )
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
-QUICK = os.environ.get("LIGHTCRAFT_QUICK") == "1"
+# the repository root, wherever Jupyter was started (notebooks/ or the root)
+ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "pyproject.toml").is_file())
+QUICK = os.environ.get("LIGHTCRAFT_FULL") != "1"  # the quick size unless LIGHTCRAFT_FULL=1
 DURATION = 0.6 if QUICK else 1.0  # s: 16 or 26 pulses
 
-model = lc.load_model("models/flight5-rcs.toml")
+model = lc.load_model(ROOT / "models" / "flight5-rcs.toml")
 plant = build_pulse_map(model, PLANT_MAP)  # SPLIT4, 32 substeps: resolves the 216 Hz forcing
 print(plant.inputs)
 
@@ -76,7 +86,8 @@ for value, kind in zip(modes.values, modes.kinds, strict=True):
 coning = modes.of_kind(ModeKind.CONING)
 omega_T = 1356.43 / 26.0  # coning rate in B [rad/s] times the pulse period
 print(f"\nconing mode at {np.abs(coning.angle).max():.3f} rad a pulse: ω T = {omega_T:.2f} rad")
-print(f"is {omega_T / (2 * math.pi):.2f} turns; aliased to {math.remainder(omega_T, 2 * math.pi):.3f}")
+aliased = math.remainder(omega_T, 2 * math.pi)
+print(f"is {omega_T / (2 * math.pi):.2f} turns; aliased to {aliased:.3f}")
 print("inputs:", list(sys.input_labels)[:4], "...", list(sys.input_labels)[-4:])
 
 # %% [markdown]
@@ -93,7 +104,9 @@ prediction = coning_model(model, pulse_map=jac, cache=True)
 print(f"grid: {prediction.spins.size} spins x {prediction.altitudes.size} altitudes")
 spins = prediction.spins
 stored = prediction.A[:, 3, 6, 6]  # altitude 2 m, c[b2] -> c[b2]
-flown = [prediction.at(s, prediction.omega_per_spin[i, 3] * s, 2.0)[0][6, 6] for i, s in enumerate(spins)]
+flown = [
+    prediction.at(s, prediction.omega_per_spin[i, 3] * s, 2.0)[0][6, 6] for i, s in enumerate(spins)
+]
 fig, ax = plt.subplots(figsize=(7, 3.5))
 rpm = spins * 60 / (2 * math.pi)
 ax.plot(rpm, stored, "o-", label="stored (turned back by -ω T)")
@@ -159,7 +172,10 @@ print("predicted coning over the horizon [deg]:", np.round(predicted, 2))
 # dispersed, noisy plant).
 
 # %%
-runs = {ctrl.name: closed_loop(model, ctrl, DURATION, x0=x0, pulse_map=plant) for ctrl in (mpc, lqr, none)}
+runs = {
+    ctrl.name: closed_loop(model, ctrl, DURATION, x0=x0, pulse_map=plant)
+    for ctrl in (mpc, lqr, none)
+}
 fig, axs = plt.subplots(2, 2, figsize=(11, 7), sharex=True)
 for run in runs.values():
     plot_closed_loop_coning(run, ax=axs[0, 0])
@@ -173,7 +189,8 @@ for name, run in runs.items():
     settled = run.first_pulse_below(math.radians(0.5))
     print(
         f"{name:5s} coning below 0.5 deg from pulse {settled}; after pulse 5 RMS coning "
-        f"{math.degrees(run.rms('coning', 5)):.2f} deg, tilt {math.degrees(run.rms('tilt', 5)):.2f} deg; "
+        f"{math.degrees(run.rms('coning', 5)):.2f} deg, "
+        f"tilt {math.degrees(run.rms('tilt', 5)):.2f} deg; "
         f"propellant {run.rcs_used[-1] * 1e3:.3f} g; solve time median "
         f"{np.median(run.log.solve_time) * 1e3:.2f} ms"
     )

@@ -309,6 +309,7 @@ def test_without_a_compiler_one_warning_per_process(small, fresh_memo, monkeypat
 
 
 # --------------------------------------------------------------------------- derivatives
+@pytest.mark.slow
 def test_compiled_chain_derivatives_equal_the_interpreted_chain(small):
     """Φ's explicit-chain Jacobian and Hessian over compiled pieces (each piece its own
     library, the derivative pieces at DERIVATIVE_FLAGS) against the same chain interpreted.

@@ -1,11 +1,12 @@
 """Every notebook runs headless, in its quick size (docs/architecture.md#rule-13).
 
 Each ``notebooks/<name>.ipynb`` has a jupytext twin ``notebooks/<name>.py`` (percent
-format), the form reviewed in diffs; the test checks that both hold the same cells, then
-executes the notebook with ``LIGHTCRAFT_QUICK=1`` (notebooks shrink their horizons and
-sample counts when it is set) from the repository root, so paths like
-``problems/crosswind_climb.toml`` resolve. A cell that raises fails the test with the
-cell's traceback.
+format), the form reviewed in diffs; the test checks that both hold the same cells and
+that the committed notebook carries its outputs (figures included: what a reader on a
+forge sees; ``python notebooks/run_all.py`` makes them), then executes the notebook from
+``notebooks/``, as Jupyter opened there runs it: the notebooks find the repository root
+themselves. Notebooks run their quick size unless ``LIGHTCRAFT_FULL=1``, which the test
+removes. A cell that raises fails the test with the cell's traceback.
 """
 
 from __future__ import annotations
@@ -41,10 +42,22 @@ def test_notebook_matches_its_jupytext_twin(path: Path):
     )
 
 
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_is_committed_with_its_outputs(path: Path):
+    nb = nbformat.read(path, as_version=4)
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    assert code and all(c.get("execution_count") for c in code), (
+        f"{path.name} has cells never run: `python notebooks/run_all.py {path.stem}`"
+    )
+    outputs = [o for c in code for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"]
+    assert any("image/png" in o.get("data", {}) for o in outputs), f"{path.name}: no figure"
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_runs_in_its_quick_size(path: Path, tmp_path: Path, monkeypatch):
-    monkeypatch.setenv("LIGHTCRAFT_QUICK", "1")
+    monkeypatch.delenv("LIGHTCRAFT_FULL", raising=False)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     monkeypatch.setenv("LIGHTCRAFT_NOTEBOOK_OUT", str(tmp_path))
     nb = nbformat.read(path, as_version=4)
@@ -52,11 +65,14 @@ def test_notebook_runs_in_its_quick_size(path: Path, tmp_path: Path, monkeypatch
         nb,
         timeout=CELL_TIMEOUT_S,
         kernel_name="python3",
-        resources={"metadata": {"path": str(ROOT)}},
+        resources={"metadata": {"path": str(ROOT / "notebooks")}},
     )
     client.execute()
     errors = [
-        o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
+        o
+        for c in nb.cells
+        if c.cell_type == "code"
+        for o in c.get("outputs", [])
         if o.get("output_type") == "error"
     ]
     assert not errors

@@ -5,12 +5,14 @@ The paper is the seed paper; its figures are listed at docs/references.md#paper-
 Each builder takes a result and returns a :class:`matplotlib.figure.Figure` that is not
 registered with pyplot (nothing to close, nothing shown); the caller saves it, e.g. at
 :data:`PLOT_DPI`. Positions are in the L frame of docs/frames.md (x east, y north, z up,
-origin at the pad).
+origin at the pad). A measured track (``track=``: times and positions, e.g. a
+:class:`~lightcraft_opt.calibration.problem.Track` from ``read_track``) is drawn as points
+over the altitude and the beam-plane track.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -19,7 +21,7 @@ from matplotlib.layout_engine import ConstrainedLayoutEngine
 
 from lightcraft_opt.params import FlightRecord, Laser
 from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
-from lightcraft_opt.plots.labels import auto_length_unit
+from lightcraft_opt.plots.labels import auto_length_unit, length_factor
 from lightcraft_opt.plots.track import (
     beam_axis_L,
     plot_pulse_offsets,
@@ -50,6 +52,20 @@ __all__ = [
 
 #: Resolution the CLI saves the figures at [dots per inch].
 PLOT_DPI = 110
+
+#: How measured points are drawn over a simulated flight.
+MEASURED: dict[str, Any] = {"color": "k", "ms": 3, "alpha": 0.6, "zorder": 6, "label": "tracked"}
+
+
+class MeasuredTrack(Protocol):
+    """Tracked positions, as :class:`~lightcraft_opt.calibration.problem.Track` holds them:
+    ``t`` (m,) [s] since the first pulse, ``r_L`` (m, 3) [m] in L (east, north, up)."""
+
+    @property
+    def t(self) -> np.ndarray: ...
+
+    @property
+    def r_L(self) -> np.ndarray: ...
 
 
 def _title(result: SimulationResult) -> str:
@@ -95,17 +111,25 @@ def mark_record(
     ]
 
 
-def altitude_figure(result: SimulationResult, *, record: FlightRecord | None = None) -> Figure:
+def altitude_figure(
+    result: SimulationResult,
+    *,
+    record: FlightRecord | None = None,
+    track: MeasuredTrack | None = None,
+) -> Figure:
     """Altitude above the pad [m] over vertical speed [m/s], sharing time [s].
 
     Paper Figs. 7-9. The highest point is marked, and a rug along the bottom of each
     axes shows the laser pulse instants (dropped pulses in red). The altitude axis spans
     the flight's data; ``record`` (the flight the model reproduces,
-    :func:`~lightcraft_opt.files.model.load_record`) adds its apogee and air time as marks.
+    :func:`~lightcraft_opt.files.model.load_record`) adds its apogee and air time as marks;
+    ``track``'s altitudes are drawn as points.
     """
     fig = Figure(figsize=(8.5, 7.0), layout="constrained")
     ax_z, ax_v = fig.subplots(2, 1, sharex=True)
     plot_altitude(result, ax=ax_z)
+    if track is not None:
+        ax_z.plot(track.t, track.r_L[:, 2], ".", **MEASURED)
     mark_apogee(result, ax=ax_z)
     if record is not None:
         mark_record(result, record, ax=ax_z)
@@ -146,6 +170,7 @@ def track_figure(
     *,
     capture_radius: float | None = None,
     length_unit: str | None = None,
+    track: MeasuredTrack | None = None,
 ) -> Figure:
     """Beam-plane track: x-y-t in 3-D (paper Fig. 10) beside the x-y view from above.
 
@@ -156,9 +181,11 @@ def track_figure(
         drawn around the beam axis for scale; None draws no circle.
     length_unit : "m", "cm" or "mm" for east/north; None picks cm for a track within 2 m
         of the pad and m beyond.
+    track : measured positions, drawn as points in both views.
     """
     _, pointing = beam_axis_L(result)
-    xy = np.vstack([result.state("r_L")[:, :2], pointing])
+    measured = np.empty((0, 2)) if track is None else track.r_L[:, :2]
+    xy = np.vstack([result.state("r_L")[:, :2], pointing, measured])
     extent = float(np.max(np.abs(xy))) + (capture_radius or 0.0)
     unit = length_unit or auto_length_unit(extent)
     # wspace: room for the 3-D time label, which constrained layout does not see
@@ -170,6 +197,10 @@ def track_figure(
     ax_3d.legend(loc="upper left", fontsize=9)
     ax_3d.set_title("x-y-t track")
     plot_track_xy(result, ax=ax_xy, capture_radius=capture_radius, length_unit=unit)
+    if track is not None:
+        f = length_factor(unit)
+        ax_3d.plot(f * measured[:, 0], f * measured[:, 1], track.t, ".", **MEASURED)
+        ax_xy.plot(f * measured[:, 0], f * measured[:, 1], ".", **MEASURED)
     dots = plot_pulse_offsets(result, ax=ax_xy, length_unit=unit)
     if dots:
         fig.colorbar(dots[0], ax=ax_xy, shrink=0.85, label="captured energy fraction [-]")
@@ -198,15 +229,17 @@ def flight_figures(
     record: FlightRecord | None = None,
     laser: Laser | None = None,
     beam_size: BeamSize | None = None,
+    track: MeasuredTrack | None = None,
 ) -> dict[str, Figure]:
     """Every figure of a flight by file name: flight.png (the overview), altitude.png,
     track.png, attitude.png and flight3d.png. ``capture_radius`` [m] as in
     :func:`track_figure`, ``record`` as in :func:`altitude_figure`, ``laser`` and
-    ``beam_size`` as in :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`."""
+    ``beam_size`` as in :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`; ``track``'s
+    points are drawn on altitude.png and track.png."""
     return {
         "flight.png": flight_overview(result),
-        "altitude.png": altitude_figure(result, record=record),
-        "track.png": track_figure(result, capture_radius=capture_radius),
+        "altitude.png": altitude_figure(result, record=record, track=track),
+        "track.png": track_figure(result, capture_radius=capture_radius, track=track),
         "attitude.png": attitude_figure(result),
         "flight3d.png": flight3d_figure(result, laser=laser, beam_size=beam_size),
     }

@@ -88,6 +88,7 @@ def test_the_campaign_folder_reads_back_as_its_result(serial, tmp_path):
     assert "\n" not in repr(serial)
 
 
+@pytest.mark.slow
 def test_local_processes_give_the_identical_table(serial, campaign, tmp_path):
     result = run_campaign(campaign, RUNS, SEED, tmp_path, workers=2, progress=False)
     assert result.engine == "processes (2 workers)"
@@ -115,6 +116,7 @@ def test_a_folder_of_another_campaign_is_refused(serial, campaign):
         run_campaign(campaign, RUNS, SEED + 5, serial.out_dir, workers=1, progress=False)
 
 
+@pytest.mark.slow
 def test_kill_and_resume_loses_nothing_and_duplicates_nothing(serial, campaign, tmp_path):
     runs = 60
     reference = run_campaign(campaign, runs, SEED, tmp_path / "ref", workers=1, progress=False)
@@ -169,6 +171,7 @@ def _alive(pid: int) -> bool:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.slow
 def test_workers_die_with_a_killed_campaign(tmp_path):
     """SIGKILL the campaign (only it, not its process group) while its two workers fly
     runs: the workers and the multiprocessing resource tracker exit within seconds."""
@@ -220,6 +223,7 @@ def test_a_run_that_raises_is_an_error_row(campaign, tmp_path, monkeypatch):
     assert result.summary["apogee_m"]["n"] == 3
 
 
+@pytest.mark.slow
 def test_mpc_runs_do_not_depend_on_the_runs_before():
     """One controller flies every run of a process: its warm start, plan and solver memory
     must not carry over. Runs made in reverse order give the same rows; the MPC's wall-clock

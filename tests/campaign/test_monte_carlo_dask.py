@@ -43,6 +43,7 @@ def _bytes(out: Path) -> bytes:
     return (out / "runs.csv").read_bytes()
 
 
+@pytest.mark.slow
 def test_dask_cluster_gives_the_identical_table(serial, campaign, tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(

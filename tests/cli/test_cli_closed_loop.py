@@ -161,6 +161,7 @@ def test_none_writes_every_file(tmp_path, capsys):
     assert "deg (never below 0.5 deg), max tilt" in printed and "None" not in printed
 
 
+@pytest.mark.slow
 def test_mpc_through_the_gust_counts_the_injected_late_answers(tmp_path, model_cache):
     """The gust problem's first second under the MPC, --deterministic (no wall-clock
     budget): the two late answers it injects (pulses 20 and 21) are the only fallbacks, in

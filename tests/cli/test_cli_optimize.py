@@ -98,6 +98,7 @@ def read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
     return rows[0], rows[1:]
 
 
+@pytest.mark.slow
 def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["optimize", str(problem_file), "--out", str(out), "--horizon", "4"]) == 0

@@ -95,6 +95,7 @@ def mpc(prediction: ConingModel) -> MpcController:
 
 
 # --------------------------------------------------------------------------- acceptance
+@pytest.mark.slow
 def test_mpc_removes_5_degrees_of_coning_in_25_pulses_and_beats_lqr(prediction, plant, mpc):
     """Nominal plant, 26 pulses from the pad. MPC: below 0.5 degrees from pulse 5 on
     (measured; asserted within the required 25 pulses) and 0.1 degrees of tilt at the end.
@@ -129,6 +130,7 @@ def test_mpc_removes_5_degrees_of_coning_in_25_pulses_and_beats_lqr(prediction, 
 
 
 @pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.slow
 def test_mpc_keeps_it_on_a_dispersed_noisy_plant_that_drops_pulses(prediction, plant, mpc, seed):
     """DISPERSION, NOISE, 5 % drop-outs: below 0.5 degrees within 25 pulses and no solve
     lost (measured from pulse 9 and 6 for seeds 0 and 1); the dispersed plant differs
@@ -143,6 +145,7 @@ def test_mpc_keeps_it_on_a_dispersed_noisy_plant_that_drops_pulses(prediction, p
     assert run.log.count(ControllerStatus.SOLVED) == run.pulses
 
 
+@pytest.mark.slow
 def test_mpc_rides_a_crosswind_gust_that_tilts_the_uncontrolled_craft(prediction, plant, mpc):
     """A 2 m/s gust from the west (1 - cos, 0.8 s from 0.4 s) in a 2 s climb from the pad,
     upright and without coning. The plant feels it, the controllers do not know it. MPC:
@@ -183,6 +186,7 @@ class _Recording(MpcController):
 @pytest.mark.parametrize(
     "fault", [ControllerFault.RAISE, ControllerFault.NON_FINITE, ControllerFault.LATE]
 )
+@pytest.mark.slow
 def test_injected_solver_failures_are_counted_answered_by_the_shifted_plan_and_survived(
     prediction, plant, fault
 ):
@@ -237,6 +241,7 @@ class _SlowAt:
         return self.function.stats()
 
 
+@pytest.mark.slow
 def test_the_deterministic_mode_ignores_a_slow_solve(prediction, plant):
     """The same 0.3 s of coning flown three times. Without a budget (time_budget None)
     the flight with a 50 ms stall in pulse 3's solve is the calm machine's to the last

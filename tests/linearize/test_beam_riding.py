@@ -94,6 +94,7 @@ def test_focus_schedules_and_the_side_they_make(flight5):
         altitude_stability(flight5, [0.0], [0.0], options=OPTIONS)
 
 
+@pytest.mark.slow
 def test_the_focus_changes_nothing_under_the_linear_beam(maps):
     model, phi = maps["linear"]
     study = altitude_stability(model, [20.0, 50.0], [0.01], pulse_map=phi)
@@ -108,6 +109,7 @@ def test_the_focus_changes_nothing_under_the_linear_beam(maps):
         study.ceiling(FocusSchedule.FAR, 0.02)
 
 
+@pytest.mark.slow
 def test_matched_focus_rides_where_the_linear_beam_throws_the_craft_out(maps):
     """The launch side kept at the craft from 20 to 60 m: 1 cm off the axis the multiplier
     stays at 1.0023-1.0024 (the same beam; only its convergence across the optic changes),
@@ -152,6 +154,7 @@ def _growth_a_pulse(model, phi, altitude):
     return cell.beam_riding[0, 0, 0], growth, offsets[-1] / 1e-7
 
 
+@pytest.mark.slow
 def test_multiplier_is_the_growth_of_an_offset_in_a_direct_simulation(maps):
     model, phi = maps["linear"]
     multiplier, growth, _ = _growth_a_pulse(model, phi, 50.0)
@@ -163,6 +166,7 @@ def test_multiplier_is_the_growth_of_an_offset_in_a_direct_simulation(maps):
     assert after_40 < 2.0  # where the linear beam grew it ~1000-fold
 
 
+@pytest.mark.slow
 def test_side_scan_finds_the_band_that_rides(maps):
     """At 50 m, climbing at 10 m/s: 3 cm off the axis Flight 5 rides sides of 7.5-9 cm
     (|λ| <= 1.003) and is thrown out by a 5.5 cm beam (1.053); 5 cm off, only a side of 9 cm
@@ -180,6 +184,7 @@ def test_side_scan_finds_the_band_that_rides(maps):
     assert at_5cm[0] > 1.5 and at_5cm[2] < 1.005
 
 
+@pytest.mark.slow
 def test_plots_draw_the_study_numbers(maps):
     """Under the linear beam one line per offset (the schedules coincide), under the waist
     beam one per schedule and offset; each line is the study's multipliers; |λ| = 1 last."""

@@ -233,6 +233,7 @@ def test_hover_is_refused_where_the_laser_cannot_hold_the_craft(f5):
     ("blast_angle", "rides"),
     [(0.5, True), (0.15, False)],
 )
+@pytest.mark.slow
 def test_beam_riding_multiplier_predicts_whether_flight5_stays_in_the_beam(blast_angle, rides):
     """5 m/s climb at 2 m (docs/frames.md): |λ| = 1.0011 at 0.5 rad (1.0015 with 32
     substeps) and 1.252 at 0.15 rad (1.247). Simulated from 1 cm off the axis, the first
@@ -347,6 +348,7 @@ def test_lqr_policy_brings_a_1cm_offset_back_in_simulation():
     assert np.max(np.abs(r_closed.state("r_L")[:, 2] - 2.0)) < 0.01
 
 
+@pytest.mark.slow
 def test_lqr_with_rcs_thrusters_closes_the_loop():
     """A Flight 5 craft with four lateral 50 mN thrusters (2 g of propellant): with or
     without the beam pointing, LQR puts every multiplier inside the unit circle."""

@@ -126,6 +126,7 @@ def test_chain_gradient_jacobian_and_hessian_equal_casadi_ad(nlp):
     assert chain["jac_g"].sparsity_out(1).nnz() <= jac.sparsity().nnz() + tr.lbg.size
 
 
+@pytest.mark.slow
 def test_ipopt_reaches_the_same_optimum_with_chain_or_ad_derivatives():
     problem, options = _lateral()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))

@@ -39,6 +39,7 @@ def crosswind():
     return problem, compiled, compiled.solve()
 
 
+@pytest.mark.slow
 def test_the_crosswind_problem_file_states_the_issue(crosswind):
     problem, _, _ = crosswind
     p = problem.p
@@ -50,6 +51,7 @@ def test_the_crosswind_problem_file_states_the_issue(crosswind):
     assert not any(isinstance(c, TerminalAltitude) for c in problem.constraints)
 
 
+@pytest.mark.slow
 def test_optimal_pointing_keeps_the_craft_that_fixed_pointing_loses(crosswind):
     problem, compiled, result = crosswind
     assert result.status is OcpStatus.SOLVED, result.message
