@@ -188,10 +188,12 @@ def main(argv: list[str] | None = None) -> None:
         "options": problem.loop,
     }
     mpc = Shadowed(model, problem.mpc, prediction=prediction)
+    budget = mpc.options.time_budget
+    said = "none" if budget is None else f"{budget * 1e3:g} ms"
     print(
         f"MPC: {mpc.options.solver.value}, horizon {mpc.options.horizon} pulses, "
         f"{mpc.qp.n_w} variables, {mpc.qp.n_a} constraint rows, budget "
-        f"{mpc.options.time_budget * 1e3:g} ms; QP built in {mpc.build_time:.2f} s"
+        f"{said}; QP built in {mpc.build_time:.2f} s"
     )
     runs: list[ClosedLoopResult] = []
     for _ in range(args.repeat):
