@@ -35,21 +35,15 @@ from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_model, load_record
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
 from lightcraft_opt.files.problem import load_problem
-from lightcraft_opt.files.simulation_outputs import (
-    write_pulses_csv,
-    write_summary,
-    write_trajectory_csv,
-)
 from lightcraft_opt.files.track import read_track
-from lightcraft_opt.layout import initial_state, parameter_values
+from lightcraft_opt.layout import initial_state
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
-from lightcraft_opt.outputs import beam_size_of
 from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
-from lightcraft_opt.plots.figures import PLOT_DPI, flight_figures
+from lightcraft_opt.plots.figures import PLOT_DPI
 from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.simulation.coast_reference import simulate_coast
@@ -138,20 +132,15 @@ def _simulate(args: argparse.Namespace) -> int:
             seed=args.seed,
             compiled=False if args.interpreted else None,
         )
-        write_pulses_csv(result, out / "pulses.csv")
-    write_trajectory_csv(result, out / "trajectory.csv")
-    summary = write_summary(result, model, out / "summary.json", launch_speed_mps=args.launch_speed)
-    # Figures not registered with pyplot: nothing to close, freed with the dict.
-    figures = flight_figures(
-        result,
-        capture_radius=model.craft.engine.capture_radius,
+    # the files and figures are written by the writers registered in outputs.py
+    result.save(
+        out,
+        model=model,
         record=load_record(args.model),
-        laser=model.laser,
-        beam_size=beam_size_of(model.laser, parameter_values(model)),
         track=track,
+        launch_speed_mps=args.launch_speed,
     )
-    for name, fig in figures.items():
-        fig.savefig(out / name, dpi=PLOT_DPI)
+    summary = json.loads((out / "summary.json").read_text())
     print(
         f"{summary['status']}: apogee {summary['apogee_m']:.2f} m, air time "
         f"{summary['air_time_s']:.2f} s -> {out}/"

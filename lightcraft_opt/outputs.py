@@ -26,7 +26,7 @@ from __future__ import annotations
 import shutil
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -53,6 +53,9 @@ from lightcraft_opt.params import FlightRecord, Laser, Model
 from lightcraft_opt.presenters import register
 from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.result import SimulationResult
+
+if TYPE_CHECKING:  # the plots load matplotlib: only on the first plot or save
+    from lightcraft_opt.plots.figures import MeasuredTrack
 
 __all__ = ["beam_size_of", "save_figures"]
 
@@ -89,6 +92,7 @@ def _flight_plot(
     model: Model | None = None,
     capture_radius: float | None = None,
     record: FlightRecord | None = None,
+    track: MeasuredTrack | None = None,
     **_: Any,
 ) -> dict[str, Any]:
     from lightcraft_opt.plots.figures import flight_figures
@@ -100,7 +104,12 @@ def _flight_plot(
         laser = model.laser
         beam_size = beam_size_of(laser, parameter_values(model))
     return flight_figures(
-        result, capture_radius=capture_radius, record=record, laser=laser, beam_size=beam_size
+        result,
+        capture_radius=capture_radius,
+        record=record,
+        laser=laser,
+        beam_size=beam_size,
+        track=track,
     )
 
 
@@ -112,6 +121,7 @@ def _flight_save(
     model: Model | None = None,
     capture_radius: float | None = None,
     record: FlightRecord | None = None,
+    track: MeasuredTrack | None = None,
     **extra: Any,
 ) -> Path:
     _folder(folder)
@@ -127,6 +137,7 @@ def _flight_save(
         model=model,
         capture_radius=capture_radius,
         record=record,
+        track=track,
     )
     return folder
 

@@ -84,7 +84,9 @@ def test_a_file_of_the_wrong_kind_names_the_command_that_reads_it(
 def test_simulate_writes_to_a_folder_named_after_the_model(tmp_path, monkeypatch, capsys):
     shutil.copytree(MODELS, tmp_path / "models")
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(cli, "flight_figures", lambda *a, **k: {})  # the slow part, not ours
+    from lightcraft_opt.plots import figures
+
+    monkeypatch.setattr(figures, "flight_figures", lambda *a, **k: {})  # the slow part
     argv = ["simulate", "models/flight5.toml", "--coast-only", "--launch-speed", "3"]
     assert main([*argv, "--duration", "0.2"]) == 0
     assert "-> runs/flight5/" in capsys.readouterr().out
