@@ -33,7 +33,6 @@ from lightcraft_opt.files.calibration_outputs import write_calibration_report, w
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_model, load_record
-from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import initial_state
@@ -45,7 +44,6 @@ from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI
 from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
-from lightcraft_opt.plots.ocp import ocp_figures
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
@@ -181,11 +179,9 @@ def _optimize(args: argparse.Namespace) -> int:
         f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
         f"{result.solve_time:.2f} s ({result.message})"
     )
-    write_solution_csv(result, problem, out / "solution.csv")
-    summary = write_ocp_summary(result, pf, out / "summary.json")
-    figures = ocp_figures(result, problem, title=pf.title)
-    for name, fig in figures.items():
-        fig.savefig(out / name, dpi=PLOT_DPI)
+    # the files and figures are written by the writers registered in outputs.py
+    result.save(out, problem=pf)
+    summary = json.loads((out / "summary.json").read_text())
     print(
         f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
         f"{summary['final_altitude_m']:.3f} m, largest beam offset "
