@@ -20,8 +20,6 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TextIO
 
-import numpy as np
-
 from lightcraft_opt import __version__
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.campaign.runner import run_campaign
@@ -29,7 +27,6 @@ from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, 
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.errors import LightcraftError, ProblemFileError
-from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_model, load_record
@@ -40,7 +37,7 @@ from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
-from lightcraft_opt.plots.calibration import calibration_figures
+from lightcraft_opt.outputs import fit_flights
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI
 from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
@@ -414,37 +411,16 @@ def _calibrate(args: argparse.Namespace) -> int:
         options=options,
         compiled=False if args.interpreted else None,
     )
-    fitted = write_fitted_model(
-        result, source, out / f"{source.stem}-fitted.toml", track_file=args.track
-    )
-    report = write_calibration_report(
+    # track_fit.png's whole flights, flown with the fit's pulse map and compile choice
+    flights = fit_flights(
         result,
         model,
-        out / "fit_report.json",
-        model_file=str(source),
-        track_file=str(args.track),
-        fitted_model_file=fitted.name,
+        options=options.pulse_map,
+        compiled=False if args.interpreted else None,
     )
-    # track_fit.png: the fitted and the starting flights from launch to landing, or to twice
-    # the track's span (a track of a whole flight shows its landing; the cost stays bounded)
-    whole = min(max(2.0 * float(track.t[-1]), 1.0), MAX_DURATION)
-    flights = {
-        label: simulate(
-            model,
-            whole,
-            x0=x0,
-            p=p,
-            options=options.pulse_map,
-            compiled=False if args.interpreted else None,
-        )
-        for label, p, x0 in (
-            ("fitted", result.p, result.x0),
-            ("before the fit", result.initial_p, result.initial_x0),
-        )
-        if p.size and np.all(np.isfinite(p)) and np.all(np.isfinite(x0))
-    }
-    for name, fig in calibration_figures(result, flights=flights).items():
-        fig.savefig(out / name, dpi=PLOT_DPI)
+    # the files and figures below are written by the writers registered in outputs.py
+    result.save(out, model=model, model_file=source, track_file=args.track, flights=flights)
+    report = json.loads((out / "fit_report.json").read_text())
     for name, entry in report["parameters"].items():
         std = "not identifiable" if entry["std"] is None else f"± {entry['std']:.3g}"
         flags = f"  [{', '.join(entry['flags'])}]" if entry["flags"] else ""

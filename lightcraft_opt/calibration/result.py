@@ -66,7 +66,7 @@ class CalibrationResult(Presentable):
     iterations : Gauss-Newton iterations taken.
     cost : ½ Σ r² at the optimum [m²]; ``initial_cost`` at the start.
     sigma : residual standard deviation sqrt(RSS / (3 m - n)) [m].
-    rms : (3,) root-mean-square residual per axis (east, north, up) [m].
+    rms : (3,) root-mean-square residual per L axis (x east, y north, z up) [m].
     residuals : (m, 3) predicted minus measured positions, L frame [m].
     t : (m,) track times [s]; ``r_measured`` (m, 3) the tracked positions, L [m].
     flight_t : (k,) times of the fitted flight's dense states [s].

@@ -300,7 +300,7 @@ def write_calibration_report(
         "cost_m2": finite_or_none(result.cost),
         "initial_cost_m2": finite_or_none(result.initial_cost),
         "sigma_m": finite_or_none(result.sigma),
-        "rms_m": dict(zip(("east", "north", "up"), map(finite_or_none, result.rms), strict=True)),
+        "rms_m": dict(zip(("x", "y", "z"), map(finite_or_none, result.rms), strict=True)),
         "parameters": parameters,
         "unidentified": list(result.unidentified),
         "flags": [

@@ -58,7 +58,7 @@ def test_calibrate_writes_model_report_and_plots(tmp_path, capsys):
     assert report["status"] == "converged"
     assert report["gaps_dropped"] == 1
     assert report["points"] == 59
-    assert set(report["rms_m"]) == {"east", "north", "up"}
+    assert set(report["rms_m"]) == {"x", "y", "z"}  # L components, as every file
     cm = report["parameters"]["cm"]
     assert cm["unit"] == "N s/J"
     assert cm["value_n_per_mw"] == cm["value"] * 1e6

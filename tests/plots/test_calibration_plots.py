@@ -87,3 +87,20 @@ def test_without_flights_track_fit_draws_the_fit_over_the_track(fit):
     up = calibration_figures(result)["track_fit.png"].axes[2]
     (line,) = [ln for ln in up.get_lines() if ln.get_label() == "fitted"]
     np.testing.assert_array_equal(line.get_ydata(), result.flight_x[:, R + 2])
+
+
+def test_plot_with_the_model_flies_the_whole_flights_itself(fit):
+    """``result.plot(model=...)`` gives the CLI's track_fit.png: outputs.fit_flights flies
+    both parameter sets to twice the track's span, at least 1 s (here 1 s), and over the
+    fixture's 0.6 s they are the fixture's flights."""
+    result, fitted, before = fit
+    assert 2.0 * result.t[-1] < 1.0
+    ax = result.plot(model=table1_flight5())["track_fit.png"].axes[2]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    for label, flight in (("fitted", fitted), ("before the fit", before)):
+        t, z = lines[label].get_xdata(), lines[label].get_ydata()
+        assert t[-1] == pytest.approx(1.0, abs=1e-9)
+        shared = t <= flight.t[-1]
+        np.testing.assert_allclose(
+            z[shared], np.interp(t[shared], flight.t, flight.x[:, R + 2]), atol=1e-6
+        )
