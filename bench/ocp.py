@@ -180,8 +180,8 @@ def main() -> None:
     )
     fraction = np.hypot(*cold.engine[:, 7:9].T) / problem.model.craft.engine.capture_radius
     print(
-        f"its optimum: largest capture fraction {fraction.max():.3f}, drift from the pad "
-        f"{100 * np.max(np.hypot(*cold.x[:, :2].T)):.2f} cm, altitude at the end "
+        f"its optimum: largest offset over the capture radius {fraction.max():.3f}, drift "
+        f"from the pad {100 * np.max(np.hypot(*cold.x[:, :2].T)):.2f} cm, altitude at the end "
         f"{cold.x[-1, 2]:.1f} m (apogee {cold.x[:, 2].max():.1f} m)"
     )
 

@@ -67,9 +67,9 @@ axes[0].hist(1000 * draws["mass"], bins=40)
 axes[0].set_xlabel("dry mass [g]")
 axes[1].hist(np.degrees(draws["tilt"]), bins=40)
 axes[1].set_xlabel("launch tilt [deg]")
-axes[2].scatter(100 * draws["offset_east"], 100 * draws["offset_north"], s=2)
-axes[2].set_xlabel("offset east [cm]")
-axes[2].set_ylabel("offset north [cm]")
+axes[2].scatter(100 * draws["launch_offset_x"], 100 * draws["launch_offset_y"], s=2)
+axes[2].set_xlabel("launch offset x (east) [cm]")
+axes[2].set_ylabel("launch offset y (north) [cm]")
 axes[2].set_aspect("equal")
 
 # %% [markdown]

@@ -162,11 +162,11 @@ def _outputs(result: ClosedLoopResult) -> dict[str, Any]:
         "apogee_m": float(r[k, 2]),
         "apogee_time_s": float(flight.t[k]),
         "flight_time_s": flight.air_time,
-        "final_east_m": float(r[-1, 0]),
-        "final_north_m": float(r[-1, 1]),
-        "final_up_m": float(r[-1, 2]),
-        "landing_east_m": float(r[-1, 0]) if landed else math.nan,
-        "landing_north_m": float(r[-1, 1]) if landed else math.nan,
+        "final_x_m": float(r[-1, 0]),
+        "final_y_m": float(r[-1, 1]),
+        "final_z_m": float(r[-1, 2]),
+        "landing_x_m": float(r[-1, 0]) if landed else math.nan,
+        "landing_y_m": float(r[-1, 1]) if landed else math.nan,
         "left_beam": int(flight.status is SimulationStatus.LEFT_BEAM),
         "pulses": result.pulses,
         "dropped_pulses": int(np.sum(result.dropped)),
@@ -203,8 +203,8 @@ class _Flyer:
         parameter_values(c.model, parameters)  # a bad value: ParameterError naming it
         x0 = np.array(c.x0, dtype=float)
         r = STATE.index("r_L")
-        x0[r.start] += draws.get("offset_east", 0.0)
-        x0[r.start + 1] += draws.get("offset_north", 0.0)
+        x0[r.start] += draws.get("launch_offset_x", 0.0)
+        x0[r.start + 1] += draws.get("launch_offset_y", 0.0)
         q = STATE.index("q_LB")  # the drawn lean, turning x0's attitude in L
         x0[q] = tilted_attitude(x0[q], draws.get("tilt", 0.0), draws.get("tilt_azimuth", 0.0))
         loop = dataclasses.replace(c.loop, seed=seed)

@@ -26,7 +26,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 
-__all__ = ["DamagedRowsWarning", "RowCheck", "RunTable", "read_table"]
+__all__ = ["DamagedRowsWarning", "RowCheck", "RunTable", "other_columns", "read_table"]
 
 INDEX = "run"
 
@@ -82,8 +82,9 @@ class RunTable:
             (header, head_raw, _), body = records[0], records[1:]
         if header and header != self.columns:
             raise ParameterError(
-                "out", f"{self.path} has columns {list(header)}, this campaign writes "
-                f"{list(self.columns)}: a different campaign; use another output folder"
+                "out", f"{self.path} has other columns ({other_columns(header, self.columns)}): "
+                "a different campaign, or one written before its columns were renamed; use "
+                "another output folder"
             )  # fmt: skip
         kept: list[tuple[int, str]] = []
         dropped: list[tuple[int | None, str]] = []
@@ -151,6 +152,18 @@ class RunTable:
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, self.path)
+
+
+def other_columns(found: Sequence[str], columns: Sequence[str]) -> str:
+    """How a table's header ``found`` differs from ``columns``, in words."""
+    there = [c for c in found if c not in columns]
+    here = [c for c in columns if c not in found]
+    if not there and not here:
+        return "the same columns in another order"
+    return (
+        f"there: {', '.join(there) or 'no other column'}; written now instead: "
+        f"{', '.join(here) or 'no other column'}"
+    )
 
 
 def read_table(path: str | Path) -> dict[str, np.ndarray]:

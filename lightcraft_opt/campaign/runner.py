@@ -43,7 +43,12 @@ import numpy as np
 from lightcraft_opt.campaign import engines as engines
 from lightcraft_opt.campaign.progress import Progress
 from lightcraft_opt.campaign.run import row_problem, run_one
-from lightcraft_opt.campaign.run_table import DamagedRowsWarning, RunTable, read_table
+from lightcraft_opt.campaign.run_table import (
+    DamagedRowsWarning,
+    RunTable,
+    other_columns,
+    read_table,
+)
 from lightcraft_opt.campaign.spec import TIMING_COLUMNS, Campaign
 from lightcraft_opt.campaign.summary import campaign_summary
 from lightcraft_opt.errors import ParameterError
@@ -194,9 +199,10 @@ def run_campaign(
     start = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    _check_manifest(out, campaign, runs, seed)
+    manifest = _checked_manifest(out, campaign, runs, seed)
     table = RunTable(out / RUNS, campaign.columns, partial(row_problem, campaign, seed))
     timings = RunTable(out / TIMINGS, TIMING_COLUMNS, _timing_problem)
+    write_json(manifest, out / MANIFEST)  # once the tables are known to be this campaign's
     timings.drop(timings.done - table.done)  # the runs made again write theirs again
     _warn_dropped(table, timings)
     todo = [i for i in range(runs) if i not in table.done]
@@ -275,8 +281,10 @@ def _first(table: dict[str, np.ndarray], runs: int) -> dict[str, np.ndarray]:
     return {name: column[keep] for name, column in table.items()}
 
 
-def _check_manifest(out: Path, campaign: Campaign, runs: int, seed: int) -> None:
-    """Write campaign.json, or check that the folder's is this campaign's."""
+def _checked_manifest(out: Path, campaign: Campaign, runs: int, seed: int) -> dict[str, Any]:
+    """campaign.json's content, after checking that the folder's, if any, is this
+    campaign's: the same run table columns (a folder written before a column was renamed
+    is refused, never mixed with rows under the new names) and the same fingerprint."""
     path = out / MANIFEST
     fingerprint = campaign_fingerprint(campaign, seed)
     if path.exists():
@@ -284,13 +292,21 @@ def _check_manifest(out: Path, campaign: Campaign, runs: int, seed: int) -> None
             old = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError) as err:
             raise ParameterError("out", f"cannot read {path}: {err}") from err
+        columns = old.get("columns")
+        if isinstance(columns, list) and columns != list(campaign.columns):
+            raise ParameterError(
+                "out",
+                f"{out} holds a campaign whose {RUNS} has other columns "
+                f"({other_columns(columns, campaign.columns)}): another campaign, or one "
+                "written before its columns were renamed; use another output folder",
+            )
         if old.get("fingerprint") != fingerprint:
             raise ParameterError(
                 "out",
                 f"{out} holds another campaign ({old.get('title')!r}, seed {old.get('seed')}): "
                 "its file, model or seed differ from this one's; use another output folder",
             )
-    manifest = {
+    return {
         "fingerprint": fingerprint,
         "title": campaign.title,
         "seed": seed,
@@ -298,7 +314,6 @@ def _check_manifest(out: Path, campaign: Campaign, runs: int, seed: int) -> None
         "controller": campaign.controller.value,
         "columns": list(campaign.columns),
     }
-    write_json(manifest, path)
 
 
 def write_json(data: dict[str, Any], path: Path) -> None:

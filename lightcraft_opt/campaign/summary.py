@@ -72,9 +72,10 @@ def _stats(v: np.ndarray) -> dict[str, Any]:
     }
 
 
-def _points(east: np.ndarray, north: np.ndarray) -> dict[str, Any]:
-    ok = np.isfinite(east) & np.isfinite(north)
-    xy = np.column_stack([east[ok], north[ok]])
+def _points(x: np.ndarray, y: np.ndarray) -> dict[str, Any]:
+    """Mean and covariance of the finite points (x, y) [m, L: east, north]."""
+    ok = np.isfinite(x) & np.isfinite(y)
+    xy = np.column_stack([x[ok], y[ok]])
     out: dict[str, Any] = {"n": len(xy)}
     if len(xy) < 3:
         return out
@@ -112,8 +113,8 @@ def campaign_summary(
         "status_counts": {str(k): int(c) for k, c in zip(names, counts, strict=True)},
         "apogee_m": _stats(col("apogee_m")),
         "apogee_time_s": _stats(col("apogee_time_s")),
-        "landing": _points(col("landing_east_m"), col("landing_north_m")),
-        "final_position": _points(col("final_east_m"), col("final_north_m")),
+        "landing": _points(col("landing_x_m"), col("landing_y_m")),
+        "final_position": _points(col("final_x_m"), col("final_y_m")),
         "left_beam": {
             "count": left,
             "probability": left / n if n else math.nan,

@@ -198,7 +198,7 @@ class MpcController:
         omega = float(np.interp(spin, pred.spins, pred.omega_per_spin[:, 0])) * spin
         A, B = pred.at(spin, omega, terminal_altitude)
         _, P = dlqr_gain(A, B @ basis, cost.Q, basis.T @ cost.R @ basis, cost.S @ basis)
-        max_offset = opts.capture_fraction * model.craft.engine.capture_radius
+        max_offset = opts.max_offset_over_capture_radius * model.craft.engine.capture_radius
         Cz, C, lo, hi, soft = input_constraints(
             pred,
             self.frame.max_thrust,

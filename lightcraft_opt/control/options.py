@@ -112,8 +112,9 @@ class MpcOptions:
         flight then depends only on its inputs, not on the machine's load.
     envelope_directions : P >= 2: the thrust envelope, the pointing limit and the beam
         offset limit are regular 2P-gons inscribed in their circles.
-    capture_fraction : soft limit of the predicted beam offset, as a fraction of the
-        optic's capture radius, in (0, 1]: where the linear engine model holds.
+    max_offset_over_capture_radius : soft limit of the predicted beam offset over the
+        optic's capture radius R_c, |offset| / R_c, in (0, 1]: where the linear engine
+        model holds.
     warm_start : start each solve from the previous plan shifted by a pulse.
     """
 
@@ -124,21 +125,23 @@ class MpcOptions:
     tol: float = 1e-6
     time_budget: float | None = 5e-3
     envelope_directions: int = 4
-    capture_fraction: float = 0.4
+    max_offset_over_capture_radius: float = 0.4
     warm_start: bool = True
 
     def __post_init__(self) -> None:
         checked_int("MpcOptions", "horizon", self.horizon, 1, MAX_CONTROL_HORIZON, _WHY_HORIZON)
         _checked_qp_options("MpcOptions", self, ControlWeights)
         checked_int("MpcOptions", "envelope_directions", self.envelope_directions, 2)
-        c = self.capture_fraction
+        c = self.max_offset_over_capture_radius
         if not (
             isinstance(c, int | float)
             and not isinstance(c, bool)
             and math.isfinite(c)
             and 0 < c <= 1
         ):
-            raise OptionError(f"MpcOptions.capture_fraction must be in (0, 1], got {c!r}")
+            raise OptionError(
+                f"MpcOptions.max_offset_over_capture_radius must be in (0, 1], got {c!r}"
+            )
         if not isinstance(self.warm_start, bool):
             raise OptionError(
                 f"MpcOptions.warm_start must be true or false, got {self.warm_start!r}"

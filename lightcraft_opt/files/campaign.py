@@ -24,8 +24,9 @@ Quantities (:data:`~lightcraft_opt.campaign.dispersions.DISPERSED`, in drawing o
 units, and their nominal value (the normal's default mean, what a relative sigma is
 relative to): ``mass`` (mass: the dry mass), ``inertia_axial``, ``inertia_transverse``
 (inertia: the dry rotor's), ``coupling`` (impulse: impulse_per_pulse), ``dropout_rate``
-(bare: [plant] dropout_rate; clipped to [0, 0.99] when drawn), ``offset_east``,
-``offset_north`` (length, added to [initial]'s position: nominal 0), ``tilt``,
+(bare: [plant] dropout_rate; clipped to [0, 0.99] when drawn), ``launch_offset_x``,
+``launch_offset_y`` (length, added to [initial]'s position, x east and y north in L:
+nominal 0; formerly ``offset_east``, ``offset_north``, refused with the new name), ``tilt``,
 ``tilt_azimuth`` (angle: a tilt composed on top of [initial]'s attitude, leaning toward
 the azimuth clockwise from north; nominal 0; a ``tilt`` without ``tilt_azimuth`` gets a
 uniform azimuth over 0-360°), ``wind_speed`` (speed) and ``wind_direction_from`` (angle),
@@ -75,13 +76,15 @@ _KIND: dict[str, str | None] = {
     "inertia_transverse": "inertia",
     "coupling": "impulse",
     "dropout_rate": None,
-    "offset_east": "length",
-    "offset_north": "length",
+    "launch_offset_x": "length",
+    "launch_offset_y": "length",
     "tilt": "angle",
     "tilt_azimuth": "angle",
     "wind_speed": "speed",
     "wind_direction_from": "angle",
 }
+#: Dispersion tables renamed: old -> new name, refused with the new one.
+_FORMER = {"offset_east": "launch_offset_x", "offset_north": "launch_offset_y"}
 _DISTRIBUTIONS = ("normal", "uniform")
 #: How a unit suffix of a key is shown in a message, where it differs.
 _SHOWN = {"mps": "m/s", "kmh": "km/h", "kg_m2": "kg m^2", "g_cm2": "g cm^2",
@@ -136,7 +139,7 @@ def _nominal(problem: ClosedLoopProblem) -> dict[str, float]:
     p = parameter_values(problem.model, problem.plant_parameters)
     out = {name: float(p[PARAMETERS.index(slot)][0]) for name, slot in DISPERSED_PARAMETER.items()}
     out["dropout_rate"] = problem.loop.dropout_rate
-    for name in ("offset_east", "offset_north", "tilt", "tilt_azimuth"):
+    for name in ("launch_offset_x", "launch_offset_y", "tilt", "tilt_azimuth"):
         out[name] = 0.0
     return out
 
@@ -147,6 +150,13 @@ def _dispersions(src: str, raw: Any, nominal: dict[str, float]) -> Dispersions:
     items: list[tuple[str, Normal | Uniform]] = []
     for name, table in raw.items():
         where = f"dispersions.{name}"
+        if name in _FORMER:
+            new = _FORMER[name]
+            raise ProblemFileError(
+                src,
+                where,
+                f"{schema.renamed(name, new)}: write [dispersions.{new}], its keys unchanged",
+            )
         if name not in DISPERSED:
             close = difflib.get_close_matches(name, list(DISPERSED), n=1, cutoff=0.6)
             hint = f"did you mean {close[0]!r}? " if close else ""

@@ -25,7 +25,7 @@ A closed-loop file::
     tol = 1e-6
     time_budget_ms = 5.0                   # "none": no wall-clock check, the deterministic
     envelope_directions = 4                #   mode (the flight depends on its inputs only)
-    capture_fraction = 0.4
+    max_offset_over_capture_radius = 0.4   # soft bound on |beam offset| / capture radius
     warm_start = true
     propellant_weight = 1.0                # [1/N] on the summed mean thrust, linear
 
@@ -137,9 +137,14 @@ _CONTROLLER: dict[str, Spec] = {
     "tol": NUMBER,
     "time_budget": quantity("time"),
     "envelope_directions": INTEGER,
-    "capture_fraction": NUMBER,
+    "max_offset_over_capture_radius": NUMBER,
     "warm_start": _SWITCH,
     "propellant_weight": NUMBER,
+}
+#: Keys of ``[controller]`` and ``[director]`` renamed: old -> new, refused with the new.
+_FORMER: dict[str, dict[str, str]] = {
+    "controller": {"capture_fraction": "max_offset_over_capture_radius"},
+    "director": {},
 }
 #: ``[controller.tolerances]``: ControlWeights field -> quantity of its tolerance.
 _TOLERANCES: dict[str, Spec] = {
@@ -376,7 +381,7 @@ def _weighted_tables(
 ) -> tuple[Table, Table, dict[str, float]]:
     """The table ``name`` and its ``[name.tolerances]`` read, and the weights of the
     tolerances, 1 / tolerance^2 by field (a tolerance must be positive)."""
-    table = read_table(src, raw, name, schema, tables=("tolerances",))
+    table = read_table(src, raw, name, schema, tables=("tolerances",), former=_FORMER[name])
     tol = read_table(src, raw.get("tolerances", {}), f"{name}.tolerances", tolerances)
     weights: dict[str, float] = {}
     for field, v in tol.values.items():

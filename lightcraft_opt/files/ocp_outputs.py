@@ -19,10 +19,10 @@ from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS, finite_or_none, model_hash
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     EnergyBudget,
     NoGroundContact,
     OcpProblem,
+    OffsetLimit,
     RcsEnvelope,
     TerminalAltitude,
     TerminalState,
@@ -33,11 +33,11 @@ from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.invariants import build_invariants
 
 __all__ = [
-    "capture_fractions",
     "constraint_margins",
     "engine_columns",
     "input_columns",
     "node_tilt",
+    "offsets_over_capture_radius",
     "solution_columns",
     "write_ocp_summary",
     "write_solution_csv",
@@ -81,9 +81,9 @@ def solution_columns(inputs: VectorLayout) -> list[str]:
     return ["k", *TRAJECTORY_COLUMNS, *input_columns(inputs), *engine_columns()]
 
 
-def capture_fractions(result: OcpResult, problem: OcpProblem) -> np.ndarray:
+def offsets_over_capture_radius(result: OcpResult, problem: OcpProblem) -> np.ndarray:
     """(N,) |offset_L| / R_c at each pulse: the beam axis's distance from the optic centre
-    over the capture radius (the CaptureFraction measure) [-]."""
+    over the capture radius (the OffsetLimit measure) [-]."""
     pulses = PulseRecord(result.t[:-1], result.u, result.engine)
     radius = float(problem.p[PARAMETERS.index("capture_radius")][0])
     return np.hypot(*pulses.offset_L.T) / radius
@@ -105,7 +105,9 @@ def write_solution_csv(result: OcpResult, problem: OcpProblem, path: Path) -> No
             np.degrees(np.asarray(coning).ravel()),
         ]
     )
-    pulses = np.column_stack([result.u, result.engine, capture_fractions(result, problem)])
+    pulses = np.column_stack(
+        [result.u, result.engine, offsets_over_capture_radius(result, problem)]
+    )
     lines = [",".join(solution_columns(result.inputs))]
     for k in range(n):
         cells = [_cell(v, integer=j == 0) for j, v in enumerate(nodes[k])]
@@ -128,17 +130,18 @@ def constraint_margins(result: OcpResult, problem: OcpProblem) -> list[dict[str,
     """Each constraint of ``problem`` with its margin at the returned iterate: the smallest
     slack over the horizon (positive: met with room to spare, negative: violated), in the
     unit named by ``unit``. The path constraints are read where the transcription poses
-    them: tilt and ground clearance at nodes 1..N, the capture fraction at every pulse.
+    them: tilt and ground clearance at nodes 1..N, the beam offset over the capture
+    radius at every pulse.
     An RCS envelope's margin is null (its slack is in the NLP's own form)."""
     z = result.state("r_L")[:, 2]
     out: list[dict[str, Any]] = []
     for con in problem.constraints:
         margin: float | None
         match con:
-            case CaptureFraction():
-                f = capture_fractions(result, problem)
-                name, unit = "capture_fraction", "-"
-                margin = float(con.fraction - np.max(f)) if f.size else None
+            case OffsetLimit():
+                f = offsets_over_capture_radius(result, problem)
+                name, unit = "offset_limit", "-"
+                margin = float(con.max_offset_over_capture_radius - np.max(f)) if f.size else None
             case TiltLimit():
                 name, unit = "tilt_limit", "deg"
                 margin = math.degrees(con.max_tilt - float(np.max(node_tilt(result, problem)[1:])))
@@ -171,8 +174,10 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
     (:func:`constraint_margins`), constraint violation). Beside it, result.json and
     result.npz: the exact result (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
-    fractions = capture_fractions(result, problem)
-    limits = [c.fraction for c in problem.constraints if isinstance(c, CaptureFraction)]
+    offsets = offsets_over_capture_radius(result, problem)
+    limits = [
+        c.max_offset_over_capture_radius for c in problem.constraints if isinstance(c, OffsetLimit)
+    ]
     r_L = result.state("r_L")
     rcs, liner = result.state("rcs_mass"), result.state("liner_mass")
     summary: dict[str, Any] = {
@@ -198,7 +203,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "final_altitude_m": float(r_L[-1, 2]),
         "final_position_m": r_L[-1].tolist(),
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
-        "max_offset_over_capture_radius": float(np.max(fractions)) if fractions.size else 0.0,
+        "max_offset_over_capture_radius": float(np.max(offsets)) if offsets.size else 0.0,
         "max_offset_over_capture_radius_limit": min(limits) if limits else None,
         "max_tilt_deg": math.degrees(float(np.max(node_tilt(result, problem)))),
         "propellant_used_kg": float(rcs[0] - rcs[-1]),

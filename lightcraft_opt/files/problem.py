@@ -49,8 +49,8 @@ A problem file::
     weight = 1e3
 
     [[constraint]]
-    kind = "capture_fraction"
-    fraction = 0.5
+    kind = "offset_limit"                  # |beam offset| / capture radius R_c at most 0.5
+    max_offset_over_capture_radius = 0.5
     [[constraint]]
     kind = "tilt_limit"
     max_tilt_deg = 10
@@ -89,10 +89,12 @@ or ``path_csv``: a CSV file relative to this one with a header, first column ``t
 then one column per component of the slot in its SI unit, e.g. ``t_s,x_m,y_m,z_m``,
 linearly interpolated at the node times), ``lateral_offset`` (weight [1/m^2],
 relative_to), ``control_effort`` (input, weight, reference), ``control_rate`` (input,
-weight). Constraints (``kind``): ``capture_fraction`` (fraction), ``tilt_limit``
-(max_tilt), ``no_ground_contact`` (clearance), ``terminal_altitude`` (minimum,
-maximum), ``terminal_state`` (state, lower, upper), ``energy_budget`` (total),
-``rcs_envelope`` (no keys: phase-locked thrust within [0, max] at every phase).
+weight). Constraints (``kind``): ``offset_limit`` (max_offset_over_capture_radius:
+the bound on |beam offset| / R_c at every pulse; formerly ``capture_fraction`` with
+``fraction``, names now refused with their new ones), ``tilt_limit`` (max_tilt),
+``no_ground_contact`` (clearance), ``terminal_altitude`` (minimum, maximum),
+``terminal_state`` (state, lower, upper), ``energy_budget`` (total), ``rcs_envelope`` (no
+keys: phase-locked thrust within [0, max] at every phase).
 ``[[control]]``: input, lower, upper, slew_rate (``inf`` for none). A quantity's keys
 take any unit of model_files' QUANTITIES (``clearance_m``, ``clearance_cm`` ...); an
 unknown key gets a did-you-mean hint. :mod:`lightcraft_opt.files.problem_tables` reads the

@@ -36,10 +36,10 @@ from lightcraft_opt.files.schema import (
     parse_number,
     parse_value,
     quantity,
+    renamed,
 )
 from lightcraft_opt.layout import STATE
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     ControlBound,
     ControlEffort,
     ControlRate,
@@ -49,6 +49,7 @@ from lightcraft_opt.ocp.problem import (
     LateralOffset,
     NoGroundContact,
     OffsetFrom,
+    OffsetLimit,
     RcsEnvelope,
     TerminalAltitude,
     TerminalState,
@@ -102,7 +103,8 @@ class TableKind:
     """One ``[[objective]]``, ``[[constraint]]`` or ``[[control]]`` table: the dataclass it
     becomes, its keys, the required ones, the key naming its slot ("input" or "state",
     renamed to the dataclass field ``slot``) and the slot when not named, other keys
-    renamed on the way."""
+    renamed on the way; ``former_names``: the names (``term``, ``kind``) it had before, and
+    ``former_keys``: (old, new) of its keys renamed, both refused with their new name."""
 
     cls: type
     schema: Mapping[str, Spec]
@@ -110,6 +112,8 @@ class TableKind:
     slot: str = ""
     renamed: tuple[tuple[str, str], ...] = ()
     default_slot: str | None = None
+    former_names: tuple[str, ...] = ()
+    former_keys: tuple[tuple[str, str], ...] = ()
 
     def field(self, key_field: str) -> str:
         """The dataclass field a file field fills."""
@@ -143,7 +147,13 @@ OBJECTIVES: Mapping[str, TableKind] = {
 
 #: ``kind = "..."`` of ``[[constraint]]`` tables.
 CONSTRAINTS: Mapping[str, TableKind] = {
-    "capture_fraction": TableKind(CaptureFraction, {"fraction": NUMBER}, ("fraction",)),
+    "offset_limit": TableKind(
+        OffsetLimit,
+        {"max_offset_over_capture_radius": NUMBER},
+        ("max_offset_over_capture_radius",),
+        former_names=("capture_fraction",),
+        former_keys=(("fraction", "max_offset_over_capture_radius"),),
+    ),
     "tilt_limit": TableKind(TiltLimit, {"max_tilt": quantity("angle")}, ("max_tilt",)),
     "no_ground_contact": TableKind(NoGroundContact, {"clearance": quantity("length")}),
     "terminal_altitude": TableKind(
@@ -193,6 +203,12 @@ def read_kind(
     name = raw.get(tag)
     if name is None:
         raise ProblemFileError(src, f"{where}.{tag}", f"missing required key; one of {allowed}")
+    new = next((n for n, k in kinds.items() if name in k.former_names), None)
+    if new is not None:
+        keys = "".join(f"; its {old} is now {key}" for old, key in kinds[new].former_keys)
+        raise ProblemFileError(
+            src, f"{where}.{tag}", f'{tag} {renamed(str(name), new)}{keys}: write {tag} = "{new}"'
+        )
     if not isinstance(name, str) or name not in kinds:
         close = difflib.get_close_matches(str(name), list(kinds), n=1, cutoff=0.6)
         hint = f"did you mean {close[0]!r}? " if close else ""
@@ -240,7 +256,15 @@ def read_item(
         )
     schema = {**kind.schema, **({tag: TEXT} if tag else {})}
     slot_name = slot if isinstance(slot, str) else None
-    table = read_table(src, raw, where, schema, required=kind.required, slot=slot_name)
+    table = read_table(
+        src,
+        raw,
+        where,
+        schema,
+        required=kind.required,
+        slot=slot_name,
+        former=dict(kind.former_keys),
+    )
     values = {kind.field(f): v for f, v in table.values.items() if f not in (tag, "path_csv")}
     if kind.cls is TrackReference:
         values["path"] = _track_path(src, file, table, times)
@@ -303,8 +327,10 @@ def read_table(
     required: tuple[str, ...] = (),
     slot: str | None = None,
     tables: tuple[str, ...] = (),
+    former: Mapping[str, str] | None = None,
 ) -> Table:
-    """Convert one table to SI values by field, with model_files' keys and units."""
+    """Convert one table to SI values by field, with model_files' keys and units; a key in
+    ``former`` (old -> new name) is refused with its new name (schema.match_key)."""
     if not isinstance(data, dict):
         raise ProblemFileError(src, where or None, f"must be a table [{where}], got {data!r}")
     values: dict[str, Any] = {}
@@ -316,7 +342,7 @@ def read_table(
         field, factor = _slot_key(src, name, schema, slot)
         unit = None
         if field is None:
-            field, unit = match_key(src, key, name, schema, tables)
+            field, unit = match_key(src, key, name, schema, tables, former)
             factor = mf.QUANTITIES[schema[field].kind][unit] if unit else "1"
         if field in keys:
             raise ProblemFileError(
@@ -328,9 +354,7 @@ def read_table(
             values[field] = _numbers(src, name, raw, factor)
         elif spec is BLOCKS:
             values[field] = (
-                tuple(
-                    parse_value(src, f"{name}[{i}]", v, INTEGER, None) for i, v in enumerate(raw)
-                )
+                tuple(parse_value(src, f"{name}[{i}]", v, INTEGER, None) for i, v in enumerate(raw))
                 if isinstance(raw, list)
                 else parse_value(src, name, raw, INTEGER, None)
             )
@@ -395,5 +419,3 @@ def si_note(key: str, reason: str) -> str:
     unit = key.removesuffix("_per_s").rpartition("_")[2]
     converted = unit in NOT_SI and re.search(r"\d", reason)
     return reason + (" (converted to SI)" if converted else "")
-
-

@@ -43,6 +43,7 @@ __all__ = [
     "quantity",
     "read_fields",
     "read_toml",
+    "renamed",
 ]
 
 T = TypeVar("T")
@@ -149,9 +150,18 @@ def read_fields(
 
 
 def match_key(
-    src: str, key: str, name: str, schema: Mapping[str, Spec], subtables: tuple[str, ...]
+    src: str,
+    key: str,
+    name: str,
+    schema: Mapping[str, Spec],
+    subtables: tuple[str, ...],
+    former: Mapping[str, str] | None = None,
 ) -> tuple[str, str | None]:
-    """(field, unit suffix or None) that ``key`` stands for."""
+    """(field, unit suffix or None) that ``key`` stands for; ``former`` maps keys this
+    table had before a rename to their new names, refused with the new name."""
+    if former and key in former and key not in schema:
+        new = former[key]
+        raise ModelFileError(src, name, f"{renamed(key, new)}; write {new} instead")
     spec = schema.get(key)
     if spec is not None:
         if spec.kind in QUANTITIES:
@@ -184,6 +194,12 @@ def match_key(
         else "known keys: " + ", ".join([*known, *subtables])
     )
     raise ModelFileError(src, name, f"unknown key; {hint}")
+
+
+def renamed(old: str, new: str) -> str:
+    """The start of the message for a name written as it was before a rename, one wording
+    for keys, kinds and tables: ``'capture_fraction' was renamed 'offset_limit'``."""
+    return f"{old!r} was renamed {new!r}"
 
 
 def _keys_for(field: str, schema: Mapping[str, Spec]) -> list[str]:

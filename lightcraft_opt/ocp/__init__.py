@@ -20,7 +20,6 @@ from lightcraft_opt.ocp.options import (
     PredictionMap,
 )
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     Constraint,
     ControlBound,
     ControlEffort,
@@ -33,6 +32,7 @@ from lightcraft_opt.ocp.problem import (
     ObjectiveTerm,
     OcpProblem,
     OffsetFrom,
+    OffsetLimit,
     RcsEnvelope,
     TerminalAltitude,
     TerminalState,
@@ -46,7 +46,6 @@ from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
 __all__ = [
     "OCP_PULSE_MAP",
     "OCP_TIME_LIMIT",
-    "CaptureFraction",
     "CompiledOcp",
     "Constraint",
     "ControlBound",
@@ -66,6 +65,7 @@ __all__ = [
     "OcpSolver",
     "OcpStatus",
     "OffsetFrom",
+    "OffsetLimit",
     "PredictionMap",
     "RcsEnvelope",
     "TerminalAltitude",

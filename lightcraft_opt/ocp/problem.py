@@ -54,7 +54,6 @@ from lightcraft_opt.params import BeamSizeModel, Model
 
 __all__ = [
     "MAX_HORIZON",
-    "CaptureFraction",
     "Constraint",
     "ControlBound",
     "ControlEffort",
@@ -67,6 +66,7 @@ __all__ = [
     "ObjectiveTerm",
     "OcpProblem",
     "OffsetFrom",
+    "OffsetLimit",
     "RcsEnvelope",
     "TerminalAltitude",
     "TerminalState",
@@ -274,20 +274,23 @@ class ControlBound:
 
 
 @dataclass(frozen=True)
-class CaptureFraction:
+class OffsetLimit:
     """Keep the beam on the optic: at every pulse the optic centre's offset from the beam
-    axis stays within ``fraction`` of the capture radius, |offset_L| <= fraction R_c.
+    axis, over the capture radius, stays within a bound: |offset_L| / R_c <=
+    ``max_offset_over_capture_radius`` (the ``offset_over_capture_radius`` column of
+    solution.csv; not the captured energy fraction, docs/outputs.md).
 
-    fraction : (0, 1].
+    max_offset_over_capture_radius : (0, 1].
     """
 
-    fraction: float
+    max_offset_over_capture_radius: float
 
     def __post_init__(self) -> None:
-        v = _number("CaptureFraction.fraction", self.fraction)
+        name = "OffsetLimit.max_offset_over_capture_radius"
+        v = _number(name, self.max_offset_over_capture_radius)
         if not 0 < v <= 1:
-            raise ParameterError("CaptureFraction.fraction", f"must lie in (0, 1], got {v!r}")
-        _set(self, "fraction", v)
+            raise ParameterError(name, f"must lie in (0, 1], got {v!r}")
+        _set(self, "max_offset_over_capture_radius", v)
 
 
 @dataclass(frozen=True)
@@ -378,7 +381,7 @@ class RcsEnvelope:
 
 
 Constraint = (
-    CaptureFraction
+    OffsetLimit
     | TiltLimit
     | NoGroundContact
     | TerminalAltitude
@@ -387,7 +390,7 @@ Constraint = (
     | RcsEnvelope
 )
 CONSTRAINT_KINDS = (
-    CaptureFraction,
+    OffsetLimit,
     TiltLimit,
     NoGroundContact,
     TerminalAltitude,

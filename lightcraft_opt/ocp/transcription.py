@@ -53,7 +53,6 @@ import numpy as np
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     ControlEffort,
     ControlRate,
     EnergyBudget,
@@ -63,6 +62,7 @@ from lightcraft_opt.ocp.problem import (
     NoGroundContact,
     OcpProblem,
     OffsetFrom,
+    OffsetLimit,
     RcsEnvelope,
     TerminalAltitude,
     TerminalState,
@@ -262,7 +262,7 @@ class MultipleShooting:
                     case TiltLimit():
                         add(cos_tilt[k], math.cos(con.max_tilt), math.inf)
                     case (
-                        CaptureFraction()
+                        OffsetLimit()
                         | TerminalAltitude()
                         | TerminalState()
                         | EnergyBudget()
@@ -272,7 +272,9 @@ class MultipleShooting:
                     case _:
                         assert_never(con)
 
-        fractions = [c.fraction for c in pr.constraints if isinstance(c, CaptureFraction)]
+        offset_limits = [
+            c.max_offset_over_capture_radius for c in pr.constraints if isinstance(c, OffsetLimit)
+        ]
         envelope = self._rcs_envelope()
         slew_rows = np.flatnonzero(np.isfinite(pr.slew[self.free]))
         limit = pr.slew[self.free][slew_rows]
@@ -290,8 +292,8 @@ class MultipleShooting:
                     add(st.as_[0] - st.vs[0], 0.0, 0.0)  # no previous input: no slew at 0
             else:
                 node_path(k)
-            if fractions:
-                add(use[k], -math.inf, min(fractions) ** 2)
+            if offset_limits:
+                add(use[k], -math.inf, min(offset_limits) ** 2)
             if envelope is not None:
                 add(envelope(st.U[:, k]), -math.inf, 0.0)
             if self.coupled and k not in self.starts:
@@ -308,7 +310,7 @@ class MultipleShooting:
                     add(st.X[STATE.index(con.slot), N], np.array(con.lower), np.array(con.upper))
                 case EnergyBudget():
                     add(fired[N] - fired0, -math.inf, con.total)
-                case NoGroundContact() | TiltLimit() | CaptureFraction() | RcsEnvelope():
+                case NoGroundContact() | TiltLimit() | OffsetLimit() | RcsEnvelope():
                     pass  # on the nodes and pulses: above
                 case _:
                     assert_never(con)

@@ -18,6 +18,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lightcraft_opt.campaign.summary import CHI2_2DOF_95
+from lightcraft_opt.plots.labels import state_label
 
 __all__ = [
     "STATUS_COLORS",
@@ -60,14 +61,14 @@ def _ellipse_xy(mean: np.ndarray, cov: np.ndarray, scale: float) -> np.ndarray:
 def plot_end_points(
     table: Table, *, ax: Axes | None = None, capture_radius: float | None = None
 ) -> list[Any]:
-    """Where each run ends (its landing point when it landed, else its last position),
-    east against north, by status, with the 1σ and 95 % ellipses of all the points and,
-    given ``capture_radius`` [m], the optic's capture circle about the pad (the beam axis
-    of a beam held there) for scale."""
+    """Where each run ends (its landing point when it landed, else its last position:
+    runs.csv's ``final_x_m``, ``final_y_m``), east against north, by status, with the 1σ
+    and 95 % ellipses of all the points and, given ``capture_radius`` [m], the optic's
+    capture circle about the pad (the beam axis of a beam held there) for scale."""
     ax = _axes(ax)
     status = _status(table)
-    east = 100.0 * np.asarray(table["final_east_m"], dtype=float)
-    north = 100.0 * np.asarray(table["final_north_m"], dtype=float)
+    east = 100.0 * np.asarray(table["final_x_m"], dtype=float)
+    north = 100.0 * np.asarray(table["final_y_m"], dtype=float)
     artists: list[Any] = []
     for name in sorted(set(status) - {"error"}):
         sel = status == name
@@ -88,8 +89,8 @@ def plot_end_points(
         artists += ax.plot(
             r * np.cos(a), r * np.sin(a), color="tab:green", lw=1.0, label="capture radius"
         )
-    ax.set_xlabel("east [cm]")
-    ax.set_ylabel("north [cm]")
+    ax.set_xlabel(state_label("east", "r_L", "east", "cm"))
+    ax.set_ylabel(state_label("north", "r_L", "north", "cm"))
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")

@@ -19,9 +19,9 @@ from matplotlib.figure import Figure
 
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     NoGroundContact,
     OcpProblem,
+    OffsetLimit,
     TerminalAltitude,
     TiltLimit,
 )
@@ -341,13 +341,17 @@ def ocp_figures(
     """Every figure of a solve by file name: controls.png, trajectory.png, capture.png.
 
     ``problem`` (the one solved) gives the capture radius, the tightest
-    :class:`~lightcraft_opt.ocp.problem.CaptureFraction`, the input bounds (inputs it holds
+    :class:`~lightcraft_opt.ocp.problem.OffsetLimit`, the input bounds (inputs it holds
     fixed are left out), the altitude limits and the tilt limit.
     """
     radius = fraction = focus = None
     if problem is not None:
         radius = float(problem.p[PARAMETERS.index("capture_radius")][0])
-        limits = [c.fraction for c in problem.constraints if isinstance(c, CaptureFraction)]
+        limits = [
+            c.max_offset_over_capture_radius
+            for c in problem.constraints
+            if isinstance(c, OffsetLimit)
+        ]
         fraction = min(limits) if limits else None
         focus = bool(np.any(problem.free[problem.inputs.index("focus")]))
     return {

@@ -64,6 +64,11 @@ def test_serial_campaign_is_complete_and_physical(serial, campaign):
     assert np.corrcoef(t["mass_kg"], t["apogee_m"])[0, 1] < 0
     assert np.all(t["pulses"] == 8)
     assert np.all(t["max_tilt_deg"] >= np.abs(t["tilt_deg"]) - np.degrees(1e-9))
+    # the launch offset drawn (x, y in L; sigma 3 mm truncated at 3 sigma), the end in L
+    for name in ("launch_offset_x_m", "launch_offset_y_m"):
+        assert np.all(np.abs(t[name]) <= 3 * 0.003 * (1 + 1e-12)) and np.ptp(t[name]) > 0
+    assert np.all((t["final_z_m"] > 0) & (t["final_z_m"] <= t["apogee_m"]))
+    assert np.array_equal(np.isnan(t["landing_x_m"]), t["status"] != "landed")
     for name in ("campaign.json", "timings.csv", "summary.json"):
         assert (serial.out_dir / name).exists()
 

@@ -39,13 +39,13 @@ def _truncated_std(k: float) -> float:
 def test_normal_and_uniform_moments():
     d = Dispersions(
         (
-            ("offset_east", Normal(0.0325, 0.002)),
+            ("launch_offset_x", Normal(0.0325, 0.002)),
             ("tilt", Normal(0.0, 0.01, truncate=3.0)),
             ("wind_speed", Uniform(1.0, 4.0)),
         )
     )
     v = draw_many(d, 123, N)
-    m = v["offset_east"]
+    m = v["launch_offset_x"]
     assert abs(m.mean() - 0.0325) < 4 * 0.002 / math.sqrt(N)
     assert abs(m.std(ddof=1) / 0.002 - 1) < 4 / math.sqrt(2 * N)
     t = v["tilt"]
@@ -90,7 +90,8 @@ def test_campaign_files_read_units_and_nominals():
     items = dict(c.dispersions.items)
     assert c.controller is CampaignController.NONE and c.duration == 3.0
     assert items["mass"] == Normal(0.0325, 0.02 * 0.0325, 3.0)
-    assert items["offset_east"] == Normal(0.0, 0.003, 3.0)  # sigma_mm = 3
+    assert items["launch_offset_x"] == Normal(0.0, 0.003, 3.0)  # sigma_mm = 3
+    assert items["launch_offset_y"] == Normal(0.0, 0.003, 3.0)
     assert items["tilt"].sigma == pytest.approx(math.radians(1.0), rel=1e-15)
     assert items["tilt_azimuth"] == Uniform(0.0, 2 * math.pi)  # added: uniform azimuth
     assert items["wind_direction_from"].high == pytest.approx(2 * math.pi, rel=1e-15)
@@ -122,8 +123,8 @@ duration_s = 0.3
          "dispersions.tilt.sigma_kg"),
         ('[dispersions.mass]\ndistribution = "uniform"\nlow_g = 1\nhigh_g = 2\nsigma_g = 1\n',
          "dispersions.mass.sigma_g"),
-        ('[dispersions.offset_east]\ndistribution = "normal"\nrelative_sigma = 0.1\n',
-         "dispersions.offset_east.relative_sigma"),
+        ('[dispersions.launch_offset_x]\ndistribution = "normal"\nrelative_sigma = 0.1\n',
+         "dispersions.launch_offset_x.relative_sigma"),
         ('[dispersions.mass]\ndistribution = "normal"\n', "dispersions.mass.sigma"),
         ('[plant]\nseed = 3\n', "plant.seed"),
         ('[campaign]\ncontroller = "pid"\n', "campaign.controller"),
@@ -175,6 +176,20 @@ def test_a_distribution_outside_its_quantity_s_domain_is_refused(tmp_path, text,
     assert message in str(err.value)
 
 
+@pytest.mark.parametrize(("old", "new"), [("offset_east", "x"), ("offset_north", "y")])
+def test_a_dispersion_under_its_former_name_says_what_it_was_renamed(tmp_path, old, new):
+    """The launch offsets were offset_east / offset_north before issue 19 (runs.csv says
+    x and y for L components): the old table is refused with its new name."""
+    path = tmp_path / "old.toml"
+    path.write_text(BASE + f'[dispersions.{old}]\ndistribution = "normal"\nsigma_mm = 2\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_campaign(path)
+    assert str(err.value) == (
+        f"{path}: dispersions.{old}: '{old}' was renamed 'launch_offset_{new}': write "
+        f"[dispersions.launch_offset_{new}], its keys unchanged"
+    )
+
+
 def test_distributions_inside_their_domains_are_taken(tmp_path):
     """Reaching a closed bound, a point mass, and an untruncated normal where any value is
     physical (an offset) are all fine."""
@@ -182,11 +197,11 @@ def test_distributions_inside_their_domains_are_taken(tmp_path):
     path.write_text(BASE + '[dispersions.wind_speed]\ndistribution = "uniform"\nlow_mps = 0\n'
                     'high_mps = 2\n[dispersions.dropout_rate]\ndistribution = "uniform"\n'
                     'low = 0\nhigh = 1\n[dispersions.mass]\ndistribution = "normal"\n'
-                    'sigma_g = 0\n[dispersions.offset_east]\ndistribution = "normal"\n'
+                    'sigma_g = 0\n[dispersions.launch_offset_x]\ndistribution = "normal"\n'
                     'sigma_mm = 2\n')  # fmt: skip
     items = dict(load_campaign(path).dispersions.items)
     assert items["wind_speed"] == Uniform(0.0, 2.0) and items["dropout_rate"] == Uniform(0, 1)
-    assert items["mass"].sigma == 0 and items["offset_east"] == Normal(0.0, 0.002)
+    assert items["mass"].sigma == 0 and items["launch_offset_x"] == Normal(0.0, 0.002)
 
 
 @pytest.mark.parametrize(

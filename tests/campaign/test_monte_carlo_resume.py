@@ -8,6 +8,7 @@ runs keep this fast (the reference and the damaged copies share one flyer)."""
 
 from __future__ import annotations
 
+import json
 import shutil
 
 import pytest
@@ -15,6 +16,7 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.campaign.run_table import DamagedRowsWarning, RunTable, read_table
 from lightcraft_opt.campaign.runner import run_campaign
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.campaign import load_campaign
 
 OPEN = REPO_ROOT / "problems" / "montecarlo_open_loop.toml"
@@ -102,3 +104,46 @@ def test_reopening_keeps_the_good_rows_byte_for_byte(tmp_path):
                              (3, "x: nope"), (4, "a cut line (no end of line)"))  # fmt: skip
     assert path.read_text() == head + zero + two
     assert RunTable(path, ("run", "x")).dropped == ()  # nothing left to drop
+
+
+#: runs.csv columns before issue 19 named L components x/y/z (and the launch offset apart
+#: from the optic's offset): new name -> old.
+OLD_COLUMNS = {
+    "launch_offset_x_m": "offset_east_m",
+    "launch_offset_y_m": "offset_north_m",
+    "final_x_m": "final_east_m",
+    "final_y_m": "final_north_m",
+    "final_z_m": "final_up_m",
+    "landing_x_m": "landing_east_m",
+    "landing_y_m": "landing_north_m",
+}
+
+
+@pytest.mark.parametrize("manifest", [True, False], ids=["with campaign.json", "runs.csv alone"])
+def test_a_folder_with_the_old_column_names_is_refused_not_mixed(
+    campaign, clean, tmp_path, manifest
+):
+    """A folder written before the rename (the same campaign otherwise): resuming into it
+    is refused naming the columns, whether campaign.json (checked first) or runs.csv's
+    header says so, and nothing there is touched (campaign.json is written only once
+    the tables are known to be this campaign's)."""
+    out = tmp_path / "old"
+    shutil.copytree(clean.out_dir, out)
+    header, rest = (out / "runs.csv").read_text().split("\n", 1)
+    old = [OLD_COLUMNS.get(c, c) for c in header.split(",")]
+    assert old != header.split(",")  # the campaign draws launch offsets: all seven renamed
+    (out / "runs.csv").write_text(",".join(old) + "\n" + rest)
+    path = out / "campaign.json"
+    if manifest:
+        data = json.loads(path.read_text())
+        path.write_text(json.dumps({**data, "columns": old}))
+    else:
+        path.unlink()
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    with pytest.raises(ParameterError) as err:
+        run_campaign(campaign, RUNS + 1, SEED, out, workers=1, progress=False)
+    message = str(err.value)
+    assert "other columns (there: offset_east_m, offset_north_m, final_east_m" in message
+    assert "written now instead: launch_offset_x_m, launch_offset_y_m, final_x_m" in message
+    assert "use another output folder" in message
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

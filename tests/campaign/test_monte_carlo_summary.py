@@ -61,10 +61,10 @@ def _table(n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
         "left_beam": (status == "left_beam").astype(int),
         "apogee_m": rng.normal(30.0, 2.0, n),
         "apogee_time_s": rng.normal(2.0, 0.1, n),
-        "final_east_m": east,
-        "final_north_m": north,
-        "landing_east_m": np.where(landed, east, np.nan),
-        "landing_north_m": np.where(landed, north, np.nan),
+        "final_x_m": east,
+        "final_y_m": north,
+        "landing_x_m": np.where(landed, east, np.nan),
+        "landing_y_m": np.where(landed, north, np.nan),
     }
     for name in (
         "max_tilt_deg",
@@ -97,7 +97,7 @@ def test_summary_reads_the_table():
     assert low < left / 399 < high
     landed = t["status"] == "landed"
     assert s["landing"]["n"] == int(landed.sum())
-    assert s["landing"]["mean_m"][0] == pytest.approx(np.mean(t["final_east_m"][landed]))
+    assert s["landing"]["mean_m"][0] == pytest.approx(np.mean(t["final_x_m"][landed]))
     # the sample covariance of the drawn points: σ_east = 0.3 m, σ_north = 0.1 m
     e = s["final_position"]["ellipse_1sigma"]
     assert e["major_m"] == pytest.approx(0.3, rel=0.15) and abs(e["angle_deg"]) < 15

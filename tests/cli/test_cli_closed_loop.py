@@ -197,6 +197,23 @@ def test_director_flies_its_crosswind_problem(tmp_path):
     assert summary["steps_by_status"] == {"solved": 13}
 
 
+def test_the_offset_bound_reaches_the_mpc_and_its_old_name_says_renamed(tmp_path):
+    """[controller] max_offset_over_capture_radius is MpcOptions' field of that name;
+    capture_fraction, its name before issue 19, is refused with the new one."""
+    src = tmp_path / "offset.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    head = f'model = "{model}"\nduration_s = 1.0\n[controller]\n'
+    src.write_text(head + "max_offset_over_capture_radius = 0.3\n")
+    assert load_closed_loop(src).mpc.max_offset_over_capture_radius == 0.3
+    src.write_text(head + "capture_fraction = 0.3\n")
+    with pytest.raises(ProblemFileError) as err:
+        load_closed_loop(src)
+    assert str(err.value) == (
+        f"{src}: controller.capture_fraction: 'capture_fraction' was renamed "
+        "'max_offset_over_capture_radius'; write max_offset_over_capture_radius instead"
+    )
+
+
 @pytest.mark.parametrize(
     ("text", "key"),
     [

@@ -37,6 +37,8 @@ def test_cli_writes_the_table_summary_and_figures(tmp_path, capsys):
     assert summary["runs"] == 3 and summary["seed"] == 4
     assert summary["controller"]["fallbacks_total"] == 6
     assert summary["apogee_m"]["mean"] == np.mean(t["apogee_m"])
+    end = summary["final_position"]["mean_m"]  # [x, y] in L, from runs.csv's final_x/y_m
+    np.testing.assert_allclose(end, [np.mean(t["final_x_m"]), np.mean(t["final_y_m"])], rtol=1e-12)
     assert summary["left_beam"]["count"] == 0
     assert summary["timing"]["solve_time_median_ms"]["n"] == 3
     manifest = json.loads((out / "campaign.json").read_text())

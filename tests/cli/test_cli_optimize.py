@@ -2,7 +2,7 @@
 
 References: the solution's own inputs rolled forward through the same Φ reproduce the
 states written (the NLP closes its gaps to its tolerance, 1e-8 of each state's natural
-size); the summary agrees with the CSV it sits beside; the capture fraction is the
+size); the summary agrees with the CSV it sits beside; offset_over_capture_radius is the
 engine's offset over the 55 mm capture radius of models/flight5.toml.
 
 The problem: Flight 5 1 cm east of the beam axis at 2 m, climbing at 4 m/s in a 3 m/s wind
@@ -61,8 +61,8 @@ input = "pointing_L"
 weight = 1e3
 
 [[constraint]]
-kind = "capture_fraction"
-fraction = 0.2
+kind = "offset_limit"
+max_offset_over_capture_radius = 0.2
 [[constraint]]
 kind = "no_ground_contact"
 
@@ -137,7 +137,7 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     steps = np.abs(np.diff(U[:, :2], axis=0)) * 26.0
     assert np.max(steps) <= 0.2 * (1 + 1e-6)  # slew limit, m/s
 
-    # capture fraction: |offset| / R_c from the engine columns, within the constraint
+    # offset over the capture radius: |offset| / R_c from the engine columns, within the constraint
     pulses = np.array([[float(v) for v in r[col["energy_captured_J"] :]] for r in rows[:-1]])
     eng = {
         name: pulses[:, col[name] - col["energy_captured_J"]]
@@ -212,12 +212,14 @@ def test_the_time_limit_comes_from_the_file_or_the_flag(problem_file, tmp_path, 
 
 
 def test_a_bad_problem_file_exits_2_with_one_line(problem_file, tmp_path, capsys):
-    problem_file.write_text(PROBLEM.replace("fraction = 0.2", "fraction = 2.0"))
+    problem_file.write_text(PROBLEM.replace("radius = 0.2", "radius = 2.0"))
     out = tmp_path / "out"
     assert main(["optimize", str(problem_file), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
-    assert f"{problem_file}: constraint[0].fraction: must lie in (0, 1]" in err
+    assert (
+        f"{problem_file}: constraint[0].max_offset_over_capture_radius: must lie in (0, 1]" in err
+    )
     assert not out.exists()
 
 

@@ -269,8 +269,9 @@ def test_prediction_error_is_second_order_and_measured_at_5_degrees(mpc):
     thruster through its whole range) the error is measured and stated: coning vector
     0.13 degrees of the 1.3 degrees it changes and H tilt 0.28 degrees (the engine's
     tipping impulse per offset is 13 % below its slope at 2 cm:
-    MpcOptions.capture_fraction), position 2.4 mm, velocity 77 mm/s (that, and the 0.4 N
-    mean thrust along the coning axis, which the upright linear model does not see);
+    MpcOptions.max_offset_over_capture_radius), position 2.4 mm, velocity 77 mm/s (that,
+    and the 0.4 N mean thrust along the coning axis, which the upright linear model does
+    not see);
     each asserted below 1.3 times the measured value. The feedback absorbs them: the
     closed loop (tests/control/test_closed_loop.py) meets the acceptance with them.
     """
@@ -337,8 +338,8 @@ def test_qp_with_inactive_constraints_gives_the_lqr_gain(prediction):
 def test_planned_thrust_stays_in_range_at_every_phase_and_the_beam_in_reach(mpc):
     """The plan from 5 degrees: every thruster's thrust mean + c cos φ + s sin φ within
     [0, max] over a coning turn (to 1e-6 N, the QP tolerance), the beam axis within the
-    pointing limit, the predicted offset within the capture fraction (the soft rows'
-    slack zero), and the first input drives the coning down hard (both pairs through
+    pointing limit, the predicted offset within its bound over the capture radius (the soft
+    rows' slack zero), and the first input drives the coning down hard (both pairs through
     their whole range)."""
     mpc.reset()
     u = mpc.step(coned(MODEL, 5.0))
@@ -356,7 +357,7 @@ def test_planned_thrust_stays_in_range_at_every_phase_and_the_beam_in_reach(mpc)
     assert np.all(np.abs(plan[:, lay.index("pointing_L")]) <= MODEL.laser.pointing_limit)
     sol = mpc.solution
     assert sol is not None
-    limit = NO_CLOCK.capture_fraction * MODEL.craft.engine.capture_radius
+    limit = NO_CLOCK.max_offset_over_capture_radius * MODEL.craft.engine.capture_radius
     offsets = np.hypot(*(sol.z[:-1, 0:2] - sol.du[:, 0:2]).T)
     assert np.max(offsets) <= limit * (1 + 1e-6)
     assert np.max(sol.slack) < 1e-7
@@ -399,8 +400,10 @@ def test_bad_options_name_the_field():
         MpcOptions(horizon=0)
     with pytest.raises(OptionError, match=r"MpcOptions\.solver must be one of"):
         MpcOptions(solver="hpipm")  # type: ignore[arg-type]
-    with pytest.raises(OptionError, match=r"MpcOptions\.capture_fraction"):
-        MpcOptions(capture_fraction=1.5)
+    with pytest.raises(OptionError, match=r"MpcOptions\.max_offset_over_capture_radius"):
+        MpcOptions(max_offset_over_capture_radius=1.5)
+    with pytest.raises(TypeError, match="capture_fraction"):  # its name before issue 19
+        MpcOptions(capture_fraction=0.4)  # type: ignore[call-arg]
     with pytest.raises(OptionError, match=r"ControlWeights\.rcs must be > 0"):
         ControlWeights(rcs=0.0)
     with pytest.raises(OptionError, match=r"ClosedLoopOptions\.faults"):

@@ -22,11 +22,11 @@ from lightcraft_opt.files.problem import objective_names
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state
 from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     ControlEffort,
     EnergyBudget,
     LateralOffset,
     OffsetFrom,
+    OffsetLimit,
     RcsEnvelope,
     TerminalState,
     TiltLimit,
@@ -69,8 +69,8 @@ weight = 1e3
 reference_cm = [0.1, -0.2]
 
 [[constraint]]
-kind = "capture_fraction"
-fraction = 0.5
+kind = "offset_limit"
+max_offset_over_capture_radius = 0.5
 [[constraint]]
 kind = "tilt_limit"
 max_tilt_deg = 10
@@ -156,7 +156,7 @@ def test_a_problem_file_reaches_the_problem_in_si(folder: Path) -> None:
     assert effort.weight == 1e3
     assert effort.reference == pytest.approx((0.001, -0.002), rel=1e-15)
     capture, tilt, budget, terminal = pr.constraints
-    assert capture == CaptureFraction(0.5)
+    assert capture == OffsetLimit(0.5)
     assert tilt == TiltLimit(math.radians(10.0))
     assert budget == EnergyBudget(2000.0)
     assert terminal == TerminalState("v_L", (-math.inf, -math.inf, 0.0), math.inf)
@@ -249,12 +249,32 @@ BAD = [
         "takes no unit",
     ),
     (
-        'kind = "capture_fraction"',
-        'kind = "capture"',
+        'kind = "offset_limit"',
+        'kind = "offset_limits"',
         "constraint[0].kind",
-        "did you mean 'capture_fraction'",
+        "did you mean 'offset_limit'",
     ),
-    ("fraction = 0.5", "fraction = 1.5", "constraint[0].fraction", "(0, 1]"),
+    (
+        "max_offset_over_capture_radius = 0.5",
+        "max_offset_over_capture_radius = 1.5",
+        "constraint[0].max_offset_over_capture_radius",
+        "(0, 1]",
+    ),
+    # the names before the rename (issue 19): refused with the new ones, not "unknown"
+    (
+        'kind = "offset_limit"\nmax_offset_over_capture_radius = 0.5',
+        'kind = "capture_fraction"\nfraction = 0.5',
+        "constraint[0].kind",
+        "kind 'capture_fraction' was renamed 'offset_limit'; its fraction is now "
+        'max_offset_over_capture_radius: write kind = "offset_limit"',
+    ),
+    (
+        "max_offset_over_capture_radius = 0.5",
+        "fraction = 0.5",
+        "constraint[0].fraction",
+        "'fraction' was renamed 'max_offset_over_capture_radius'; write "
+        "max_offset_over_capture_radius instead",
+    ),
     ("max_tilt_deg = 10", "max_tilt_deg = 200", "constraint[1].max_tilt_deg", "(converted to SI)"),
     ('state = "v_L"', 'state = "v"', "constraint[3].state", "no such state"),
     ("lower_cm = -5.0", "lower_cm = 6.0", "control[0].lower_cm", "exceeds upper"),

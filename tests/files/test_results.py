@@ -25,10 +25,10 @@ from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.files.simulation_outputs import PULSE_COLUMNS
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     EnergyBudget,
     LaserEnergy,
     NoGroundContact,
+    OffsetLimit,
     TiltLimit,
 )
 from lightcraft_opt.simulation.coast_reference import simulate_coast
@@ -153,7 +153,7 @@ def _ocp(model: lc.Model) -> tuple[lc.OcpProblem, lc.OcpResult]:
         objective=(LaserEnergy(),),
         constraints=(
             TiltLimit(math.radians(10)),
-            CaptureFraction(0.5),
+            OffsetLimit(0.5),
             NoGroundContact(0.05),
             EnergyBudget(1500.0),
         ),
@@ -178,7 +178,7 @@ def test_ocp_constraint_margins_are_each_constraints_smallest_slack(model):
         m["constraint"]: (m["margin"], m["unit"]) for m in constraint_margins(result, problem)
     }
     assert margins["tilt_limit"] == (pytest.approx(10.0), "deg")  # upright throughout
-    assert margins["capture_fraction"] == (pytest.approx(0.5 - 3e-3 / radius), "-")
+    assert margins["offset_limit"] == (pytest.approx(0.5 - 3e-3 / radius), "-")
     assert margins["no_ground_contact"] == (pytest.approx(0.1 - 0.05), "m")
     assert margins["energy_budget"] == (pytest.approx(1500.0 - 1200.0), "J")
 

@@ -34,7 +34,6 @@ from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
-    CaptureFraction,
     ControlBound,
     ControlEffort,
     ControlRate,
@@ -44,6 +43,7 @@ from lightcraft_opt.ocp.problem import (
     LateralOffset,
     NoGroundContact,
     OcpProblem,
+    OffsetLimit,
     TerminalAltitude,
     TrackReference,
 )
@@ -109,7 +109,7 @@ def lateral_problem(model: Model) -> OcpProblem:
             ControlEffort("pointing_L", weight=1e3),
             ControlRate("pointing_L", weight=1.0),
         ),
-        (CaptureFraction(0.2), NoGroundContact()),
+        (OffsetLimit(0.2), NoGroundContact()),
         controls=(
             ControlBound("pointing_L", -0.05, 0.05, slew_rate=0.2),
             ControlBound("energy", 420.0, 420.0),
@@ -437,7 +437,7 @@ def test_bad_problems_and_options_name_the_field():
         (lambda: OcpProblem(model, 3, ("energy",)), "objective[0]"),  # type: ignore[arg-type]
         (lambda: OcpProblem(model, 3, ()), "objective"),
         (lambda: LaserEnergy(weight=math.nan), "LaserEnergy.weight"),
-        (lambda: CaptureFraction(1.5), "CaptureFraction.fraction"),
+        (lambda: OffsetLimit(1.5), "OffsetLimit.max_offset_over_capture_radius"),
         (lambda: TerminalAltitude(minimum=2.0, maximum=1.0), "TerminalAltitude.minimum"),
         (
             lambda: OcpProblem(model, 3, good, controls=(ControlBound("energy", 300, 200),)),

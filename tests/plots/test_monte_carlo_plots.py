@@ -28,8 +28,8 @@ def table():
         "mass_kg": 0.0325 + 1e-3 * rng.standard_normal(n),
         "wind_speed_mps": rng.uniform(0.0, 2.0, n),
         "apogee_m": 20.0 + rng.standard_normal(n),
-        "final_east_m": 0.01 * rng.standard_normal(n),
-        "final_north_m": 0.01 * rng.standard_normal(n),
+        "final_x_m": 0.01 * rng.standard_normal(n),
+        "final_y_m": 0.01 * rng.standard_normal(n),
         "max_tilt_deg": 1.2 * rng.random(n),
         "max_coning_deg": 0.6 * rng.random(n),
         "max_offset_m": 0.04 * rng.random(n),
@@ -68,5 +68,11 @@ def test_apogee_lines_are_labelled_with_their_values(table):
 
 def test_end_points_draw_the_capture_circle(table):
     (ax,) = monte_carlo_figures(table, capture_radius=CAPTURE_RADIUS)["end_points.png"].axes
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("east, r_L[east] [cm]", "north, r_L[north] [cm]")
+    for dots in ax.collections:  # the end points, x and y in L, by status, in cm
+        sel = table["status"] == dots.get_label()
+        expected = np.c_[table["final_x_m"][sel], table["final_y_m"][sel]]
+        np.testing.assert_allclose(dots.get_offsets(), 100 * expected)
+    assert {d.get_label() for d in ax.collections} == set(table["status"])
     (circle,) = [ln for ln in ax.get_lines() if ln.get_label() == "capture radius"]
     np.testing.assert_allclose(np.hypot(circle.get_xdata(), circle.get_ydata()), 5.5)

@@ -1,8 +1,8 @@
 """The optimize figures draw each problem's own constraints and leave out what it holds.
 
-Reference: problems/rcs_gust_tilt.toml (tilt under 1 degree, capture fraction 0.8, the
-beam held on the pad and the energy held at 420 J, four free RCS thrusters) over a made-up
-3-pulse result; every drawn limit is compared with the problem's numbers.
+Reference: problems/rcs_gust_tilt.toml (tilt under 1 degree, beam offset at most 0.8 of the
+capture radius, the beam held on the pad and the energy held at 420 J, four free RCS
+thrusters) over a made-up 3-pulse result; every drawn limit is compared with the problem's numbers.
 """
 
 from __future__ import annotations
