@@ -131,8 +131,8 @@ def constraint_margins(result: OcpResult, problem: OcpProblem) -> list[dict[str,
     slack over the horizon (positive: met with room to spare, negative: violated), in the
     unit named by ``unit``. The path constraints are read where the transcription poses
     them: tilt and ground clearance at nodes 1..N, the beam offset over the capture
-    radius at every pulse.
-    An RCS envelope's margin is null (its slack is in the NLP's own form)."""
+    radius at every pulse, the RCS envelope at every pulse and thruster
+    (:func:`rcs_envelope_margin`)."""
     z = result.state("r_L")[:, 2]
     out: list[dict[str, Any]] = []
     for con in problem.constraints:
@@ -160,10 +160,29 @@ def constraint_margins(result: OcpResult, problem: OcpProblem) -> list[dict[str,
                 name, unit = "energy_budget", "J"
                 margin = float(con.total - result.laser_energy)
             case RcsEnvelope():
-                name, unit, margin = "rcs_envelope", "N", None
+                name, unit, margin = "rcs_envelope", "N", rcs_envelope_margin(result, problem)
         value = None if margin is None else finite_or_none(margin)  # inf: unbounded
         out.append({"constraint": name, "margin": value, "unit": unit})
     return out
+
+
+def rcs_envelope_margin(result: OcpResult, problem: OcpProblem) -> float | None:
+    """How far the RCS thrust stays inside [0, max_thrust] over the horizon [N]: the least
+    of thrust_i - 0 and max_i - thrust_i at every pulse, thruster and instant. A
+    phase-locked thrust mean_i + cos_i cos(ωτ) + sin_i sin(ωτ) spans mean_i ± its amplitude
+    sqrt(cos_i² + sin_i²); a held or sub-interval level is its own value. None without an
+    RCS."""
+    rcs = problem.model.craft.rcs
+    if rcs is None or "rcs_thrust" not in problem.inputs.names:
+        return None
+    top = np.array([thruster.max_thrust for thruster in rcs.thrusters])
+    levels = np.reshape(result.input("rcs_thrust"), (result.u.shape[0], -1, top.size))
+    amplitude = np.zeros((levels.shape[0], 1, top.size))
+    if "rcs_cos" in problem.inputs.names:
+        cos, sin = (np.reshape(result.input(n), (-1, 1, top.size)) for n in ("rcs_cos", "rcs_sin"))
+        amplitude = np.hypot(cos, sin)
+    slack = np.minimum(levels - amplitude, top - levels - amplitude)
+    return float(np.min(slack)) if slack.size else None
 
 
 def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:

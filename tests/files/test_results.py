@@ -20,6 +20,7 @@ from support.paths import REPO_ROOT
 import lightcraft_opt as lc
 from lightcraft_opt.calibration.result import CalibrationStatus, FitFlag, FlagKind
 from lightcraft_opt.campaign.runner import CampaignResult
+from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.ocp_outputs import constraint_margins
 from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.files.simulation_outputs import PULSE_COLUMNS
@@ -29,8 +30,10 @@ from lightcraft_opt.ocp.problem import (
     LaserEnergy,
     NoGroundContact,
     OffsetLimit,
+    RcsEnvelope,
     TiltLimit,
 )
+from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.flight_log import beam_gap
 from lightcraft_opt.symbolic.beam import beam_side
@@ -233,3 +236,41 @@ def test_calibration_and_campaign_round_trip_through_the_archive(tmp_path):
     again = lc.load_result(tmp_path)
     assert dict(again.summary) == stats and again.engine == "serial"
     assert np.array_equal(again.table["status"], campaign.table["status"])
+
+
+@pytest.mark.parametrize("profile", [RcsProfile.HOLD, RcsProfile.PHASE_LOCKED])
+def test_the_rcs_envelope_margin_is_the_thrusts_least_room_over_every_phase(profile):
+    """The margin against a sweep of 3600 phases of each pulse's thrust profile
+    mean + cos cos(φ) + sin sin(φ) (held levels: the level itself), made-up inputs."""
+    model = load_model(REPO_ROOT / "models" / "flight5-rcs.toml")
+    problem = lc.OcpProblem(
+        model, horizon=3, objective=(LaserEnergy(),), constraints=(RcsEnvelope(),),
+        rcs_profile=profile,
+    )  # fmt: skip
+    top = np.array([t.max_thrust for t in model.craft.rcs.thrusters])
+    rng = np.random.default_rng(3)
+    u = np.tile(problem.nominal_input(), (3, 1))
+    mean = rng.uniform(0.2, 0.8, (3, top.size)) * top
+    cols = {
+        n: slice(problem.inputs.slot(n).start, problem.inputs.slot(n).stop)
+        for n in ("rcs_thrust", "rcs_cos", "rcs_sin")
+        if n in problem.inputs.names
+    }
+    u[:, cols["rcs_thrust"]] = mean
+    thrust = mean[:, :, None] * np.ones(3600)
+    if profile is RcsProfile.PHASE_LOCKED:
+        cos, sin = (rng.uniform(-0.3, 0.3, (3, top.size)) * top for _ in range(2))
+        u[:, cols["rcs_cos"]], u[:, cols["rcs_sin"]] = cos, sin
+        phase = np.linspace(0.0, 2 * np.pi, 3600, endpoint=False)
+        thrust = thrust + cos[:, :, None] * np.cos(phase) + sin[:, :, None] * np.sin(phase)
+    x = np.tile(initial_state(model), (4, 1))
+    result = lc.OcpResult(
+        lc.OcpStatus.SOLVED, "made up", "ipopt", 0.0, 1, 0.0, np.arange(4) / 26.0, x, u,
+        np.zeros((3, ENGINE.size)), problem.inputs,
+    )  # fmt: skip
+    swept = min(thrust.min(), (top[None, :, None] - thrust).min())
+    (margin,) = [
+        m for m in constraint_margins(result, problem) if m["constraint"] == "rcs_envelope"
+    ]
+    assert margin["unit"] == "N"
+    assert margin["margin"] == pytest.approx(swept, abs=1e-6 * top.max())
