@@ -22,11 +22,12 @@ from typing import TextIO
 
 from lightcraft_opt import __version__
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
+from lightcraft_opt.calibration.parameters import FORMER_NAMES
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, real, substeps
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.result import ClosedLoopResult
-from lightcraft_opt.errors import LightcraftError, ProblemFileError
+from lightcraft_opt.errors import LightcraftError, ProblemFileError, renamed
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_model, load_record
@@ -109,7 +110,7 @@ def _simulate(args: argparse.Namespace) -> int:
     out = output_folder(args.out or Path("runs") / Path(args.model).stem)
     x0 = initial_state(
         model,
-        r_L=(args.offset_east_cm / 100, args.offset_north_cm / 100, 0.0),
+        r_L=(args.launch_offset_x_cm / 100, args.launch_offset_y_cm / 100, 0.0),
         v_L=(0.0, 0.0, args.launch_speed),
         tilt=math.radians(args.tilt_deg),
         tilt_azimuth=math.radians(args.tilt_azimuth_deg),
@@ -469,6 +470,45 @@ BUDGET_MS = real(
 RUNS = integer(1, 1_000_000, why="the summary reads every run's row into memory")
 
 
+#: Flags renamed (issue 19: L components are x, y, z across outputs): old -> new, refused
+#: with the new one.
+_FORMER_SIMULATE_FLAGS = {
+    "--offset-east-cm": "--launch-offset-x-cm",
+    "--offset-north-cm": "--launch-offset-y-cm",
+}
+
+
+class _Renamed(argparse.Action):
+    """A flag as it was spelled before a rename: a usage error naming the new flag (status
+    2), whatever value follows it."""
+
+    def __init__(self, option_strings: list[str], dest: str, new: str, **kwargs: object):
+        super().__init__(option_strings, dest, **kwargs)  # type: ignore[arg-type]
+        self.new = new
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: object,
+        option_string: str | None = None,
+    ) -> None:
+        old = option_string or self.option_strings[0]
+        value = f"={values}" if isinstance(values, str) else ""
+        parser.error(f"argument {old}: {renamed(old, self.new)}: write {self.new}{value}")
+
+
+def _initial_value(text: str) -> tuple[str, float]:
+    """``--initial NAME=VALUE`` (:func:`name_value`), a component's former name refused
+    with its new one."""
+    name, value = name_value(text)
+    if name in FORMER_NAMES:
+        raise argparse.ArgumentTypeError(
+            f"{renamed(name, FORMER_NAMES[name])}: write {FORMER_NAMES[name]}={value:g}"
+        )
+    return name, value
+
+
 def add_simulate(sub: argparse._SubParsersAction) -> None:
     """Add ``lightcraft simulate`` to the subcommands ``sub``."""
     sim = sub.add_parser(
@@ -502,17 +542,26 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
         help="direction of the tilt, clockwise from north [deg] (default 90: east)",
     )
     sim.add_argument(
-        "--offset-east-cm",
+        "--launch-offset-x-cm",
         type=OFFSET,
         default=0.0,
-        help="initial offset from the beam axis, east [cm]",
+        help="initial offset from the beam axis along L x (east) [cm]",
     )
     sim.add_argument(
-        "--offset-north-cm",
+        "--launch-offset-y-cm",
         type=OFFSET,
         default=0.0,
-        help="initial offset from the beam axis, north [cm]",
+        help="initial offset from the beam axis along L y (north) [cm]",
     )
+    for old, new in _FORMER_SIMULATE_FLAGS.items():
+        sim.add_argument(
+            old,
+            action=_Renamed,
+            new=new,
+            nargs="?",
+            default=argparse.SUPPRESS,
+            help=argparse.SUPPRESS,
+        )
     sim.add_argument(
         "--dropout-rate",
         type=DROPOUT,
@@ -705,7 +754,7 @@ def add_calibrate(sub: argparse._SubParsersAction) -> None:
     )
     cal.add_argument(
         "--initial",
-        type=name_value,
+        type=_initial_value,
         action="append",
         default=[],
         metavar="NAME=VALUE",

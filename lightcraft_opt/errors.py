@@ -12,6 +12,7 @@ __all__ = [
     "OptionError",
     "ParameterError",
     "ProblemFileError",
+    "renamed",
 ]
 
 
@@ -67,3 +68,10 @@ class ProblemFileError(LightcraftError, ValueError):
 
 class OptionError(LightcraftError, ValueError):
     """An option has a value outside its allowed set; the message lists the allowed values."""
+
+
+def renamed(old: str, new: str) -> str:
+    """The start of the message for a name written as it was before a rename, one wording
+    for file keys, kinds and tables, fit components and command-line flags:
+    ``'capture_fraction' was renamed 'offset_limit'``."""
+    return f"{old!r} was renamed {new!r}"

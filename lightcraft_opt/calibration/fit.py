@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lightcraft_opt.calibration.parameters import FitComponent, fit_components
+from lightcraft_opt.calibration.parameters import FORMER_NAMES, FitComponent, fit_components
 from lightcraft_opt.calibration.problem import (
     CalibrationProblem,
     Track,
@@ -37,7 +37,7 @@ from lightcraft_opt.calibration.problem import (
 from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
 from lightcraft_opt.calibration.statistics import fit_statistics, identifiability_flags
 from lightcraft_opt.compiled import dense_sensitivity_for, pulse_map_for
-from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.errors import OptionError, ParameterError, renamed
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.pulse_map import PulseMap
@@ -212,6 +212,8 @@ def _start(
     names = [c.name for c in comps]
     start = model_values.copy()
     for name, value in (given or {}).items():
+        if name in FORMER_NAMES:
+            raise ParameterError(f"initial.{name}", renamed(name, FORMER_NAMES[name]))
         if name not in names:
             raise ParameterError(f"initial.{name}", f"is not fitted; fitted: {names}")
         v = float(value)

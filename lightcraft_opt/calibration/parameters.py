@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from lightcraft_opt.errors import ParameterError
 
-__all__ = ["FIT_GROUPS", "FitComponent", "fit_components"]
+__all__ = ["FIT_GROUPS", "FORMER_NAMES", "FitComponent", "fit_components"]
 
 
 @dataclass(frozen=True)
@@ -21,7 +21,7 @@ class FitComponent:
 
     Attributes
     ----------
-    name : its name in results and reports (``cm``, ``offset_east`` ...).
+    name : its name in results and reports (``cm``, ``launch_offset_x`` ...).
     group : the ``--fit`` name that selects it (``offset`` selects two components).
     unit : SI unit of its value.
     lower, upper : default bounds (physically meaningful) [unit].
@@ -133,42 +133,42 @@ FIT_GROUPS: dict[str, tuple[FitComponent, ...]] = {
     ),
     "offset": (
         _c(
-            "offset_east",
+            "launch_offset_x",
             "offset",
             "m",
             (-0.5, 0.5),
             0.01,
             "x0",
-            "initial position of the mass centre, east of the pad",
+            "initial position of the mass centre along L x (east of the pad)",
         ),
         _c(
-            "offset_north",
+            "launch_offset_y",
             "offset",
             "m",
             (-0.5, 0.5),
             0.01,
             "x0",
-            "initial position of the mass centre, north of the pad",
+            "initial position of the mass centre along L y (north of the pad)",
         ),
     ),
     "tilt": (
         _c(
-            "tilt_east",
+            "launch_tilt_x",
             "tilt",
             "rad",
             (-0.5, 0.5),
             0.01,
             "x0",
-            "initial lean of the axis b1 toward east: rotation about L north",
+            "initial lean of the axis b1 toward +x (east): rotation about L y",
         ),
         _c(
-            "tilt_north",
+            "launch_tilt_y",
             "tilt",
             "rad",
             (-0.5, 0.5),
             0.01,
             "x0",
-            "initial lean of the axis b1 toward north: rotation about L -east",
+            "initial lean of the axis b1 toward +y (north): rotation about L -x",
         ),
     ),
     "wind": (
@@ -194,6 +194,16 @@ FIT_GROUPS: dict[str, tuple[FitComponent, ...]] = {
     "cd": (
         _c("cd_scale", "cd", "-", (0.0, 5.0), 0.1, "cd_scale", "factor on the drag coefficient"),
     ),
+}
+
+
+#: Components renamed (issue 19: one name per quantity across outputs; L components are
+#: x, y, z as in docs/outputs.md): old name -> new name, refused with the new one.
+FORMER_NAMES: dict[str, str] = {
+    "offset_east": "launch_offset_x",
+    "offset_north": "launch_offset_y",
+    "tilt_east": "launch_tilt_x",
+    "tilt_north": "launch_tilt_y",
 }
 
 

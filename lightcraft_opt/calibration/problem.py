@@ -106,9 +106,9 @@ def initial_values(components: Sequence[FitComponent], model: Model, x0: np.ndar
             values.append(
                 float(PARAMETERS.get("impulse_per_pulse", p0)) / model.flight.pulse_energy
             )
-        elif c.name in ("offset_east", "offset_north"):
-            values.append(float(r0[0 if c.name == "offset_east" else 1]))
-        elif c.name in ("tilt_east", "tilt_north"):
+        elif c.name in ("launch_offset_x", "launch_offset_y"):
+            values.append(float(r0[0 if c.name == "launch_offset_x" else 1]))
+        elif c.name in ("launch_tilt_x", "launch_tilt_y"):
             values.append(0.0)
         else:
             values.append(float(PARAMETERS.get(c.target, p0)))
@@ -130,14 +130,15 @@ def apply_fit(
     """(p, x0) with the fitted values ``theta`` (one per component, SI) put in.
 
     ``cm`` sets impulse_per_pulse = cm * reference_pulse_energy (and spent_coupling = cm
-    when ``spent_follows_cm``: a model that leaves it to default to Cm); ``offset_*`` set r_L's
-    east/north; ``tilt_east`` te and ``tilt_north`` tn turn x0's attitude by
-    q = q(north, te) (x) q(east, -tn): b1 upright leans by te toward east and tn toward
-    north (smooth at zero tilt); the rest set their PARAMETERS slot.
+    when ``spent_follows_cm``: a model that leaves it to default to Cm); ``launch_offset_x``,
+    ``launch_offset_y`` set r_L's x (east) and y (north); ``launch_tilt_x`` tx and
+    ``launch_tilt_y`` ty turn x0's attitude by q = q(y, tx) (x) q(x, -ty): b1 upright leans
+    by tx toward +x and ty toward +y (smooth at zero tilt); the rest set their PARAMETERS
+    slot.
     """
     p = ca.MX(ca.DM(p0))
     x = ca.MX(ca.DM(x0))
-    tilt = {"tilt_east": 0 * theta[0], "tilt_north": 0 * theta[0]}
+    tilt = {"launch_tilt_x": 0 * theta[0], "launch_tilt_y": 0 * theta[0]}
     for i, c in enumerate(components):
         if c.name == "cm":
             e0 = float(PARAMETERS.get("reference_pulse_energy", p0))
@@ -145,16 +146,16 @@ def apply_fit(
             p[PARAMETERS.index("impulse_per_pulse")] = impulse
             if spent_follows_cm:  # the model's default: spent_coupling = Cm
                 p[PARAMETERS.index("spent_coupling")] = impulse / e0
-        elif c.name in ("offset_east", "offset_north"):
-            x[STATE.slot("r_L").start + (0 if c.name == "offset_east" else 1)] = theta[i]
+        elif c.name in ("launch_offset_x", "launch_offset_y"):
+            x[STATE.slot("r_L").start + (0 if c.name == "launch_offset_x" else 1)] = theta[i]
         elif c.name in tilt:
             tilt[c.name] = theta[i]
         else:
             p[PARAMETERS.index(c.target)] = theta[i]
     if any(c.name in tilt for c in components):
         q_tilt = quat_multiply(
-            _axis_quaternion(tilt["tilt_east"], (0.0, 1.0, 0.0)),
-            _axis_quaternion(-tilt["tilt_north"], (1.0, 0.0, 0.0)),
+            _axis_quaternion(tilt["launch_tilt_x"], (0.0, 1.0, 0.0)),
+            _axis_quaternion(-tilt["launch_tilt_y"], (1.0, 0.0, 0.0)),
         )
         q = STATE.slot("q_LB")
         x[q.start : q.stop] = quat_multiply(q_tilt, ca.DM(STATE.get("q_LB", x0)))

@@ -138,7 +138,7 @@ class CalibrationResult(Presentable):
             f"CalibrationResult: {self.status.value} ({self.message})",
             f"  {self.iterations} iterations, {self.solve_time:.2f} s, {self.t.size} tracked "
             f"points ({self.gaps} gaps dropped)",
-            f"  residual sigma {1e3 * self.sigma:.3f} mm; rms east/north/up "
+            f"  residual sigma {1e3 * self.sigma:.3f} mm; rms x/y/z "
             + " / ".join(f"{1e3 * v:.3f}" for v in self.rms)
             + " mm",
             f"  cost {self.initial_cost:.4g} -> {self.cost:.4g} m^2, "

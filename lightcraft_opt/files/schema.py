@@ -22,7 +22,7 @@ from enum import Enum
 from pathlib import Path
 from typing import Any, TypeVar
 
-from lightcraft_opt.errors import ModelFileError, ParameterError
+from lightcraft_opt.errors import ModelFileError, ParameterError, renamed
 
 __all__ = [
     "INTEGER",
@@ -194,12 +194,6 @@ def match_key(
         else "known keys: " + ", ".join([*known, *subtables])
     )
     raise ModelFileError(src, name, f"unknown key; {hint}")
-
-
-def renamed(old: str, new: str) -> str:
-    """The start of the message for a name written as it was before a rename, one wording
-    for keys, kinds and tables: ``'capture_fraction' was renamed 'offset_limit'``."""
-    return f"{old!r} was renamed {new!r}"
 
 
 def _keys_for(field: str, schema: Mapping[str, Spec]) -> list[str]:

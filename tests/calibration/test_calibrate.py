@@ -89,12 +89,12 @@ def recovery(model: Model, fit_map):
     )
     truth = {
         "cm": true.flight.impulse_per_pulse / true.flight.pulse_energy,
-        "offset_east": TRUE_OFFSET[0],
-        "offset_north": TRUE_OFFSET[1],
+        "launch_offset_x": TRUE_OFFSET[0],
+        "launch_offset_y": TRUE_OFFSET[1],
         # small-angle components of the lean (quaternion_from_tilt vs the two rotations
         # of the fit differ by O(tilt^2) ~ 2e-4 rad, far below their std)
-        "tilt_east": TRUE_TILT * np.sin(TRUE_AZIMUTH),
-        "tilt_north": TRUE_TILT * np.cos(TRUE_AZIMUTH),
+        "launch_tilt_x": TRUE_TILT * np.sin(TRUE_AZIMUTH),
+        "launch_tilt_y": TRUE_TILT * np.cos(TRUE_AZIMUTH),
         "blast_angle": 0.47,
     }
     return result, truth
@@ -107,10 +107,10 @@ def test_synthetic_track_is_recovered_within_3_sigma(recovery):
     # 0.03 rad of blast angle: otherwise "within 3 sigma" would say little
     tolerance = {
         "cm": 0.005 * truth["cm"],
-        "offset_east": 0.003,
-        "offset_north": 0.003,
-        "tilt_east": 0.005,
-        "tilt_north": 0.005,
+        "launch_offset_x": 0.003,
+        "launch_offset_y": 0.003,
+        "launch_tilt_x": 0.005,
+        "launch_tilt_y": 0.005,
         "blast_angle": 0.03,
     }
     for name, value in truth.items():
@@ -193,8 +193,8 @@ def test_residual_jacobian_matches_ad_and_finite_differences(model, fit_map):
     theta = initial_values(comps, model, problem.x0)
     names = [c.name for c in comps]
     theta[names.index("wind_speed")] = 2.0
-    theta[names.index("offset_east")] = 0.01
-    theta[names.index("tilt_north")] = 0.02
+    theta[names.index("launch_offset_x")] = 0.01
+    theta[names.index("launch_tilt_y")] = 0.02
     r, J = (np.asarray(a) for a in problem.jacobian(theta))
     r_ad, J_ad = (np.asarray(a) for a in by_ad.jacobian(theta))
     np.testing.assert_allclose(r, r_ad, rtol=0, atol=1e-12)
@@ -255,6 +255,11 @@ def test_bad_fit_names_and_options_get_clear_errors(model, fit_map):
         calibrate(model, track, "cm", initial={"cm": 1.0}, pulse_map=fit_map)
     with pytest.raises(ParameterError, match=r"bounds\.divergence.*not fitted"):
         calibrate(model, track, "cm", bounds={"divergence": (0, 1)}, pulse_map=fit_map)
+    # issue 19: the launch offset and tilt are x/y components (docs/outputs.md)
+    with pytest.raises(
+        ParameterError, match=r"initial\.tilt_north: 'tilt_north' was renamed 'launch_tilt_y'"
+    ):
+        calibrate(model, track, "tilt", initial={"tilt_north": 0.01}, pulse_map=fit_map)
     with pytest.raises(OptionError, match="max_iter"):
         CalibrationOptions(max_iter=0)
     with pytest.raises(OptionError, match="correlation_max"):

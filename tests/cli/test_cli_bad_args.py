@@ -35,8 +35,10 @@ BAD_NUMBERS = [
     (["simulate", "m.toml", "--duration", "ten"], "--duration", "must be a number; got 'ten'"),
     (["simulate", "m.toml", "--launch-speed", "nan"], "--launch-speed", "finite"),
     (["simulate", "m.toml", "--launch-speed", "400"], "--launch-speed", "speed of sound"),
-    (["simulate", "m.toml", "--offset-east-cm", "1001"], "--offset-east-cm", "10 m from the"),
-    (["simulate", "m.toml", "--offset-north-cm=-2e3"], "--offset-north-cm", "[-1000, 1000]"),
+    (["simulate", "m.toml", "--launch-offset-x-cm", "1001"], "--launch-offset-x-cm",
+     "10 m from the"),
+    (["simulate", "m.toml", "--launch-offset-y-cm=-2e3"], "--launch-offset-y-cm",
+     "[-1000, 1000]"),
     (["optimize", "p.toml", "--horizon", "0"], "--horizon", "in [1, 5200]"),
     (["optimize", "p.toml", "--horizon", "1e11"], "--horizon", "must be an integer"),
     (["optimize", "p.toml", "--max-iter", "0"], "--max-iter", "must be an integer >= 1; got 0"),
@@ -67,14 +69,41 @@ def test_a_number_out_of_range_is_a_usage_error_naming_the_flag(argv, flag, reas
     assert "Traceback" not in captured.err and captured.out == ""
 
 
+# issue 19: L components are x, y, z (docs/outputs.md); the former spellings are refused
+# with the new name, before any file is read (m.toml and t.csv do not exist)
+RENAMED = [
+    (["simulate", "m.toml", "--offset-east-cm", "3"], "--offset-east-cm",
+     "'--offset-east-cm' was renamed '--launch-offset-x-cm': write --launch-offset-x-cm=3"),
+    (["simulate", "m.toml", "--offset-north-cm=-2"], "--offset-north-cm",
+     "'--offset-north-cm' was renamed '--launch-offset-y-cm': write --launch-offset-y-cm=-2"),
+    (["simulate", "m.toml", "--offset-north-cm"], "--offset-north-cm",
+     "'--offset-north-cm' was renamed '--launch-offset-y-cm'"),
+    (["calibrate", "m.toml", "--track", "t.csv", "--fit", "offset", "--initial",
+      "offset_east=0.01"], "--initial",
+     "'offset_east' was renamed 'launch_offset_x': write launch_offset_x=0.01"),
+    (["calibrate", "m.toml", "--track", "t.csv", "--fit", "tilt", "--initial",
+      "tilt_north=-0.02"], "--initial",
+     "'tilt_north' was renamed 'launch_tilt_y': write launch_tilt_y=-0.02"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("argv", "flag", "reason"), RENAMED)
+def test_a_former_name_is_a_usage_error_giving_the_new_one(argv, flag, reason, capsys):
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert f"error: argument {flag}: {reason}" in captured.err
+    assert "Traceback" not in captured.err and captured.out == ""
+    assert "m.toml" not in captured.err.splitlines()[-1]  # refused before reading it
+
+
 def test_values_at_the_ends_of_the_ranges_are_taken():
     parse = build_parser().parse_args
     args = parse(["simulate", "m.toml", "--tilt-deg", "89.9", "--dropout-rate", "0",
-                  "--offset-east-cm", "-1000", "--offset-north-cm", "1e3", "--seed", "0",
+                  "--launch-offset-x-cm", "-1000", "--launch-offset-y-cm", "1e3", "--seed", "0",
                   "--duration", "3600", "--launch-speed", "-340",
                   "--tilt-azimuth-deg", "-400"])  # fmt: skip
     assert (args.tilt_deg, args.dropout_rate, args.seed) == (89.9, 0.0, 0)
-    assert (args.offset_east_cm, args.offset_north_cm) == (-1000.0, 1000.0)
+    assert (args.launch_offset_x_cm, args.launch_offset_y_cm) == (-1000.0, 1000.0)
     assert (args.duration, args.launch_speed, args.tilt_azimuth_deg) == (3600.0, -340.0, -400.0)
     args = parse(["calibrate", "m.toml", "--track", "t.csv", "--fit", "cm", "--substeps", "1024",
                   "--initial", "cm=1.5e-4", "--initial", " tilt = 0.01"])  # fmt: skip

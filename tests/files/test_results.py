@@ -205,17 +205,18 @@ def test_ocp_save_and_load_round_trip_and_summary(model, tmp_path):
 
 def test_calibration_and_campaign_round_trip_through_the_archive(tmp_path):
     fit = lc.CalibrationResult(
-        CalibrationStatus.CONVERGED, "made up", ("cm", "offset_east"), ("N/W", "m"),
+        CalibrationStatus.CONVERGED, "made up", ("cm", "launch_offset_x"), ("N/W", "m"),
         np.array([1.5e-4, 2e-3]), np.array([1e-4, 0.0]), np.zeros(2), np.ones(2),
         np.array([1e-6, np.inf]), np.eye(2), np.eye(2), np.array([3.0, 0.0]), np.inf,
-        (FitFlag("offset_east", FlagKind.NOT_IDENTIFIABLE, "null direction"),), 4, 1e-6,
+        (FitFlag("launch_offset_x", FlagKind.NOT_IDENTIFIABLE, "null direction"),), 4, 1e-6,
         1e-3, 1e-3, np.full(3, 1e-3), np.zeros((2, 3)), np.arange(2.0), np.zeros((2, 3)),
         np.arange(2.0), np.zeros((2, STATE.size)), np.zeros(PARAMETERS.size),
         np.zeros(STATE.size), 0.5,
     )  # fmt: skip
-    assert "offset_east  0.002 not identifiable m  [not_identifiable]" in fit.summary()
+    assert "launch_offset_x  0.002 not identifiable m  [not_identifiable]" in fit.summary()
     assert repr(fit) == (
-        "<CalibrationResult converged: cm=0.00015, offset_east=0.002; sigma 1.000 mm, 4 iterations>"
+        "<CalibrationResult converged: cm=0.00015, launch_offset_x=0.002; sigma 1.000 mm, "
+        "4 iterations>"
     )
     write_archive(fit, tmp_path)
     back = read_archive(tmp_path)

@@ -67,7 +67,7 @@ def test_signed_beam_gap_counts_the_depth_over_the_footprint(offset, profile, ga
 
 
 def test_a_huge_offset_leaves_the_beam_at_the_first_pulses(flight5):
-    """``lightcraft simulate models/flight5.toml --offset-east-cm 1e12``: outside the beam
+    """``lightcraft simulate models/flight5.toml --launch-offset-x-cm 1e12``: outside the beam
     from the first pulse, the flight ends after LEFT_BEAM_PULSES pulses."""
     model, phi = flight5
     result = simulate(model, 1.0, x0=initial_state(model, r_L=(1e10, 0.0, 0.0)), pulse_map=phi)
