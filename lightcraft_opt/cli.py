@@ -41,7 +41,6 @@ from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
 from lightcraft_opt.outputs import fit_flights
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI
-from lightcraft_opt.plots.monte_carlo import monte_carlo_figures
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
@@ -359,14 +358,8 @@ def _montecarlo(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         progress=not args.quiet,
     )
-    figures = monte_carlo_figures(
-        result.table,
-        title=campaign.title,
-        dispersed=campaign.dispersions.columns,
-        capture_radius=campaign.model.craft.engine.capture_radius,
-    )
-    for name, fig in figures.items():
-        fig.savefig(out / name, dpi=PLOT_DPI)
+    # the figures (and result.json/npz) are written by the writers registered in outputs.py
+    result.save(out, title=campaign.title)
     s = result.summary
     apogee, beam = s["apogee_m"], s["left_beam"]
     low, high = beam["wilson_95"]

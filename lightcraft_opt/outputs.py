@@ -311,7 +311,12 @@ def _campaign_plot(result: CampaignResult, *, title: str | None = None) -> dict[
 
     if title is None:
         title = str(result.summary.get("title", ""))
-    return monte_carlo_figures(result.table, title=title)
+    return monte_carlo_figures(
+        result.table,
+        title=title,
+        dispersed=result.dispersed,
+        capture_radius=result.capture_radius,
+    )
 
 
 def _campaign_save(

@@ -74,6 +74,10 @@ class CampaignResult(Presentable):
     engine : "serial", "processes (N workers)" or "dask <address>".
     elapsed : wall time of this call [s].
     dropped : damaged rows of runs.csv this call dropped (their runs made again).
+    dispersed : run-table columns of the drawn inputs, in drawing order (the figures put
+        the beam offset against each).
+    capture_radius : the optic's capture radius [m] (the figures' capture circle); None
+        when not known (a folder read back without its archive).
     """
 
     out_dir: Path
@@ -87,6 +91,8 @@ class CampaignResult(Presentable):
     engine: str
     elapsed: float
     dropped: int = 0
+    dispersed: tuple[str, ...] = ()
+    capture_radius: float | None = None
 
     @property
     def runs_per_minute(self) -> float:
@@ -243,6 +249,8 @@ def run_campaign(
         engine=name,
         elapsed=time.perf_counter() - start,
         dropped=len(table.dropped),
+        dispersed=campaign.dispersions.columns,
+        capture_radius=campaign.model.craft.engine.capture_radius,
     )
 
 

@@ -14,6 +14,8 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.campaign.run_table import read_table
 from lightcraft_opt.cli import main
+from lightcraft_opt.files.campaign import load_campaign
+from lightcraft_opt.files.results import load_result
 
 ROOT = REPO_ROOT
 MPC = ROOT / "problems" / "montecarlo_gust_mpc.toml"
@@ -45,6 +47,14 @@ def test_cli_writes_the_table_summary_and_figures(tmp_path, capsys):
     assert manifest["controller"] == "mpc" and manifest["columns"][0] == "run"
     for name in ("end_points.png", "apogee.png", "run_extremes.png"):
         assert (out / name).stat().st_size > 10_000
+    # the folder reads back with what its figures need: plot() draws the CLI's panels,
+    # the tilt against the coning and the beam offset against each drawn input
+    campaign = load_campaign(MPC, duration=0.9)
+    back = load_result(out)
+    assert back.dispersed == campaign.dispersions.columns and len(back.dispersed) >= 3
+    assert back.capture_radius == campaign.model.craft.engine.capture_radius
+    panels = [ax for ax in back.plot()["run_extremes.png"].axes if ax.get_visible()]
+    assert len(panels) == 1 + len(back.dispersed)
     # again: everything is found done, nothing is made
     assert main(argv) == 0
     assert "0 runs made, 3 found done" in capsys.readouterr().out

@@ -227,7 +227,7 @@ def test_calibration_and_campaign_round_trip_through_the_archive(tmp_path):
     stats["left_beam"] = {"count": 0, "probability": 0.0, "wilson_95": [0.0, 0.84]}
     campaign = CampaignResult(
         tmp_path, 2, 2, 0, True, {"run": np.arange(2), "status": np.array(["landed"] * 2)},
-        stats, "serial", 1.5,
+        stats, "serial", 1.5, dispersed=("mass_kg", "tilt_deg"), capture_radius=0.055,
     )  # fmt: skip
     assert campaign.summary["status_counts"] == {"landed": 2}  # still the dict
     assert "status           2 landed" in campaign.summary()
@@ -236,6 +236,7 @@ def test_calibration_and_campaign_round_trip_through_the_archive(tmp_path):
     write_archive(campaign, tmp_path)
     again = lc.load_result(tmp_path)
     assert dict(again.summary) == stats and again.engine == "serial"
+    assert again.dispersed == ("mass_kg", "tilt_deg") and again.capture_radius == 0.055
     assert np.array_equal(again.table["status"], campaign.table["status"])
 
 
