@@ -90,25 +90,19 @@ def workspace(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     return tmp_path
 
 
-def run(command: str, capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
-    """``command`` (``lightcraft ...``) through the CLI's entry point; status and output."""
-    words = shlex.split(command)
+def run_line(subcommand: str, capsys: pytest.CaptureFixture[str]) -> tuple[list[str], Path]:
+    """The README's ``lightcraft SUBCOMMAND ...`` line, word for word, through the CLI's
+    entry point: it must exit 0. Its words and its ``--out`` folder."""
+    words = shlex.split(_command(subcommand))
     assert words[0] == "lightcraft"
     status = main(words[1:])
     captured = capsys.readouterr()
-    return status, captured.out + captured.err
-
-
-def out_folder(command: str) -> Path:
-    words = shlex.split(command)
-    return Path(words[words.index("--out") + 1])
+    assert status == 0, captured.out + captured.err
+    return words, Path(words[words.index("--out") + 1])
 
 
 def test_the_first_line_flies_flight5_and_writes_what_the_readme_lists(workspace, capsys):
-    command = _command("simulate")
-    status, printed = run(command, capsys)
-    assert status == 0, printed
-    out = out_folder(command)
+    _, out = run_line("simulate", capsys)
     readme = README.read_text(encoding="utf-8")
     written = sorted(p.name for p in out.iterdir())
     for name in written:  # the README lists every file the line writes ...
@@ -116,16 +110,16 @@ def test_the_first_line_flies_flight5_and_writes_what_the_readme_lists(workspace
     for name in re.findall(r"`(\w+\.(?:csv|json|npz|png))`", readme.split("## From Python")[0]):
         assert name in written, name  # ... and the line writes every file it lists
     summary = json.loads((out / "summary.json").read_text())
-    # Flight 5 of Table 1 climbs out of the beam's reach well before 10 s (docs/physics.md)
-    assert summary["apogee_m"] > 5.0 and summary["apogee_time_s"] < 10.0
+    # docs/physics.md#validation: Flight 5 rides the beam for the 10 s, apogee 20-100 m,
+    # sinking after its engine overheats (the apogee before the end)
+    assert summary["status"] == "duration_reached"
+    assert 20.0 <= summary["apogee_m"] <= 100.0 and summary["apogee_time_s"] < 10.0
 
 
 @pytest.mark.slow
 def test_the_optimize_line_solves_within_its_constraints(workspace, capsys):
-    command = _command("optimize")
-    status, printed = run(command, capsys)
-    assert status == 0, printed
-    summary = json.loads((out_folder(command) / "summary.json").read_text())
+    _, out = run_line("optimize", capsys)
+    summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "solved"
     margins = {m["constraint"]: m["margin"] for m in summary["constraint_margins"]}
     assert set(margins) == {"tilt_limit", "offset_limit"}, margins  # the file's two
@@ -139,10 +133,7 @@ def test_the_closed_loop_line_flies_the_mpc_and_reports_each_step(workspace, cap
     late solve falls back depends on the machine (the damping itself is checked without
     the clock in tests/control/test_mpc.py), so this checks the line runs and its files
     agree with one another."""
-    command = _command("closed-loop")
-    status, printed = run(command, capsys)
-    assert status == 0, printed
-    out = out_folder(command)
+    _, out = run_line("closed-loop", capsys)
     summary = json.loads((out / "summary.json").read_text())
     with open(out / "steps.csv", newline="") as handle:
         steps = list(csv.DictReader(handle))
@@ -156,10 +147,8 @@ def test_the_closed_loop_line_flies_the_mpc_and_reports_each_step(workspace, cap
 
 @pytest.mark.slow
 def test_the_calibrate_line_finds_what_the_sample_track_was_made_with(workspace, capsys):
-    command = _command("calibrate")
-    status, printed = run(command, capsys)
-    assert status == 0, printed
-    report = json.loads((out_folder(command) / "fit_report.json").read_text())
+    _, out = run_line("calibrate", capsys)
+    report = json.loads((out / "fit_report.json").read_text())
     truth = {name: 0.0 for name in report["parameters"]}
     truth["cm"] = _true_cm()
     assert set(truth) == {
@@ -176,15 +165,13 @@ def test_the_calibrate_line_finds_what_the_sample_track_was_made_with(workspace,
 
 @pytest.mark.slow
 def test_the_montecarlo_line_makes_every_run(workspace, capsys):
-    command = _command("montecarlo")
-    status, printed = run(command, capsys)
-    assert status == 0, printed
-    runs = int(shlex.split(command)[shlex.split(command).index("--runs") + 1])
-    with open(out_folder(command) / "runs.csv", newline="") as handle:
+    words, out = run_line("montecarlo", capsys)
+    runs = int(words[words.index("--runs") + 1])
+    with open(out / "runs.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
     assert sorted(int(r["run"]) for r in rows) == list(range(runs))
     assert not [r for r in rows if r["status"] == "error"]
-    summary = json.loads((out_folder(command) / "summary.json").read_text())
+    summary = json.loads((out / "summary.json").read_text())
     assert summary["runs"] == runs
 
 

@@ -60,15 +60,6 @@ BAD_NUMBERS = [
 ]  # fmt: skip
 
 
-@pytest.mark.parametrize(("argv", "flag", "reason"), BAD_NUMBERS)
-def test_a_number_out_of_range_is_a_usage_error_naming_the_flag(argv, flag, reason, capsys):
-    assert main(argv) == 2
-    captured = capsys.readouterr()
-    assert f"error: argument {flag}: " in captured.err
-    assert reason in captured.err
-    assert "Traceback" not in captured.err and captured.out == ""
-
-
 # issue 19: L components are x, y, z (docs/outputs.md); the former spellings are refused
 # with the new name, before any file is read (m.toml and t.csv do not exist)
 RENAMED = [
@@ -87,13 +78,15 @@ RENAMED = [
 ]  # fmt: skip
 
 
-@pytest.mark.parametrize(("argv", "flag", "reason"), RENAMED)
-def test_a_former_name_is_a_usage_error_giving_the_new_one(argv, flag, reason, capsys):
+@pytest.mark.parametrize(("argv", "flag", "reason"), BAD_NUMBERS + RENAMED)
+def test_a_bad_number_or_a_former_name_is_a_usage_error_naming_the_flag(argv, flag, reason, capsys):
+    """An out-of-range number says its range; a former flag or name gives the new one."""
     assert main(argv) == 2
     captured = capsys.readouterr()
-    assert f"error: argument {flag}: {reason}" in captured.err
+    assert f"error: argument {flag}: " in captured.err
+    assert reason in captured.err
     assert "Traceback" not in captured.err and captured.out == ""
-    assert "m.toml" not in captured.err.splitlines()[-1]  # refused before reading it
+    assert "m.toml" not in captured.err.splitlines()[-1]  # refused before reading any file
 
 
 def test_values_at_the_ends_of_the_ranges_are_taken():
