@@ -1,6 +1,8 @@
 """Every example is a test (docs/architecture.md#rule-15): each ```python block of README.md
-and docs/*.md runs, in the order written, in one namespace per file, from the repository
-root, as a reader would type it. Quick sizes through LIGHTCRAFT_QUICK where a page has them.
+and docs/*.md runs, in the order written, in one namespace per file, as a reader would type
+it at the repository root: from a folder of pytest's that holds the repository's files (by
+links, all but runs/), so what an example writes under runs/ starts afresh and lands there.
+Quick sizes through LIGHTCRAFT_QUICK where a page has them.
 """
 
 from __future__ import annotations
@@ -34,7 +36,10 @@ def test_the_pages_have_examples() -> None:
     ids=lambda p: str(p.relative_to(REPO_ROOT)),
 )
 def test_page_examples_run(page: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.chdir(REPO_ROOT)
+    for entry in REPO_ROOT.iterdir():
+        if entry.name not in ("runs", ".git"):
+            (tmp_path / entry.name).symlink_to(entry, target_is_directory=entry.is_dir())
+    monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("LIGHTCRAFT_QUICK", "1")
     namespace: dict[str, object] = {"__name__": "__docs__"}
     for i, block in enumerate(python_blocks(page)):
