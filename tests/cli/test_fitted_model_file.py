@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support.paths import REPO_ROOT
+from support.results import made_up_fit
 
-from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
+from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.files.calibration_outputs import write_fitted_model
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
@@ -36,37 +37,7 @@ def made_up_result(model) -> CalibrationResult:
     for slot, v in zip(slots, file_values, strict=True):
         p[PARAMETERS.slot(slot).start] = v
     p[PARAMETERS.slot("spent_coupling").start] = VALUES[0]  # defaults to the coupling
-    n = len(NAMES)
-    z = np.zeros(n)
-    return CalibrationResult(
-        status=CalibrationStatus.CONVERGED,
-        message="made up",
-        names=NAMES,
-        units=UNITS,
-        values=np.array(VALUES),
-        initial=z,
-        lower=z,
-        upper=z,
-        std=np.array(STD),
-        covariance=np.eye(n),
-        correlation=np.eye(n),
-        singular_values=np.ones(n),
-        condition=1.0,
-        flags=(),
-        iterations=3,
-        cost=0.0,
-        initial_cost=0.0,
-        sigma=0.0,
-        rms=np.zeros(3),
-        residuals=np.zeros((0, 3)),
-        t=np.zeros(0),
-        r_measured=np.zeros((0, 3)),
-        flight_t=np.zeros(0),
-        flight_x=np.zeros((0, 13)),
-        p=p,
-        x0=np.zeros(13),
-        solve_time=0.0,
-    )
+    return made_up_fit(NAMES, UNITS, VALUES, std=np.array(STD), iterations=3, p=p)
 
 
 @pytest.fixture

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from support.models import table1_flight5
+from support.results import made_up_fit
 
-from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
 from lightcraft_opt.layout import PARAMETERS, STATE, parameter_values
 from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.simulation.simulate import simulate
@@ -30,24 +30,13 @@ def fit():
     before = simulate(model, 0.6, p=p0)
     on_track = fitted.t <= 0.3
     t, r = fitted.t[on_track][::4], fitted.x[on_track][::4, R : R + 3]
-    n = 2
-    result = CalibrationResult(
-        status=CalibrationStatus.CONVERGED,
-        message="made up",
-        names=("cm", "divergence"),
-        units=("N s/J", "rad"),
-        values=np.ones(n),
-        initial=np.ones(n),
-        lower=np.zeros(n),
-        upper=np.full(n, 2.0),
-        std=np.full(n, 0.1),
-        covariance=np.eye(n),
-        correlation=np.eye(n),
-        singular_values=np.ones(n),
-        condition=1.0,
-        flags=(),
-        iterations=1,
-        cost=0.0,
+    result = made_up_fit(
+        ("cm", "divergence"),
+        ("N s/J", "rad"),
+        (1.0, 1.0),
+        initial=np.ones(2),
+        upper=np.full(2, 2.0),
+        std=np.full(2, 0.1),
         initial_cost=1.0,
         sigma=1e-3,
         rms=np.full(3, 1e-3),
@@ -58,7 +47,6 @@ def fit():
         flight_x=fitted.x[on_track],
         p=p,
         x0=fitted.x[0],
-        solve_time=0.0,
         initial_p=p0,
         initial_x0=before.x[0],
     )
