@@ -20,13 +20,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support.paths import REPO_ROOT
+from support.results import made_up_solve
 
 from lightcraft_opt.cli import main
 from lightcraft_opt.files.ocp_outputs import solution_columns
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import STATE, initial_state, map_input_layout
 from lightcraft_opt.ocp.options import OCP_TIME_LIMIT
-from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.solve import rollout
 from lightcraft_opt.ocp.transcription import state_scale
 from lightcraft_opt.plots.ocp import ocp_figures
@@ -237,19 +237,7 @@ def test_ocp_figures_draw_the_results_numbers(problem_file):
     u = np.array([[0.01, 0.0, 500.0, 420.0], [0.02, -0.01, 500.0, 300.0], [0.0, 0.0, 500.0, 0.0]])
     engine = np.zeros((3, 11))
     engine[:, 7:9] = [[0.003, 0.004], [0.0, 0.01], [0.006, 0.008]]  # offset_L [m]
-    result = OcpResult(
-        status=OcpStatus.SOLVED,
-        message="made up",
-        solver="ipopt",
-        cost=1.0,
-        iterations=1,
-        solve_time=0.0,
-        t=np.arange(4) / 26.0,
-        x=x,
-        u=u,
-        engine=engine,
-        inputs=map_input_layout(0, False),
-    )
+    result = made_up_solve(x, u, map_input_layout(0, False), engine=engine, cost=1.0)
     figures = ocp_figures(result, problem, title="made up")
     assert list(figures) == list(FIGURES)
 

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support.paths import REPO_ROOT
+from support.results import made_up_solve
 
 import lightcraft_opt as lc
 from lightcraft_opt.calibration.result import CalibrationStatus, FitFlag, FlagKind
@@ -167,9 +168,9 @@ def _ocp(model: lc.Model) -> tuple[lc.OcpProblem, lc.OcpResult]:
     u[:, problem.inputs.index("energy")] = 400.0
     engine = np.zeros((3, ENGINE.size))
     engine[:, ENGINE.slot("offset_L").start] = [1e-3, 2e-3, 3e-3]
-    result = lc.OcpResult(
-        lc.OcpStatus.SOLVED, "made up", "ipopt", 1.5, 7, 0.25, np.arange(4) / 26.0, x, u,
-        engine, problem.inputs, cost_terms=np.array([1.5]), w=np.arange(5.0),
+    result = made_up_solve(
+        x, u, problem.inputs, engine=engine, cost=1.5, iterations=7, solve_time=0.25,
+        cost_terms=np.array([1.5]), w=np.arange(5.0),
     )  # fmt: skip
     return problem, result
 
@@ -266,10 +267,7 @@ def test_the_rcs_envelope_margin_is_the_thrusts_least_room_over_every_phase(prof
         phase = np.linspace(0.0, 2 * np.pi, 3600, endpoint=False)
         thrust = thrust + cos[:, :, None] * np.cos(phase) + sin[:, :, None] * np.sin(phase)
     x = np.tile(initial_state(model), (4, 1))
-    result = lc.OcpResult(
-        lc.OcpStatus.SOLVED, "made up", "ipopt", 0.0, 1, 0.0, np.arange(4) / 26.0, x, u,
-        np.zeros((3, ENGINE.size)), problem.inputs,
-    )  # fmt: skip
+    result = made_up_solve(x, u, problem.inputs)
     swept = min(thrust.min(), (top[None, :, None] - thrust).min())
     (margin,) = [
         m for m in constraint_margins(result, problem) if m["constraint"] == "rcs_envelope"

@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 from support.paths import PROBLEMS
+from support.results import made_up_solve
 
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, quaternion_from_tilt
-from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.plots.ocp import ocp_figures
 
 
@@ -28,20 +28,7 @@ def solved():
         x[i, STATE.index("q_LB")] = quaternion_from_tilt(tilt, 0.4)
     u = np.tile(problem.nominal_input(), (3, 1))
     u[:, problem.inputs.index("rcs_thrust")] = [[0.1, 0, 0, 0], [0, 0.2, 0, 0], [0, 0, 0.3, 0]]
-    engine = np.zeros((3, 11))
-    result = OcpResult(
-        status=OcpStatus.SOLVED,
-        message="made up",
-        solver="ipopt",
-        cost=1.0,
-        iterations=1,
-        solve_time=0.0,
-        t=np.arange(4) / 26.0,
-        x=x,
-        u=u,
-        engine=engine,
-        inputs=problem.inputs,
-    )
+    result = made_up_solve(x, u, problem.inputs, cost=1.0)
     return problem, result, tilts
 
 

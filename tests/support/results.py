@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStatus
-from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 
 
 def made_up_fit(
@@ -49,3 +50,23 @@ def made_up_fit(
         "solve_time": 0.0,
     }
     return CalibrationResult(**{**made, **fields})
+
+
+def made_up_solve(x: np.ndarray, u: np.ndarray, inputs: VectorLayout, **fields: Any) -> OcpResult:
+    """A solved OcpResult of the node states ``x`` (N + 1, STATE.size) and pulse inputs
+    ``u`` (N, inputs.size) in ``inputs``' layout, nodes 1/26 s apart: zero engine record,
+    cost, iterations and solve time unless ``fields`` give them."""
+    made: dict[str, Any] = {
+        "status": OcpStatus.SOLVED,
+        "message": "made up",
+        "solver": "ipopt",
+        "cost": 0.0,
+        "iterations": 1,
+        "solve_time": 0.0,
+        "t": np.arange(len(x)) / 26.0,
+        "x": x,
+        "u": u,
+        "engine": np.zeros((len(u), ENGINE.size)),
+        "inputs": inputs,
+    }
+    return OcpResult(**{**made, **fields})
