@@ -39,6 +39,11 @@ failing statuses after an hour or more. ``--wind 1`` is the 260-pulse problem me
 converge (IPOPT, exact Hessian: 432 iterations, about 11 min cold); ``--horizon 130`` is the
 file's problem, terminal altitude kept, converged in 3 m/s.
 
+``--profile N`` instead runs N IPOPT iterations of the problem as filed (no wind ramp, the
+nominal start) and prints where an iteration's time goes: casadi's timing table of the
+solver's functions (wall time per call and per iteration) and how often the shared
+evaluation of Φ (ocp/evaluation.py) computed against how often it was asked.
+
 Run: ``pip install -e ".[bench]" && python bench/ocp.py`` (``--help`` for options;
 ``--horizon 30`` for a quick look).
 """
@@ -54,7 +59,12 @@ import numpy as np
 
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.ocp.options import HessianApproximation, OcpSolver, PredictionMap
+from lightcraft_opt.ocp.options import (
+    HessianApproximation,
+    OcpOptions,
+    OcpSolver,
+    PredictionMap,
+)
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.ocp.solve import CompiledOcp
@@ -67,7 +77,9 @@ DEFAULT_SOLVERS = "ipopt:exact,ipopt:gauss_newton,fatrop:exact,sqp_hpipm:gauss_n
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--problem", default=str(ROOT / "problems" / "crosswind_climb.toml"))
-    parser.add_argument("--horizon", type=int, default=260, help="pulses (default 260)")
+    parser.add_argument(
+        "--horizon", type=int, help="pulses (default 260; the file's with --profile)"
+    )
     parser.add_argument(
         "--solvers",
         default=DEFAULT_SOLVERS,
@@ -92,10 +104,23 @@ def main() -> None:
         default="rollout",
         help="cold start: the nominal rollout (with the wind ramp) or the director's flight",
     )
+    parser.add_argument(
+        "--profile",
+        type=int,
+        metavar="N",
+        help="profile N iterations of the problem as filed (--horizon, --threads apply)",
+    )
     args = parser.parse_args()
 
     loaded = load_problem(args.problem)
     problem = loaded.problem
+    if args.profile:
+        if args.horizon not in (None, problem.horizon):
+            keep = tuple(c for c in problem.constraints if not isinstance(c, TerminalAltitude))
+            problem = replace(problem, horizon=args.horizon, constraints=keep)
+        profile(problem, replace(loaded.options, threads=args.threads), args.profile)
+        return
+    args.horizon = args.horizon or 260
     if args.horizon != problem.horizon:
         keep = tuple(c for c in problem.constraints if not isinstance(c, TerminalAltitude))
         problem = replace(problem, horizon=args.horizon, constraints=keep)
@@ -184,6 +209,39 @@ def main() -> None:
         f"from the pad {100 * np.max(np.hypot(*cold.x[:, :2].T)):.2f} cm, altitude at the end "
         f"{cold.x[-1, 2]:.1f} m (apogee {cold.x[:, 2].max():.1f} m)"
     )
+
+
+#: The solver's functions, in the order IPOPT calls them within an iteration.
+_FUNCTIONS = ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")
+
+
+def profile(problem: OcpProblem, options: OcpOptions, iterations: int) -> None:
+    """Where an iteration's time goes (module docstring, ``--profile``)."""
+    options = replace(options, max_iter=iterations, wind_ramp=0)
+    start = time.perf_counter()
+    compiled = CompiledOcp(problem, options)
+    print(
+        f"{problem.horizon} pulses, {options.threads} threads: built in "
+        f"{time.perf_counter() - start:.1f} s",
+        flush=True,
+    )
+    result = compiled.solve()
+    n = max(result.iterations, 1)
+    stats = compiled.solver.stats()
+    print(
+        f"{result.iterations} iterations in {result.solve_time:.2f} s: "
+        f"{1e3 * result.solve_time / n:.1f} ms an iteration ({result.status.value})"
+    )
+    print(f"{'function':12s} {'calls':>6s} {'ms/call':>8s} {'ms/iter':>8s}")
+    spent = 0.0
+    for name in _FUNCTIONS:
+        calls, wall = stats.get(f"n_call_{name}", 0), stats.get(f"t_wall_{name}", 0.0)
+        spent += wall
+        print(f"{name:12s} {calls:6d} {1e3 * wall / max(calls, 1):8.2f} {1e3 * wall / n:8.2f}")
+    rest = result.solve_time - spent
+    print(f"{'the rest':12s} {'':6s} {'':8s} {1e3 * rest / n:8.2f}  (IPOPT's own algebra)")
+    for shared in getattr(compiled.transcription, "shared", ()):
+        print(f"{shared.name()}: {shared.evaluations} evaluations for {shared.requests} requests")
 
 
 def director_guess(problem: OcpProblem) -> tuple[np.ndarray, np.ndarray]:

@@ -71,7 +71,7 @@ A problem file::
     max_iter = 200
     tol = 1e-8
     move_blocking = 1                      # or block lengths [4, 4, 2, ...]
-    threads = 1
+    threads = 2                            # Φ over the horizon on 2 threads (default: every core)
     print_level = 0
     wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
     prediction = "full"                    # or "reduced": the coning-aware reduced map

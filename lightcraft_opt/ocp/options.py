@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, field
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
@@ -98,7 +99,8 @@ class OcpOptions:
         violation, in (0, 1).
     move_blocking : hold each control for this many pulses (an int), or for the given
         block lengths in pulses (a tuple, summing to the horizon); 1 means free every pulse.
-    threads : evaluate Φ over the horizon on this many threads (casadi map), >= 1.
+    threads : evaluate Φ and its derivatives over the horizon on this many threads (casadi
+        map), >= 1; default every core (:func:`os.cpu_count`).
     print_level : 0 is silent; 1..12 the solver's own verbosity (IPOPT's scale).
     wind_ramp : continuation steps on the wind, >= 0. With n > 0 a cold solve first
         solves the problem in calm air, then with the wind (reference speed and gust)
@@ -124,7 +126,7 @@ class OcpOptions:
     max_iter: int = 200
     tol: float = 1e-8
     move_blocking: int | tuple[int, ...] = 1
-    threads: int = 1
+    threads: int = field(default_factory=lambda: os.cpu_count() or 1)
     print_level: int = 0
     wind_ramp: int = 0
     chain_derivatives: bool = True

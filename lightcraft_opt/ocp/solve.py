@@ -119,9 +119,11 @@ def _uses_chain(opts: OcpOptions) -> bool:
 
 def _solver_options(
     opts: OcpOptions, tr: MultipleShooting, deadline: Deadline | None
-) -> tuple[str, dict[str, Any]]:
-    """nlpsol plugin name and options for ``opts``; ``deadline`` the iteration callback
-    that holds IPOPT and sqpmethod to the time limit (fatrop calls none)."""
+) -> tuple[str, dict[str, Any], dict[str, ca.MX] | ca.Function]:
+    """nlpsol plugin name, options and NLP for ``opts``; ``deadline`` the iteration
+    callback that holds IPOPT and sqpmethod to the time limit (fatrop calls none). The NLP
+    is the transcription's expressions, or with the chain its Function that evaluates Φ
+    once per point (ocp/evaluation.py)."""
     quiet = opts.print_level == 0
     # Trial points where Φ is not finite (IPOPT then shortens its step) are not warned about
     # unless the solver is verbose.
@@ -134,8 +136,13 @@ def _solver_options(
         common["iteration_callback"] = deadline
     if opts.hessian is HessianApproximation.GAUSS_NEWTON:
         common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
-    elif _uses_chain(opts) and tr.derivatives is not None:
-        common.update(tr.chain_derivatives(upper=True))
+    nlp: dict[str, ca.MX] | ca.Function = tr.nlp
+    if _uses_chain(opts) and tr.derivatives is not None:
+        chain = tr.chain_derivatives(upper=True)
+        nlp = chain.pop("nlp")
+        # the NLP's Function is not differentiable (Φ's chain gives its derivatives):
+        # no multipliers of the parameters, which would need casadi's AD of it
+        common.update(chain, no_nlp_grad=True, calc_lam_p=False)
     exact = opts.hessian is not HessianApproximation.LIMITED_MEMORY
     equality = tr.equality
     if opts.solver is OcpSolver.IPOPT:
@@ -151,7 +158,7 @@ def _solver_options(
             ipopt["hessian_approximation"] = "limited-memory"
         if opts.time_limit is not None:
             ipopt["max_wall_time"] = float(opts.time_limit)
-        return "ipopt", {**common, "ipopt": ipopt}
+        return "ipopt", {**common, "ipopt": ipopt}, nlp
     if opts.solver is OcpSolver.FATROP:
         fatrop = {
             "print_level": opts.print_level,
@@ -159,12 +166,11 @@ def _solver_options(
             "tol": opts.tol,
             "constr_viol_tol": opts.tol,
         }
-        return "fatrop", {
-            **common,
-            "structure_detection": "auto",
-            "equality": equality,
-            "fatrop": fatrop,
-        }
+        return (
+            "fatrop",
+            {**common, "structure_detection": "auto", "equality": equality, "fatrop": fatrop},
+            nlp,
+        )
     qp = _QP[opts.solver]
     qp_opts: dict[str, Any] = {"error_on_fail": False}
     if qp == "qrqp":
@@ -186,18 +192,22 @@ def _solver_options(
             "res_d_max": 1e-10,
             "res_m_max": 1e-10,
         }
-    return "sqpmethod", {
-        **common,
-        "qpsol": qp,
-        "qpsol_options": qp_opts,
-        "hessian_approximation": "exact" if exact else "limited-memory",
-        "max_iter": opts.max_iter,
-        "tol_pr": opts.tol,
-        "tol_du": opts.tol,
-        "print_header": not quiet,
-        "print_iteration": not quiet,
-        "print_status": not quiet,
-    }
+    return (
+        "sqpmethod",
+        {
+            **common,
+            "qpsol": qp,
+            "qpsol_options": qp_opts,
+            "hessian_approximation": "exact" if exact else "limited-memory",
+            "max_iter": opts.max_iter,
+            "tol_pr": opts.tol,
+            "tol_du": opts.tol,
+            "print_header": not quiet,
+            "print_iteration": not quiet,
+            "print_status": not quiet,
+        },
+        nlp,
+    )
 
 
 #: Parameter slots that OcpOptions.wind_ramp scales (speeds; directions and profiles stay).
@@ -353,9 +363,9 @@ class CompiledOcp:
             and opts.solver is not OcpSolver.FATROP
             else None
         )
-        name, solver_opts = _solver_options(opts, tr, self._deadline)
+        name, solver_opts, nlp = _solver_options(opts, tr, self._deadline)
         try:
-            self.solver = ca.nlpsol("ocp_nlp", name, tr.nlp, solver_opts)
+            self.solver = ca.nlpsol("ocp_nlp", name, nlp, solver_opts)
         except RuntimeError as err:
             raise OptionError(
                 f"OcpOptions.solver {opts.solver.value!r} cannot take this problem's NLP: "
@@ -374,7 +384,7 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._warm_solver: ca.Function | None = None
-        self._nlp_options = (name, solver_opts)
+        self._nlp_options = (name, solver_opts, nlp)
         self.build_time = time.perf_counter() - start
 
     def solve(
@@ -514,7 +524,7 @@ class CompiledOcp:
         if self.options.solver is not OcpSolver.IPOPT:
             return self.solver
         if self._warm_solver is None:
-            name, opts = self._nlp_options
+            name, opts, nlp = self._nlp_options
             push = 1e-6
             ipopt = {
                 **opts["ipopt"],
@@ -524,7 +534,6 @@ class CompiledOcp:
                 "warm_start_mult_bound_push": push,
                 "warm_start_slack_bound_push": push,
             }
-            nlp = self.transcription.nlp
             self._warm_solver = ca.nlpsol("ocp_nlp_warm", name, nlp, {**opts, "ipopt": ipopt})
         return self._warm_solver
 

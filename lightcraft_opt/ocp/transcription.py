@@ -6,10 +6,13 @@ nodes, pulses and units). Decision variables, stage by stage (k = 0..N-1, then N
     w = [x_0, a_0, v_0,  x_1, a_1, v_1,  ...,  x_N, a_N]
 
 x_k the state at node k, v_k the free entries of the map input u_k (entries whose bounds
-are equal are held, not variables), and a_k, present only when a term couples consecutive
-pulses (slew limits, control rates, move blocking), a memory of the previous pulse's free
-inputs: a_{k+1} = v_k. With it every constraint and cost term involves one stage only, so
-the NLP has the stage structure that fatrop and hpipm exploit. Constraints, in order::
+are equal are held, not variables; a free focus f [m] is decided by its vergence 1/f [1/m],
+on which the beam's side depends nearly linearly, and u_k takes 1/v: the surrogate below
+stays exact, since it differentiates z(w) itself), and a_k, present only when a term
+couples consecutive pulses (slew limits, control rates, move blocking), a memory of the
+previous pulse's free inputs: a_{k+1} = v_k. With it every constraint and cost term
+involves one stage only, so the NLP has the stage structure that fatrop and hpipm
+exploit. Constraints, in order::
 
     for k in 0..N-1:  x_{k+1} - Φ(x_k, u_k, p, t_k) = 0,  a_{k+1} - v_k = 0   (gaps)
                       stage k: x_0 = x0 (k = 0), path constraints at node k (k >= 1),
@@ -52,6 +55,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.ocp.evaluation import SharedEvaluation, horizon_map
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
@@ -75,6 +79,31 @@ from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.pulse_map_derivatives import PulseMapDerivatives
 
 __all__ = ["MultipleShooting", "state_scale"]
+
+
+def _reciprocal_entries(problem: OcpProblem, free: np.ndarray) -> np.ndarray:
+    """(n_free,) which free entries are decided by their reciprocal: the focus f, whose
+    vergence 1/f the beam's side depends on nearly linearly (the director's choice too,
+    docs/director.md), where f itself spans 2-500 m. Its bounds must be positive, and a
+    slew limit or rate cost on it is refused (they would be read in the wrong unit)."""
+    lay = problem.inputs
+    if "focus" not in lay.names:
+        return np.zeros(free.size, dtype=bool)
+    slot = lay.slot("focus")
+    out = (free >= slot.start) & (free < slot.stop)
+    if not out.any():
+        return out
+    rows = free[out]
+    if np.any(problem.lower[rows] <= 0):
+        raise ParameterError("focus", "a free focus needs a positive lower bound [m]")
+    rated = any(isinstance(t, ControlRate) and t.slot == "focus" for t in problem.objective)
+    if rated or np.any(np.isfinite(problem.slew[rows])):
+        raise ParameterError(
+            "focus",
+            "a free focus is decided in its vergence 1/f: a slew limit or control_rate on "
+            "it is not supported",
+        )
+    return out
 
 
 def state_scale(problem: OcpProblem) -> np.ndarray:
@@ -153,7 +182,7 @@ class MultipleShooting:
         derivatives: PulseMapDerivatives | None = None,
     ) -> None:
         self.problem, self.period = problem, phi.period
-        self.derivatives = derivatives
+        self.derivatives, self.threads = derivatives, threads
         self._phi = phi
         N, nu = problem.horizon, problem.inputs.size
         free = np.flatnonzero(problem.free)
@@ -176,7 +205,10 @@ class MultipleShooting:
         )
         self.P = ca.MX.sym("P", self.parameters.size)
         self.x_scale = state_scale(problem)
-        span = np.maximum(np.abs(problem.lower[free]), np.abs(problem.upper[free]))
+        self.reciprocal = _reciprocal_entries(problem, free)
+        limits = self.decided(problem.lower[free]), self.decided(problem.upper[free])
+        self.lower, self.upper = np.minimum(*limits), np.maximum(*limits)  # bounds of v [SI]
+        span = np.maximum(np.abs(self.lower), np.abs(self.upper))
         self.u_scale = np.where(np.isfinite(span) & (span > 0), span, 1.0)
 
         xs = [ca.MX.sym(f"x_{k}", STATE.size) for k in range(N + 1)]
@@ -225,10 +257,13 @@ class MultipleShooting:
         X = ca.horzcat(*[sx * x for x in xs])
         A = ca.horzcat(*[su * a for a in as_]) if self.coupled else ca.MX(0, N + 1)
         V = ca.horzcat(*[su * v for v in vs]) if self.free.size else ca.MX(0, N)
+        # the map's inputs from the decisions: the focus from its vergence 1/f
+        rows = [1 / V[i, :] if self.reciprocal[i] else V[i, :] for i in range(self.free.size)]
+        V_map = ca.vertcat(*rows) if rows else V
         select = np.zeros((pr.inputs.size, self.free.size))
         select[self.free, np.arange(self.free.size)] = 1.0
         held = ca.DM((~pr.free).astype(float)) * self.parameters.get("u_fixed", P)
-        U = ca.repmat(held, 1, N) + ca.mtimes(ca.DM(select), V)
+        U = ca.repmat(held, 1, N) + ca.mtimes(ca.DM(select), V_map)
         if outputs is None:
             assert phi is not None
             step = phi.step.map(N, "thread", threads) if threads > 1 else phi.step.map(N)
@@ -287,6 +322,7 @@ class MultipleShooting:
                 add(st.xs[0] - x0 / sx, 0.0, 0.0)
                 if self.coupled and has_previous:
                     u_prev = self.parameters.get("u_previous", P)[self.free.tolist()]
+                    u_prev = ca.if_else(ca.DM(self.reciprocal.astype(float)), 1 / u_prev, u_prev)
                     add(st.as_[0] - u_prev / su, 0.0, 0.0)
                 elif self.coupled:
                     add(st.as_[0] - st.vs[0], 0.0, 0.0)  # no previous input: no slew at 0
@@ -413,9 +449,17 @@ class MultipleShooting:
         return self.parameters.get("t0", self.P) + ca.DM(self.period * np.arange(N)).T
 
     def chain_derivatives(self, *, upper: bool = True) -> dict[str, ca.Function]:
-        """nlpsol's ``grad_f``, ``jac_g`` and ``hess_lag`` (upper triangle with ``upper``)
-        from Φ's explicit-chain derivatives (module docstring); they equal casadi's AD of
-        the NLP to rounding (tests/ocp/test_chain_derivatives.py)."""
+        """nlpsol's NLP and derivatives from Φ's explicit chain (module docstring):
+        ``nlp(x, p) -> (f, g)`` (pass it to nlpsol in place of :attr:`nlp`), ``grad_f``,
+        ``jac_g`` and ``hess_lag`` (upper triangle with ``upper``). They equal casadi's AD
+        of the NLP to rounding (tests/ocp/test_chain_derivatives.py).
+
+        Φ over the horizon is evaluated once per primal point and shared
+        (ocp/evaluation.py): its values by f and g, its values and Jacobians by ∇f, ∂g/∂w
+        and the Hessian's multipliers; the chain's Hessian blocks once per iterate. Every
+        other piece is an SX Function (the NLP with Φ's outputs as symbols, and the
+        surrogate below), a few microseconds a pulse in casadi's SX machine.
+        """
         der = self.derivatives
         if der is None or der.hessian is None:
             raise ParameterError(
@@ -435,15 +479,15 @@ class MultipleShooting:
         f_y = ca.sum1(terms_y)
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
         ell_y = lam_f * f_y + ca.dot(lam_g, g_y)
-        tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y])
+        tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y]).expand()
         mu = ca.Function(
             "ocp_output_multipliers",
             [w, Yx, Ye, P, lam_f, lam_g],
             [ca.gradient(ell_y, Yx), ca.gradient(ell_y, Ye)],
-        )
+        ).expand()
         # Φ's arguments z_k = (x_k, u_k), affine in w
         Z = ca.vertcat(st.X[:, :N], st.U)
-        z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z])
+        z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z]).expand()
         # the surrogate at w̄, whose Φ quantities enter as symbols: casadi differentiates it
         # in w without ever differentiating Φ or its chain
         Zb = ca.MX.sym("z_bar", nv, N)
@@ -468,14 +512,30 @@ class MultipleShooting:
         H = ca.hessian(lam_f * f_lin + ca.dot(lam_g, g_lin) + quad, w)[0]
         H = ca.triu(H) if upper else H
         first = [w, P, Zb, XN, EN, DX, DE]
-        surrogate_grad = ca.Function("ocp_surrogate_grad_f", first, [f_lin, ca.gradient(f_lin, w)])
-        surrogate_jac = ca.Function("ocp_surrogate_jac_g", first, [g_lin, ca.jacobian(g_lin, w)])
-        surrogate_hess = ca.Function("ocp_surrogate_hess", [*first, HB, lam_f, lam_g], [H])
+        surrogate_grad = ca.Function(
+            "ocp_surrogate_grad_f", first, [f_lin, ca.gradient(f_lin, w)]
+        ).expand()
+        surrogate_jac = ca.Function(
+            "ocp_surrogate_jac_g", first, [g_lin, ca.jacobian(g_lin, w)]
+        ).expand()
+        surrogate_hess = ca.Function("ocp_surrogate_hess", [*first, HB, lam_f, lam_g], [H]).expand()
 
-        # the chain at w̄ = w, then the surrogate
+        # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
+        values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, self.threads))
+        jacobians = SharedEvaluation(
+            "ocp_pulse_jacobians", horizon_map(der.jacobian, N, self.threads)
+        )
+        self.shared = (values, jacobians)  # the Callbacks must outlive the solver
         times = self._pulse_times()
         z = z_of(w, P)
-        point = [z, *der.jacobian.map(N)(z[:nx, :], z[nx:, :], p, times)]
+        nlp = ca.Function(
+            "ocp_nlp",
+            [w, P],
+            tilde(w, *values(z[:nx, :], z[nx:, :], p, times), P),
+            ["x", "p"],
+            ["f", "g"],
+        )
+        point = [z, *jacobians(z[:nx, :], z[nx:, :], p, times)]
         grad_f = ca.Function(
             "nlp_grad_f", [w, P], surrogate_grad.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
         )
@@ -484,7 +544,8 @@ class MultipleShooting:
         )
         _, xn, en, _, _ = point
         mu_x, mu_e = mu(w, xn, en, P, lam_f, lam_g)
-        Hb = der.hessian.map(N)(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
+        hessians = horizon_map(der.hessian, N, self.threads)
+        Hb = hessians(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
         hess_lag = ca.Function(
             "nlp_hess_l",
             [w, P, lam_f, lam_g],
@@ -492,7 +553,7 @@ class MultipleShooting:
             ["x", "p", "lam_f", "lam_g"],
             ["hess_gamma_x_x"],
         )
-        return {"grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}
+        return {"nlp": nlp, "grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}
 
     def _phi_sparsity(self, nx: int, ne: int, nv: int) -> tuple[ca.Sparsity, ca.Sparsity]:
         """Structural patterns of Φ's Jacobian in v = (x, u), (nx + ne, nv), and of the
@@ -531,17 +592,24 @@ class MultipleShooting:
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lbx, ubx) of the scaled decision vector: input bounds on v_k, none elsewhere."""
         lbx, ubx = np.full(self.n_w, -np.inf), np.full(self.n_w, np.inf)
-        lo = self.problem.lower[self.free] / self.u_scale
-        hi = self.problem.upper[self.free] / self.u_scale
+        lo, hi = self.lower / self.u_scale, self.upper / self.u_scale
         for idx in self.v_index:
             lbx[idx], ubx[idx] = lo, hi
         return lbx, ubx
 
+    def decided(self, u_free: np.ndarray) -> np.ndarray:
+        """The decisions of free map-input values (..., n_free): the focus's vergence 1/f
+        [1/m] in place of f [m], the others as they are (module docstring)."""
+        u = np.asarray(u_free, dtype=float)
+        with np.errstate(divide="ignore"):
+            return np.where(self.reciprocal, 1.0 / u, u)
+
     def pack(self, X: np.ndarray, U: np.ndarray, u_previous: np.ndarray | None) -> np.ndarray:
         """Scaled decision vector from states (N + 1, STATE.size) and map inputs (N, size)."""
         w = np.zeros(self.n_w)
-        free = U[:, self.free] / self.u_scale
-        first = free[0] if u_previous is None else u_previous[self.free] / self.u_scale
+        free = self.decided(U[:, self.free]) / self.u_scale
+        previous = None if u_previous is None else self.decided(u_previous[self.free])
+        first = free[0] if previous is None else previous / self.u_scale
         for k, idx in enumerate(self.x_index):
             w[idx] = X[k] / self.x_scale
         for k, idx in enumerate(self.v_index):

@@ -90,6 +90,8 @@ class PulseMapDerivatives:
 
     Attributes
     ----------
+    values : casadi.Function ``pulse_map_values(x, u, p, t) -> (x_next, engine)``: Φ
+        itself composed over the same pieces (compiled pieces: Φ at compiled speed).
     jacobian : casadi.Function ``pulse_map_jacobian(x, u, p, t) -> (x_next, engine,
         dx_next_dv, dengine_dv)``; the Jacobians are (STATE.size, nv) and (ENGINE.size, nv)
         with nv = STATE.size + u's size, columns x first, then u.
@@ -99,6 +101,7 @@ class PulseMapDerivatives:
     pieces : the pieces' derivative Functions the chain calls.
     """
 
+    values: ca.Function
     jacobian: ca.Function
     hessian: ca.Function | None
     pieces: DerivativePieces
@@ -228,9 +231,16 @@ def chain_derivatives(
         ["x", "u", "p", "t"],
         ["x_next", "engine", "dx_next_dv", "dengine_dv"],
     )
+    values = ca.Function(
+        "pulse_map_values",
+        [x, u, p, t],
+        [x_next, engine],
+        ["x", "u", "p", "t"],
+        ["x_next", "engine"],
+    )
 
     if hN is None or hJ is None or hS is None or hW is None:
-        return PulseMapDerivatives(jacobian, None, derivatives)
+        return PulseMapDerivatives(values, jacobian, None, derivatives)
 
     # ------------------------------------------------------------ backward sweep
     _, H_out = hN(s, lam_x)
@@ -260,7 +270,7 @@ def chain_derivatives(
         ["x", "u", "p", "t", "lam_x", "lam_e"],
         ["hess_v_v"],
     )
-    return PulseMapDerivatives(jacobian, hessian, derivatives)
+    return PulseMapDerivatives(values, jacobian, hessian, derivatives)
 
 
 def _unit(n: int, i: int) -> np.ndarray:

@@ -10,8 +10,14 @@ References:
   optimum (cost to 1e-9, inputs to 1e-7 m) in the same number of iterations or close.
 
 Problems: the lateral problem (slew limits, so the NLP carries the previous-input memory
-a_k; held pulse energy) and a PHASE_LOCKED RCS problem (the coning rate of the state after
-each jump feeds the coast), both with a cheap Φ (1-2 substeps, a coarse optic).
+a_k; held pulse energy), a PHASE_LOCKED RCS problem (the coning rate of the state after
+each jump feeds the coast) and the lateral problem under the waist beam with the focus
+free (decided by its vergence 1/f: the map's input is then not affine in w), all with a
+cheap Φ (1-2 substeps, a coarse optic).
+
+Shared evaluation (ocp/evaluation.py): within a solve, Φ's Jacobian chain runs once per
+primal point at which IPOPT asks for derivatives, and Φ's values once per point at which
+it asks for f and g, counted against IPOPT's own call counts.
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Engine
+from lightcraft_opt.params import BeamSizeModel, Engine
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
 
@@ -75,9 +81,25 @@ def _phase_locked():
     return problem, PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=2, dense=2)
 
 
-@pytest.fixture(scope="module", params=["lateral", "phase_locked"])
+def _focus_free():
+    problem, options = _lateral()
+    model = problem.model
+    waist = replace(model, laser=replace(model.laser, size_model=BeamSizeModel.WAIST))
+    controls = (
+        ControlBound("pointing_L", -0.05, 0.05, slew_rate=0.2),
+        ControlBound("focus", 2.0, 500.0),
+        ControlBound("energy", 420.0, 420.0),
+    )
+    return replace(problem, model=waist, controls=controls), options
+
+
+@pytest.fixture(scope="module", params=["lateral", "phase_locked", "focus_free"])
 def nlp(request):
-    problem, options = {"lateral": _lateral, "phase_locked": _phase_locked}[request.param]()
+    problem, options = {
+        "lateral": _lateral,
+        "phase_locked": _phase_locked,
+        "focus_free": _focus_free,
+    }[request.param]()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
     tr = MultipleShooting(problem, phi, derivatives=build_pulse_map_derivatives(phi))
     X, U = rollout(problem, phi)
@@ -114,6 +136,8 @@ def test_chain_gradient_jacobian_and_hessian_equal_casadi_ad(nlp):
     )
     f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
     chain = tr.chain_derivatives(upper=True)
+    f_n, g_n = chain["nlp"](w, P)
+    assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL
     f_c, grad_c = chain["grad_f"](w, P)
     g_c, jac_c = chain["jac_g"](w, P)
     hess_c = chain["hess_lag"](w, P, lam_f, lam_g)
@@ -143,3 +167,23 @@ def test_ipopt_reaches_the_same_optimum_with_chain_or_ad_derivatives():
     assert with_chain.cost == pytest.approx(with_ad.cost, rel=1e-9)
     np.testing.assert_allclose(with_chain.u, with_ad.u, atol=1e-7)
     assert abs(with_chain.iterations - with_ad.iterations) <= 2
+
+
+def test_each_point_evaluates_phi_once():
+    problem, options = _lateral()
+    phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
+    compiled = CompiledOcp(problem, OcpOptions(pulse_map=options, tol=TOL), pulse_map=phi)
+    result = compiled.solve()
+    assert result.status is OcpStatus.SOLVED
+    stats = compiled.solver.stats()
+    values, jacobians = compiled.transcription.shared
+    # the Jacobian chain at most once per point IPOPT differentiates at (∇f, ∂g/∂w and
+    # the Hessian's multipliers there share it; IPOPT asks for ∇f twice at one point),
+    # at least once per iterate
+    assert result.iterations <= jacobians.evaluations <= stats["n_call_nlp_grad_f"]
+    assert jacobians.requests == (
+        stats["n_call_nlp_grad_f"] + stats["n_call_nlp_jac_g"] + stats["n_call_nlp_hess_l"]
+    )
+    # the values at most once per trial point: f and g share them
+    assert result.iterations <= values.evaluations <= stats["n_call_nlp_g"]
+    assert values.requests == stats["n_call_nlp_f"] + stats["n_call_nlp_g"]

@@ -1,0 +1,104 @@
+"""Φ over the horizon, evaluated once per point and shared by the NLP's functions.
+
+An interior-point iterate asks for f and g at each trial point of its line search, then
+for ∇f, ∂g/∂w and the Lagrangian Hessian at the point it accepts. Every one of them
+needs Φ over the whole horizon (values at a trial point; values and Jacobians at the
+accepted one), and nlpsol calls each as its own casadi.Function: composed naively, Φ's
+Jacobian chain runs three times per iterate (∇f, ∂g/∂w, and the Hessian's multipliers)
+and its values twice per trial point (f, g).
+
+:class:`SharedEvaluation` is a casadi Callback around one mapped Function (Φ's values,
+or its values and Jacobians, over the horizon, on several threads) that remembers the
+results of the last few argument points, keyed by their bytes. The NLP's functions call
+it with the same arguments whenever they stand at the same primal point, so each
+quantity is computed once per point whatever asks for it; the Hessian of the chain,
+which needs the dual point too, is computed once per iterate by nlp_hess_l alone.
+
+The cache is exact (a hit needs the same bytes), so results never depend on whether a
+value came from it: :attr:`SharedEvaluation.evaluations` against
+:attr:`SharedEvaluation.requests` counts what it saved.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["SharedEvaluation", "horizon_map"]
+
+#: Points remembered: the accepted point and a trial point or two of the line search.
+KEEP = 4
+
+
+def horizon_map(f: ca.Function, horizon: int, threads: int) -> ca.Function:
+    """``f`` mapped over ``horizon`` pulses, evaluated on ``threads`` threads (serial
+    for 1)."""
+    return f.map(horizon, "thread", threads) if threads > 1 else f.map(horizon)
+
+
+class SharedEvaluation(ca.Callback):
+    """A casadi Function that evaluates ``f`` and remembers the last :data:`KEEP` points.
+
+    Parameters
+    ----------
+    name : the Callback's name (``ocp_pulse_values``, ``ocp_pulse_jacobians``).
+    f : the Function evaluated on a miss; the Callback has its inputs and outputs
+        (names and sparsity), and is not differentiable: the NLP's derivatives come
+        from Φ's chain (transcription.MultipleShooting.chain_derivatives), never from
+        AD through this Callback.
+
+    Attributes
+    ----------
+    requests : calls made.
+    evaluations : calls that evaluated ``f`` (the others were answered from memory).
+    """
+
+    def __init__(self, name: str, f: ca.Function) -> None:
+        ca.Callback.__init__(self)
+        self._f = f
+        self._memory: OrderedDict[bytes, list[ca.DM]] = OrderedDict()
+        self.requests = 0
+        self.evaluations = 0
+        self.construct(name, {})
+
+    def get_n_in(self) -> int:
+        return int(self._f.n_in())
+
+    def get_n_out(self) -> int:
+        return int(self._f.n_out())
+
+    def get_name_in(self, i: int) -> str:
+        return str(self._f.name_in(i))
+
+    def get_name_out(self, i: int) -> str:
+        return str(self._f.name_out(i))
+
+    def get_sparsity_in(self, i: int) -> Any:
+        return self._f.sparsity_in(i)
+
+    def get_sparsity_out(self, i: int) -> Any:
+        return self._f.sparsity_out(i)
+
+    def has_jacobian(self) -> bool:
+        return False
+
+    def eval(self, arg: list[ca.DM]) -> list[ca.DM]:
+        self.requests += 1
+        key = b"".join(np.asarray(a.nonzeros(), dtype=float).tobytes() for a in arg)
+        known = self._memory.get(key)
+        if known is not None:
+            self._memory.move_to_end(key)
+            return known
+        self.evaluations += 1
+        out = self._f.call(arg)
+        self._memory[key] = out
+        if len(self._memory) > KEEP:
+            self._memory.popitem(last=False)
+        return out
+
+    def forget(self) -> None:
+        """Drop the remembered points (the counts stay)."""
+        self._memory.clear()
