@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from support.capped_energy import capped_flight16
 
-from lightcraft_opt.errors import OptionError
+from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import STATE
 from lightcraft_opt.ocp.constraint_rows import ConstraintRow, dynamics_gap, unmet_constraint
@@ -120,6 +120,21 @@ def test_the_stall_window_is_checked():
         with pytest.raises(OptionError, match=r"OcpOptions\.stall_iterations"):
             OcpOptions(stall_iterations=bad)  # type: ignore[arg-type]
     assert OcpOptions(stall_iterations=None).stall_iterations is None
+
+
+def test_the_stall_window_is_read_from_the_solver_table(tmp_path):
+    """``stall_iterations`` under ``[solver]``: the default 30 when absent, 0 for none,
+    a negative count refused naming the key."""
+    path = capped_flight16(tmp_path / "capped.toml", energy_cap_J=20.0, minimum_m=5.0)
+    text = path.read_text()
+    assert load_problem(path).options.stall_iterations == 30
+    for given, read in (("45", 45), ("0", None)):
+        path.write_text(text.replace("[solver]", f"[solver]\nstall_iterations = {given}"))
+        assert load_problem(path).options.stall_iterations == read
+    path.write_text(text.replace("[solver]", "[solver]\nstall_iterations = -1"))
+    with pytest.raises(ProblemFileError) as err:
+        load_problem(path)
+    assert err.value.field == "solver.stall_iterations" and "0 for no stall rule" in str(err.value)
 
 
 # --------------------------------------------------------------------------- row names
