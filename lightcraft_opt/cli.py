@@ -179,14 +179,17 @@ def _optimize(args: argparse.Namespace) -> int:
     # the files and figures are written by the writers registered in outputs.py
     result.save(out, problem=pf)
     summary = json.loads((out / "summary.json").read_text())
-    print(
-        f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
-        f"{summary['final_altitude_m']:.3f} m, largest beam offset "
-        f"{summary['max_offset_over_capture_radius']:.3f} of the capture radius -> {out}/"
-    )
+    if result.dynamics_closed:
+        print(
+            f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
+            f"{summary['final_altitude_m']:.3f} m, largest beam offset "
+            f"{summary['max_offset_over_capture_radius']:.3f} of the capture radius -> {out}/"
+        )
+    else:  # the figures of an iterate that is no trajectory are no results
+        print(f"no flyable plan: {result.open_dynamics()} -> {out}/")
     if result.status.value == "max_iter":
         print(_ITERATION_LIMIT.format(n=options.max_iter))
-    return 0 if result.success else 1
+    return 0 if result.success and result.dynamics_closed else 1
 
 
 #: What an iteration limit means, the last line of optimize and calibrate when it came.
@@ -590,8 +593,10 @@ def add_optimize(sub: argparse._SubParsersAction) -> None:
         "optimize",
         help="solve an optimal control problem from a problem file",
         description="Solve the problem file's optimal control problem and write solution.csv, "
-        "summary.json and figures. Exit status 0: solved; 1: the solver did not converge "
-        "or reached its wall-clock limit (files still written); 2: bad input.",
+        "summary.json and figures. Exit status 0: solved; 1: the solver did not converge, "
+        "found the problem infeasible (its constraint violation stalled: the message names "
+        "the constraint that cannot be met) or reached its wall-clock limit, or its plan "
+        "leaves the dynamics gaps open (files still written); 2: bad input.",
     )
     opt.add_argument("problem", help="problem TOML, e.g. problems/crosswind_launch.toml")
     opt.add_argument("--out", default=None, help="output folder (default runs/<problem name>)")

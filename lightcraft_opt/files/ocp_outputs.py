@@ -2,7 +2,9 @@
 
 Column names carry their units and match trajectory.csv's (:mod:`.simulation_outputs`):
 positions in L (x east, y north, z up, docs/frames.md), impulses in B. A failed solve is
-written too: its status is in the summary, its last iterate in the CSV.
+written too: its status is in the summary, its last iterate in the CSV. When that iterate's
+dynamics gaps are open, the summary says so (``dynamics_closed`` false): its achieved
+figures (final altitude, laser energy ...) are then those of no flyable trajectory.
 """
 
 from __future__ import annotations
@@ -190,8 +192,11 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
     times), what it asked (solver, horizon) and what it achieved (laser energy, final
     altitude, largest beam offset over the capture radius against its limit, largest
     tilt, RCS propellant and liner used, each constraint's margin
-    (:func:`constraint_margins`), constraint violation). Beside it, result.json and
-    result.npz: the exact result (:mod:`.result_archive`)."""
+    (:func:`constraint_margins`), constraint violation), and whether the returned iterate
+    is a trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest
+    dynamics gap, scaled units): when not, the achieved figures keep their keys but are no
+    results. Beside it, result.json and result.npz: the exact result
+    (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
     offsets = offsets_over_capture_radius(result, problem)
     limits = [
@@ -216,6 +221,8 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "iterations": result.iterations,
         "solve_time_s": result.solve_time,
         "build_time_s": result.build_time,
+        "dynamics_closed": result.dynamics_closed,
+        "dynamics_gap": finite_or_none(result.dynamics_gap),
         "horizon_pulses": result.horizon,
         "pulse_period_s": problem.period,
         "laser_energy_J": result.laser_energy,

@@ -76,6 +76,8 @@ A problem file::
     wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
     prediction = "full"                    # or "reduced": the coning-aware reduced map
     time_limit_s = 1800.0                  # wall-clock limit of a solve (OcpOptions)
+    stall_iterations = 30                  # stop when the constraint violation has not
+                                           # fallen 10 % in this many iterations; 0: never
 
     [pulse_map]                            # optional: PulseMapOptions; keys not given
     scheme = "split4"                      # keep OCP_PULSE_MAP's (split4, 8 substeps,
@@ -203,6 +205,7 @@ _SOLVER: Mapping[str, Spec] = {
     "wind_ramp": INTEGER,
     "prediction": choice(PredictionMap),
     "time_limit": quantity("time"),
+    "stall_iterations": INTEGER,
 }
 
 
@@ -491,6 +494,15 @@ def _options(src: str, data: Mapping[str, Any], horizon: int) -> OcpOptions:
     solver = read_table(src, data.get("solver", {}), "solver", _SOLVER)
     pulse = read_table(src, data.get("pulse_map", {}), "pulse_map", _PULSE_MAP)
     values = {("solver" if k == "name" else k): v for k, v in solver.values.items()}
+    if "stall_iterations" in values:  # 0 in a file: no stall rule (None in OcpOptions)
+        window = values["stall_iterations"]
+        if window < 0:
+            raise ProblemFileError(
+                src,
+                solver.key("stall_iterations"),
+                f"must be an integer >= 1 (iterations), or 0 for no stall rule, got {window!r}",
+            )
+        values["stall_iterations"] = window or None
     try:
         pulse_map = replace(OCP_PULSE_MAP, **pulse.values)
         options = OcpOptions(**values, pulse_map=pulse_map)

@@ -3,16 +3,20 @@ transcription, solve) and what came out (result).
 
 - :mod:`.problem`: :class:`OcpProblem`, its objective terms and constraints (numpy only);
 - :mod:`.options`: :class:`OcpOptions` (solver, Hessian, prediction map, move blocking,
-  wall-clock limit);
+  wall-clock limit, stall rule);
 - :mod:`.transcription`: :class:`MultipleShooting`, Φ as the dynamics of an NLP;
 - :mod:`.solve`: :class:`CompiledOcp` (built once, solved warm), :func:`solve`, :func:`rollout`;
-- :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus`.
+- :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus`;
+- :mod:`.stall`: the stall rule that ends a solve making no progress toward its constraints;
+- :mod:`.constraint_rows`: the names of the NLP's constraint rows and the constraint an
+  infeasible solve cannot meet.
 
 The what never imports the how (an import-linter contract).
 """
 
 from lightcraft_opt.ocp.options import (
     OCP_PULSE_MAP,
+    OCP_STALL_ITERATIONS,
     OCP_TIME_LIMIT,
     HessianApproximation,
     OcpOptions,
@@ -45,6 +49,7 @@ from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
 
 __all__ = [
     "OCP_PULSE_MAP",
+    "OCP_STALL_ITERATIONS",
     "OCP_TIME_LIMIT",
     "CompiledOcp",
     "Constraint",

@@ -12,6 +12,7 @@ from lightcraft_opt.options import CoastScheme, PulseMapOptions
 
 __all__ = [
     "OCP_PULSE_MAP",
+    "OCP_STALL_ITERATIONS",
     "OCP_TIME_LIMIT",
     "HessianApproximation",
     "OcpOptions",
@@ -82,6 +83,12 @@ OCP_PULSE_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT4, substeps=8, dense=8)
 #: (fatrop spinning in its restoration phase on an infeasible problem) still does.
 OCP_TIME_LIMIT = 1800.0
 
+#: Window of the stall rule unless told otherwise [iterations] (ocp/stall.py): problem (b)
+#: with the pulse energy capped at 20 J (infeasible) ends after 56-58 IPOPT iterations
+#: instead of 225-300; converging solves measured rose for up to 20 iterations before they
+#: fell, which this window leaves alone.
+OCP_STALL_ITERATIONS = 30
+
 
 @dataclass(frozen=True)
 class OcpOptions:
@@ -118,6 +125,12 @@ class OcpOptions:
         offers neither, so its solve runs in a forked process that is stopped at the
         limit (its iterate is then lost: the result carries the initial guess). A wind
         ramp's solves share one limit.
+    stall_iterations : W of the stall rule (ocp/stall.py), iterations, >= 1, or None for
+        no rule; default :data:`OCP_STALL_ITERATIONS`. IPOPT and sqpmethod stop when
+        their least constraint violation, above ``tol``, has not fallen by 10 % over the
+        last W iterations, with status ``INFEASIBLE`` and the constraint that cannot be
+        met in the message (ocp/result.py). fatrop calls no iteration callback: the rule
+        never stops it.
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -132,8 +145,15 @@ class OcpOptions:
     chain_derivatives: bool = True
     prediction: PredictionMap = PredictionMap.FULL
     time_limit: float | None = OCP_TIME_LIMIT
+    stall_iterations: int | None = OCP_STALL_ITERATIONS
 
     def __post_init__(self) -> None:
+        w = self.stall_iterations
+        if w is not None and (isinstance(w, bool) or not isinstance(w, int) or w < 1):
+            raise OptionError(
+                "OcpOptions.stall_iterations must be an integer >= 1 (iterations) or None "
+                f"for no stall rule, got {w!r}"
+            )
         t = self.time_limit
         if t is not None and not (
             isinstance(t, int | float) and not isinstance(t, bool) and math.isfinite(t) and t > 0

@@ -1,7 +1,9 @@
 """The result of an optimal control solve: numpy only, with a status (docs/architecture.md#rule-9).
 
 A failed or infeasible solve is a result too: its status says so in words and it carries
-the solver's last iterate, never a raw exception.
+the solver's last iterate, never a raw exception. An iterate whose dynamics gaps are open
+(``dynamics_closed`` false) is no trajectory of Φ: its summary shows no altitude, drift or
+energy as achieved.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ class OcpStatus(Enum):
     ACCEPTABLE = "acceptable"  # converged to the solver's looser acceptable level
     MAX_ITER = "max_iter"  # iteration limit reached first
     TIME_LIMIT = "time_limit"  # the wall-clock limit (OcpOptions.time_limit) came first
-    INFEASIBLE = "infeasible"  # the solver found the constraints (locally) infeasible
+    INFEASIBLE = "infeasible"  # the solver found the constraints (locally) infeasible, or
+    # its constraint violation stalled (OcpOptions.stall_iterations, ocp/stall.py)
     FAILED = "failed"  # anything else: evaluation error, line search or QP failure ...
 
 
@@ -43,6 +46,10 @@ class OcpResult(Presentable):
     build_time : wall time to build the transcription and solver, 0 when reused [s].
     constraint_violation : largest violation of any constraint or bound at the returned
         iterate, in the NLP's scaled units (gaps: states over their natural size).
+    dynamics_gap : largest dynamics gap |x_{k+1} - Φ(x_k, u_k)| (and |x_0 - x0|) at the
+        returned iterate, in the same scaled units; NaN when not measured.
+    dynamics_closed : the gaps are within the solve's tolerance: ``x`` is Φ's trajectory
+        under ``u``, and its altitude, drift and energy are results. False: no flyable plan.
     t : (N + 1,) node times [s]; pulse k fires at t[k].
     x : (N + 1, STATE.size) predicted states at the nodes (docs/frames.md), x[0] = x0.
     u : (N, map-input size) optimal map inputs, one row per pulse; labels in ``inputs``.
@@ -66,6 +73,8 @@ class OcpResult(Presentable):
     inputs: VectorLayout
     build_time: float = 0.0
     constraint_violation: float = float("nan")
+    dynamics_gap: float = float("nan")
+    dynamics_closed: bool = True
     cost_terms: np.ndarray = field(default_factory=lambda: np.empty(0))
     w: np.ndarray = field(default_factory=lambda: np.empty(0))
     lam_x: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -101,7 +110,6 @@ class OcpResult(Presentable):
     def summary(self) -> str:
         """The solve on one screen: how it ended, then what it achieved, with units."""
         r = self.state("r_L")
-        width = max(len(n) for n in ("status", "cost", "final position"))
         rows = [
             ("status", f"{self.status.value} ({self.message})"),
             ("solver", f"{self.solver}, {self.iterations} iterations"),
@@ -109,17 +117,34 @@ class OcpResult(Presentable):
             ("cost", f"{self.cost:.6g} (terms {np.array2string(self.cost_terms, precision=4)})"),
             ("violation", f"{self.constraint_violation:.3g} (scaled)"),
             ("horizon", f"{self.horizon} pulses, {float(self.t[-1] - self.t[0]):.3f} s"),
-            ("laser energy", f"{self.laser_energy:.2f} J"),
-            ("final altitude", f"{float(r[-1, 2]):.3f} m"),
-            ("max drift", f"{float(np.max(np.hypot(r[:, 0], r[:, 1]))):.4f} m"),
-            ("final position", f"({r[-1, 0]:.3f}, {r[-1, 1]:.3f}, {r[-1, 2]:.3f}) m"),
         ]
+        if self.dynamics_closed:
+            rows += [
+                ("laser energy", f"{self.laser_energy:.2f} J"),
+                ("final altitude", f"{float(r[-1, 2]):.3f} m"),
+                ("max drift", f"{float(np.max(np.hypot(r[:, 0], r[:, 1]))):.4f} m"),
+                ("final position", f"({r[-1, 0]:.3f}, {r[-1, 1]:.3f}, {r[-1, 2]:.3f}) m"),
+            ]
+        else:
+            rows.append(("no flyable plan", self.open_dynamics()))
         width = max(len(n) for n, _ in rows)
         return "\n".join(["OcpResult", *(f"  {n:<{width}}  {v}" for n, v in rows)])
 
+    def open_dynamics(self) -> str:
+        """Why an iterate with open dynamics gaps is no plan, in words."""
+        return (
+            f"the dynamics gaps stay open, up to {self.dynamics_gap:.3g} (scaled): the states "
+            "do not follow Φ, so the altitude, drift and energy of this iterate are no results"
+        )
+
     def __repr__(self) -> str:
+        achieved = (
+            f"laser energy {self.laser_energy:.1f} J, "
+            f"final altitude {float(self.state('r_L')[-1, 2]):.3f} m"
+            if self.dynamics_closed
+            else f"no flyable plan (dynamics gap {self.dynamics_gap:.3g})"
+        )
         return (
             f"<OcpResult {self.status.value}: cost {self.cost:.6g}, {self.iterations} "
-            f"iterations, {self.horizon} pulses, laser energy {self.laser_energy:.1f} J, "
-            f"final altitude {float(self.state('r_L')[-1, 2]):.3f} m>"
+            f"iterations, {self.horizon} pulses, {achieved}>"
         )

@@ -13,7 +13,10 @@ RCS and motor off, moved at most by the slew limits and clipped to the bounds (h
 inputs at their values).
 A failed or infeasible solve returns an :class:`~lightcraft_opt.ocp.result.OcpResult`
 with a readable status and the solver's last iterate; so does a solve stopped by its
-wall-clock limit (``OcpOptions.time_limit``, ocp/time_limit.py); bad inputs raise
+wall-clock limit (``OcpOptions.time_limit``, ocp/time_limit.py) or by the stall rule
+(``OcpOptions.stall_iterations``, ocp/stall.py). An infeasible result's message names the
+constraint that cannot be met (ocp/constraint_rows.py), and every result says whether its
+dynamics gaps are closed (``OcpResult.dynamics_closed``); bad inputs raise
 :class:`~lightcraft_opt.errors.ParameterError` or :class:`~lightcraft_opt.errors.OptionError`.
 """
 
@@ -36,6 +39,7 @@ from lightcraft_opt.compiled import (
 )
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
+from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver, PredictionMap
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
@@ -226,13 +230,26 @@ def _wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
 #: IPOPT's words for its own wall-clock (and CPU-time) limit.
 _IPOPT_TIME_LIMIT = ("Maximum_WallTime_Exceeded", "Maximum_CpuTime_Exceeded")
 
+#: Solver returns that mean the constraints cannot be met when the returned iterate
+#: violates them: IPOPT's restoration phase found no less infeasible point, sqpmethod's QP
+#: of the linearised constraints gave no step (fatrop reports SOLVER_RET_INFEASIBLE).
+_INFEASIBLE_RETURNS = {
+    OcpSolver.IPOPT: ("Restoration_Failed",),
+    OcpSolver.SQP_QRQP: ("Search_Direction_Becomes_Too_Small",),
+    OcpSolver.SQP_HPIPM: ("Search_Direction_Becomes_Too_Small",),
+    OcpSolver.SQP_OSQP: ("Search_Direction_Becomes_Too_Small",),
+}
 
-def _status(call: SolverCall, opts: OcpOptions) -> tuple[OcpStatus, str, int]:
-    """OcpStatus, message and iteration count of one solver call."""
+
+def _status(call: SolverCall, opts: OcpOptions, violation: float) -> tuple[OcpStatus, str, int]:
+    """OcpStatus, message and iteration count of one solver call whose returned iterate
+    violates its constraints by ``violation`` (scaled units)."""
     name = opts.solver.value
     stats = call.stats
     iterations = int(stats.get("iter_count", 0)) if stats else 0
     raw = stats.get("return_status", "unknown") if stats else "unknown"
+    if call.stall is not None:
+        return OcpStatus.INFEASIBLE, f"{name}: {call.stall.describe()}", iterations
     if call.deadline_reached or raw in _IPOPT_TIME_LIMIT:
         if call.solution is None:  # fatrop's process, stopped mid-solve
             return (
@@ -252,11 +269,12 @@ def _status(call: SolverCall, opts: OcpOptions) -> tuple[OcpStatus, str, int]:
         return OcpStatus.FAILED, f"{name}: the QP solver failed (no status reported)", 0
     unified = str(stats.get("unified_return_status", ""))
     low = str(raw).lower()
+    unmet = raw in _INFEASIBLE_RETURNS.get(opts.solver, ()) and violation > opts.tol
     if "acceptable" in low:
         status = OcpStatus.ACCEPTABLE
     elif stats.get("success", False):
         status = OcpStatus.SOLVED
-    elif "infeasib" in low or unified == "SOLVER_RET_INFEASIBLE":
+    elif "infeasib" in low or unified == "SOLVER_RET_INFEASIBLE" or unmet:
         status = OcpStatus.INFEASIBLE
     elif "maximum_iter" in low or unified == "SOLVER_RET_LIMITED" or iterations >= opts.max_iter:
         status = OcpStatus.MAX_ITER
@@ -348,8 +366,8 @@ class CompiledOcp:
         self.transcription = tr = MultipleShooting(
             problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives
         )
-        # the deadline callback of IPOPT and sqpmethod (fatrop's solves are forked instead)
-        # and of the progress hook (if any)
+        # the iteration callback of IPOPT and sqpmethod: the deadline (fatrop's solves are
+        # forked instead), the stall rule and the progress hook (if any)
         self._deadline = (
             Deadline(
                 tr.n_w,
@@ -358,8 +376,14 @@ class CompiledOcp:
                 lbg=tr.lbg,
                 ubg=tr.ubg,
                 progress=progress,
+                stall_window=opts.stall_iterations,
+                tol=opts.tol,
             )
-            if (opts.time_limit is not None or progress is not None)
+            if (
+                opts.time_limit is not None
+                or progress is not None
+                or opts.stall_iterations is not None
+            )
             and opts.solver is not OcpSolver.FATROP
             else None
         )
@@ -481,11 +505,24 @@ class CompiledOcp:
         else:
             call = call_solver(solver, args, self._deadline, until)
         solve_time = time.perf_counter() - start
-        status, message, iterations = _status(call, self.options)
         w, lam_x, lam_g = call.solution or (w0, lam_x0, lam_g0)
-        if not np.all(np.isfinite(w)):
+        finite = bool(np.all(np.isfinite(w)))
+        g, violation = self._violation(w if finite else w0, P)
+        status, message, iterations = _status(call, self.options, violation)
+        if not finite:
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
-        return self._result(w, lam_x, lam_g, P, status, message, iterations, solve_time, t0)
+        return self._result(
+            w, lam_x, lam_g, P, g, violation, status, message, iterations, solve_time, t0
+        )
+
+    def _violation(self, w: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, float]:
+        """(n_g,) the constraints at ``w`` and the largest violation of any of them or of
+        the variables' bounds (scaled units)."""
+        tr = self.transcription
+        g = np.asarray(tr.constraints(w, P), dtype=float).ravel()
+        lbx, ubx = self._bounds
+        excess = [tr.lbg - g, g - tr.ubg, lbx - w, w - ubx, np.zeros(1)]
+        return g, float(np.max(np.concatenate(excess)))
 
     def _solve_ramped(
         self,
@@ -567,20 +604,23 @@ class CompiledOcp:
         lam_x: np.ndarray,
         lam_g: np.ndarray,
         P: np.ndarray,
+        g: np.ndarray,
+        viol: float,
         status: OcpStatus,
         message: str,
         iterations: int,
         solve_time: float,
         t0: float,
     ) -> OcpResult:
-        tr, pr = self.transcription, self.problem
+        """The result of iterate ``w`` (constraints ``g``, largest violation ``viol``)."""
+        tr, pr, tol = self.transcription, self.problem, self.options.tol
         X, U, eng = (np.asarray(v, dtype=float) for v in tr.trajectory(w, P))
         terms = np.asarray(tr.cost_terms(w, P), dtype=float).ravel()
-        g = np.asarray(tr.constraints(w, P), dtype=float).ravel()
-        lbx, ubx = self._bounds
-        excess = [tr.lbg - g, g - tr.ubg, lbx - w, w - ubx, np.zeros(1)]
-        viol = float(np.max(np.concatenate(excess)))
-        if status not in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE) and viol > self.options.tol:
+        rows = tr.constraint_rows
+        gap = dynamics_gap(rows, g, tr.lbg, tr.ubg)
+        if status is OcpStatus.INFEASIBLE:
+            message += "; infeasible: " + unmet_constraint(rows, g, tr.lbg, tr.ubg, lam_g, tol)
+        elif status not in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE) and viol > tol:
             message += f"; constraints violated by up to {viol:.3g} (scaled units) at the "
             message += (
                 "initial guess, returned as is"
@@ -604,6 +644,8 @@ class CompiledOcp:
             inputs=pr.inputs,
             build_time=self.build_time,
             constraint_violation=viol,
+            dynamics_gap=gap,
+            dynamics_closed=gap <= tol,
             cost_terms=terms,
             w=w,
             lam_x=lam_x,

@@ -14,7 +14,9 @@ Three solvers, three mechanisms:
 
 The same callback reports progress: given a :attr:`Deadline.progress` hook, it passes the
 iteration number, the objective and the constraint violation of each iterate to it (the
-command line's progress line).
+command line's progress line). Given a stall window, it also stops a solve whose constraint
+violation has stopped falling (ocp/stall.py); fatrop, which calls no callback, is never
+stopped that way.
 
 Both calls return a :class:`SolverCall`: the solution (or None), the solver's statistics
 and whether the deadline ended it, never an exception for a failed solve.
@@ -37,6 +39,8 @@ from typing import Any, cast
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.ocp.stall import Stall, find_stall
+
 __all__ = ["Deadline", "Progress", "SolverCall", "call_forked", "call_solver", "can_fork"]
 
 #: Solver statistics the result needs (ocp/solve.py reads them into an OcpStatus).
@@ -54,12 +58,14 @@ class SolverCall:
     stats : the solver's statistics (``_STATS``); None when it left none.
     error : the exception's text when the call raised, else "".
     deadline_reached : the wall-clock limit ended the call.
+    stall : the stall (ocp/stall.py) that ended the call, else None.
     """
 
     solution: tuple[np.ndarray, np.ndarray, np.ndarray] | None
     stats: dict[str, Any] | None = None
     error: str = ""
     deadline_reached: bool = False
+    stall: Stall | None = None
 
 
 #: A progress hook: (iteration, objective, largest constraint violation) of an iterate.
@@ -67,17 +73,21 @@ Progress = Callable[[int, float, float], None]
 
 
 class Deadline(ca.Callback):
-    """casadi iteration callback that asks the NLP solver to stop once ``time.perf_counter()``
-    passes :attr:`deadline` (returns 1), and tells :attr:`progress` (if any) of each
-    iterate. Disarmed (deadline +inf) outside :func:`call_solver` calls, so calls of the
-    compiled casadi.Function run unlimited.
+    """casadi iteration callback that asks the NLP solver to stop (returns 1) once
+    ``time.perf_counter()`` passes :attr:`deadline` or, given a stall window, once the
+    constraint violation has stalled (ocp/stall.py), and tells :attr:`progress` (if any)
+    of each iterate. Disarmed (deadline +inf, no stall rule) outside :func:`call_solver`
+    calls, so calls of the compiled casadi.Function run unlimited.
 
     Parameters
     ----------
     n_x, n_g, n_p : sizes of the NLP's variables, constraints and parameters.
     lbg, ubg : (n_g,) the constraints' bounds, for the violation :attr:`progress` is told
-        (scaled units, as OcpResult.constraint_violation); None: violation NaN.
+        and the stall rule watches (scaled units, as OcpResult.constraint_violation); None:
+        violation NaN (and no stall is ever found).
     progress : called with (iteration from 0, objective, violation) at each iterate.
+    stall_window : W of the stall rule, iterations; None: no stall rule.
+    tol : the constraint tolerance of the stall rule (scaled units).
     """
 
     def __init__(
@@ -89,6 +99,8 @@ class Deadline(ca.Callback):
         lbg: np.ndarray | None = None,
         ubg: np.ndarray | None = None,
         progress: Progress | None = None,
+        stall_window: int | None = None,
+        tol: float = 0.0,
     ) -> None:
         ca.Callback.__init__(self)
         self._sizes = {"x": n_x, "f": 1, "g": n_g, "lam_x": n_x, "lam_g": n_g, "lam_p": n_p}
@@ -96,6 +108,10 @@ class Deadline(ca.Callback):
         self.reached = False
         self.progress = progress
         self.iteration = 0
+        self.stall_window, self.tol = stall_window, tol
+        self.armed = False  # the stall rule, inside call_solver only
+        self.violations: list[float] = []
+        self.stall: Stall | None = None
         self._bounds = None if lbg is None or ubg is None else (np.asarray(lbg), np.asarray(ubg))
         self.construct("ocp_deadline", {})
 
@@ -115,12 +131,18 @@ class Deadline(ca.Callback):
         return ca.Sparsity.dense(self._sizes[ca.nlpsol_out(i)], 1)
 
     def eval(self, arg: Any) -> list[int]:
+        violation = self._violation(arg[2])
         if self.progress is not None:
-            self.progress(self.iteration, float(arg[1]), self._violation(arg[2]))
+            self.progress(self.iteration, float(arg[1]), violation)
         self.iteration += 1
         if time.perf_counter() > self.deadline:
             self.reached = True
             return [1]
+        if self.armed and self.stall_window is not None:
+            self.violations.append(violation)
+            self.stall = find_stall(self.violations, self.stall_window, self.tol)
+            if self.stall is not None:
+                return [1]
         return [0]
 
     def _violation(self, g: Any) -> float:
@@ -135,19 +157,22 @@ def call_solver(
     solver: Any, args: dict[str, Any], deadline: Deadline | None, until: float
 ) -> SolverCall:
     """Call ``solver`` (an nlpsol Function) on ``args`` in this process, ``deadline`` (if
-    any) armed until ``until`` (a ``time.perf_counter()`` time, +inf for none)."""
+    any) armed until ``until`` (a ``time.perf_counter()`` time, +inf for none), with its
+    stall rule (if any)."""
     if deadline is not None:
         deadline.deadline, deadline.reached, deadline.iteration = until, False, 0
+        deadline.armed, deadline.violations, deadline.stall = True, [], None
     try:
         sol = solver(**args)
     except RuntimeError as err:  # e.g. an evaluation error the solver did not catch
         return SolverCall(None, _stats(solver), error=str(err))
     finally:
         if deadline is not None:
-            deadline.deadline = math.inf
+            deadline.deadline, deadline.armed = math.inf, False
     w, lam_x, lam_g = (np.asarray(sol[k], dtype=float).ravel() for k in ("x", "lam_x", "lam_g"))
     reached = deadline is not None and deadline.reached
-    return SolverCall((w, lam_x, lam_g), _stats(solver), deadline_reached=reached)
+    stall = None if deadline is None or reached else deadline.stall
+    return SolverCall((w, lam_x, lam_g), _stats(solver), deadline_reached=reached, stall=stall)
 
 
 def can_fork() -> bool:

@@ -55,6 +55,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.evaluation import SharedEvaluation, horizon_map
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
@@ -161,6 +162,8 @@ class MultipleShooting:
     residuals : the least-squares residuals r of the objective (its squared-norm terms sum
         to |r|^2), for :meth:`gauss_newton_hessian`.
     lbg, ubg : bounds of g; ``equality`` marks lbg == ubg (fatrop's structure detection).
+    constraint_rows : (n_g,) the name of each row of g (ocp/constraint_rows.py), e.g.
+        ``dynamics_gap at pulse 17 (v_L[z])``, ``terminal_altitude at node 20``.
     parameters : layout of the parameter vector.
     trajectory : casadi.Function ``ocp_trajectory(w, P) -> (X, U, engine)``: physical
         states (STATE.size, N + 1), map inputs (size, N) and engine outputs (11, N).
@@ -283,19 +286,28 @@ class MultipleShooting:
         _, use = st.pulses
         g: list[ca.MX] = []
         bounds: list[tuple[np.ndarray, np.ndarray]] = []
+        rows: list[ConstraintRow] = []
 
-        def add(expr: ca.MX, lo: float | np.ndarray, hi: float | np.ndarray) -> None:
+        def add(
+            expr: ca.MX,
+            lo: float | np.ndarray,
+            hi: float | np.ndarray,
+            label: ConstraintRow | list[ConstraintRow],
+        ) -> None:
             g.append(expr)
             n = expr.numel()
             bounds.append((np.broadcast_to(lo, (n,)), np.broadcast_to(hi, (n,))))
+            rows.extend(label if isinstance(label, list) else [label] * n)
 
         def node_path(k: int) -> None:
             for con in pr.constraints:
                 match con:
                     case NoGroundContact():
-                        add(altitude[k], con.clearance, math.inf)
+                        where = ConstraintRow("no_ground_contact", f"node {k}", "altitude", "m")
+                        add(altitude[k], con.clearance, math.inf, where)
                     case TiltLimit():
-                        add(cos_tilt[k], math.cos(con.max_tilt), math.inf)
+                        where = ConstraintRow("tilt_limit", f"node {k}", "cos(tilt)")
+                        add(cos_tilt[k], math.cos(con.max_tilt), math.inf, where)
                     case (
                         OffsetLimit()
                         | TerminalAltitude()
@@ -315,43 +327,63 @@ class MultipleShooting:
         limit = pr.slew[self.free][slew_rows]
         has_previous = pr.u_previous is not None
         for k in range(N):
-            add(st.xs[k + 1] - st.x_next[:, k] / sx, 0.0, 0.0)  # gap
-            if self.coupled:
-                add(st.as_[k + 1] - st.vs[k], 0.0, 0.0)  # memory of the inputs
+            gap = entry_rows("dynamics_gap", f"pulse {k}", scale=self.x_scale)
+            add(st.xs[k + 1] - st.x_next[:, k] / sx, 0.0, 0.0, gap)
+            if self.coupled:  # memory of the inputs
+                memory = ConstraintRow("input_memory", f"pulse {k}", unit=SCALED)
+                add(st.as_[k + 1] - st.vs[k], 0.0, 0.0, memory)
             if k == 0:
-                add(st.xs[0] - x0 / sx, 0.0, 0.0)
+                start = entry_rows("initial_state", "node 0", scale=self.x_scale)
+                add(st.xs[0] - x0 / sx, 0.0, 0.0, start)
+                first = ConstraintRow("initial_memory", "pulse 0", unit=SCALED)
                 if self.coupled and has_previous:
                     u_prev = self.parameters.get("u_previous", P)[self.free.tolist()]
                     u_prev = ca.if_else(ca.DM(self.reciprocal.astype(float)), 1 / u_prev, u_prev)
-                    add(st.as_[0] - u_prev / su, 0.0, 0.0)
+                    add(st.as_[0] - u_prev / su, 0.0, 0.0, first)
                 elif self.coupled:
-                    add(st.as_[0] - st.vs[0], 0.0, 0.0)  # no previous input: no slew at 0
+                    add(st.as_[0] - st.vs[0], 0.0, 0.0, first)  # no previous input: no slew at 0
             else:
                 node_path(k)
             if offset_limits:
-                add(use[k], -math.inf, min(offset_limits) ** 2)
+                where = ConstraintRow("offset_limit", f"pulse {k}", "(offset / capture radius)^2")
+                add(use[k], -math.inf, min(offset_limits) ** 2, where)
             if envelope is not None:
-                add(envelope(st.U[:, k]), -math.inf, 0.0)
-            if self.coupled and k not in self.starts:
-                add(st.vs[k] - st.as_[k], 0.0, 0.0)  # held by move blocking
+                where = ConstraintRow("rcs_envelope", f"pulse {k}")
+                add(envelope(st.U[:, k]), -math.inf, 0.0, where)
+            if self.coupled and k not in self.starts:  # held by move blocking
+                held = ConstraintRow("move_blocking", f"pulse {k}", unit=SCALED)
+                add(st.vs[k] - st.as_[k], 0.0, 0.0, held)
             elif self.coupled and slew_rows.size and (k > 0 or has_previous):
-                add((st.V[:, k] - st.A[:, k])[slew_rows.tolist()], -limit, limit)
+                slew = entry_rows(
+                    "slew_limit", f"pulse {k}", pr.inputs, entries=self.free[slew_rows]
+                )
+                add((st.V[:, k] - st.A[:, k])[slew_rows.tolist()], -limit, limit, slew)
         node_path(N)
         fired0 = build_node_measures()(x0, p)[3]
         for con in pr.constraints:
             match con:
                 case TerminalAltitude():
-                    add(altitude[N], con.minimum, con.maximum)
+                    where = ConstraintRow("terminal_altitude", f"node {N}", "altitude", "m")
+                    add(altitude[N], con.minimum, con.maximum, where)
                 case TerminalState():
-                    add(st.X[STATE.index(con.slot), N], np.array(con.lower), np.array(con.upper))
+                    slot = STATE.slot(con.slot)
+                    final = entry_rows(
+                        f"terminal_state_{con.slot}",
+                        f"node {N}",
+                        entries=range(slot.start, slot.stop),
+                    )
+                    lower, upper = np.array(con.lower), np.array(con.upper)
+                    add(st.X[STATE.index(con.slot), N], lower, upper, final)
                 case EnergyBudget():
-                    add(fired[N] - fired0, -math.inf, con.total)
+                    where = ConstraintRow("energy_budget", f"node {N}", "energy fired", "J")
+                    add(fired[N] - fired0, -math.inf, con.total, where)
                 case NoGroundContact() | TiltLimit() | OffsetLimit() | RcsEnvelope():
                     pass  # on the nodes and pulses: above
                 case _:
                     assert_never(con)
         lbg = np.concatenate([b[0] for b in bounds]).astype(float)
         ubg = np.concatenate([b[1] for b in bounds]).astype(float)
+        self.constraint_rows = tuple(rows)
         return ca.vertcat(*g), lbg, ubg
 
     def _rcs_envelope(self) -> ca.Function | None:

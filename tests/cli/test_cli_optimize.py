@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.capped_energy import capped_flight16
 from support.paths import REPO_ROOT
 from support.results import made_up_solve
 
@@ -153,6 +154,7 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     assert summary["solver"] == "ipopt" and summary["horizon_pulses"] == 4
     assert summary["laser_energy_J"] == pytest.approx(4 * 420.0, rel=1e-12)
     assert summary["final_altitude_m"] == pytest.approx(X[-1, 2], rel=1e-11)
+    assert summary["dynamics_closed"] is True and summary["dynamics_gap"] < 1e-8
     assert summary["max_offset_over_capture_radius"] == pytest.approx(np.max(fraction), rel=1e-10)
     assert summary["max_offset_over_capture_radius_limit"] == 0.2
     terms = summary["cost_terms"]
@@ -186,6 +188,33 @@ def test_an_unconverged_solve_exits_1_and_still_writes_its_files(problem_file, t
     assert len(rows) == 4
     for name in FIGURES:
         assert (out / name).exists()
+
+
+def test_an_infeasible_problem_names_its_constraint_and_no_final_altitude(tmp_path, capsys):
+    """Problem (b) with the pulse energy capped at 20 J (which does not lift Flight 16 off
+    the pad) asked for 5 m in 10 pulses: exit status 1; the outcome line says infeasible
+    and names terminal_altitude with its bound; the returned iterate's dynamics gaps are
+    open, so instead of its final altitude the command says there is no flyable plan;
+    summary.json keeps its keys and says the dynamics are not closed."""
+    path = capped_flight16(tmp_path / "capped.toml", energy_cap_J=20.0, minimum_m=5.0)
+    out = tmp_path / "out"
+    assert main(["optimize", str(path), "--out", str(out), "--horizon", "10"]) == 1
+    printed = capsys.readouterr().out
+    lines = [line for line in printed.splitlines() if not line.startswith("  iteration")]
+    assert len(lines) == 4 and lines[1].startswith("built in"), printed
+    outcome, last = lines[2:]
+    assert outcome.startswith("infeasible: cost ")
+    assert "infeasible: terminal_altitude (at least 5 m at node 10) cannot be met" in outcome
+    assert last.startswith("no flyable plan: the dynamics gaps stay open, up to ")
+    assert last.endswith(f"-> {out}/")
+    assert "final altitude" not in printed  # nor the line of laser energy it heads
+    assert not any(line.startswith("laser energy") for line in lines)
+    assert "max-iter" not in printed and "raise max_iter" not in printed
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "infeasible" and summary["success"] is False
+    assert summary["dynamics_closed"] is False and summary["dynamics_gap"] > 1.0
+    assert "final_altitude_m" in summary and "laser_energy_J" in summary
+    assert "terminal_altitude" in summary["message"]
 
 
 def test_the_time_limit_comes_from_the_file_or_the_flag(problem_file, tmp_path, capsys):

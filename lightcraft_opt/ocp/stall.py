@@ -1,0 +1,111 @@
+"""The stall rule: when an NLP solve has stopped making progress toward its constraints.
+
+An infeasible problem does not always end quickly. IPOPT may wander for hundreds of
+iterations with its constraint violation flat (its restoration phase failing again and
+again) before it says ``Restoration_Failed`` or reaches its iteration limit; fatrop may spin
+for ever. The rule here stops such a solve early: at iteration k >= 2W - 1,
+
+    stall  <=>  min(v_{k-W+1} .. v_k) > FALL * min(v_{k-2W+1} .. v_{k-W})
+
+with v_i the largest constraint violation of iterate i (scaled units, as
+``OcpResult.constraint_violation``), W the window (``OcpOptions.stall_iterations``) and
+:data:`FALL` = 0.9: the least violation of the last W iterations is not 10 % below the least
+of the W before them. Window minima, not single iterates, are compared, so the spikes of a
+restoration phase or a line search neither trigger nor hide a stall, and a violation that
+first rises (the solver leaves the rollout, whose dynamics gaps are closed) and then falls
+is not stopped while it falls. A solve whose violation ever reached the tolerance never
+stalls, nor one whose window minimum is under :data:`FLOOR` (1 in scaled units: a metre of
+altitude, a metre or a metre per second of dynamics gap): from a start that flies (the
+director's flight, ocp/start.py) IPOPT walks through iterates violated by 0.01-0.3 for
+dozens of iterations while its objective falls (problems/beam_tracking_focus.toml: 1.08 ->
+0.61 over iterations 30-68), which is progress, not infeasibility; a problem that cannot
+be met at all misses by far more (24.8 and 17.7 below).
+
+Why W = 30 and 10 % (measured 2026-12-03): problem (b) (problems/least_energy_flight16.toml)
+with the pulse energy capped at 20 J, which cannot leave the pad, let alone reach 30 m:
+IPOPT's violation falls 30 -> 24.8 m in 35 iterations and stays there (20 pulses; it said
+``Restoration_Failed`` at iteration 225), or creeps from 35 to 17.7 m over 300 iterations
+with stretches of 100 flat within 2 % (70 pulses; iteration limit). The rule stops them
+at iterations 58 and 56. Converging solves: the steps of problem (a)'s wind ramp
+(problems/crosswind_climb.toml, 6-37 iterations each) rose above their start for up to 20
+iterations before converging, which a window of 10 or 15 would have cut; no solve measured
+took more than 37 iterations to converge. A solve losing less than 10 % per 30 iterations
+would need thousands of iterations to gain the 1e6 or more it needs.
+
+The rule sees only iterates a solver reports to casadi's iteration callback: IPOPT's and
+sqpmethod's (ocp/time_limit.py). fatrop calls no callback: its stalls are not detected,
+its own status and the wall-clock limit end it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["FALL", "FLOOR", "Stall", "find_stall"]
+
+#: A window's least violation must fall below this fraction of the least before it [-].
+FALL = 0.9
+
+#: Violations under this (scaled units) never stall: a solve still that close is going on.
+FLOOR = 1.0
+
+
+@dataclass(frozen=True)
+class Stall:
+    """A stalled solve: its least constraint violation over two consecutive windows.
+
+    Attributes
+    ----------
+    iteration : the iteration (from 0) at which the rule stopped the solve.
+    window : W, iterations.
+    before : least violation of iterations ``iteration - 2W + 1 .. iteration - W``
+        (scaled units).
+    violation : least violation of the last W iterations (scaled units), > FALL * before.
+    """
+
+    iteration: int
+    window: int
+    before: float
+    violation: float
+
+    def describe(self) -> str:
+        """The stall in words, for a result's message."""
+        k, w = self.iteration, self.window
+        fall = 1.0 - self.violation / self.before if math.isfinite(self.before) else 0.0
+        return (
+            f"stalled: the least constraint violation of iterations {k - w + 1}-{k}, "
+            f"{self.violation:.3g} (scaled), is only {100 * max(fall, 0.0):.1f} % below that "
+            f"of iterations {k - 2 * w + 1}-{k - w}, {self.before:.3g}: less than "
+            f"{100 * (1 - FALL):.0f} % in {w} iterations"
+        )
+
+
+def find_stall(violations: Sequence[float] | np.ndarray, window: int, tol: float) -> Stall | None:
+    """The stall at the last of ``violations`` (module docstring), or None.
+
+    Parameters
+    ----------
+    violations : v_0 .. v_k, the largest constraint violation of each iterate so far
+        (scaled units); NaN entries (an iterate whose constraints were not finite) count
+        as no progress.
+    window : W >= 1, iterations.
+    tol : the solve's constraint tolerance (scaled units).
+    """
+    v = np.asarray(violations, dtype=float)
+    k = v.size - 1
+    if k < 2 * window - 1:
+        return None
+    v = np.where(np.isnan(v), np.inf, v)
+    if np.min(v) <= tol:
+        return None
+    now, before = (
+        float(np.min(v[k - window + 1 :])),
+        float(np.min(v[k - 2 * window + 1 : k - window + 1])),
+    )
+    if now <= FALL * before or now < FLOOR:
+        return None
+    return Stall(k, window, before, now)
