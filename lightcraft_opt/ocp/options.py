@@ -116,6 +116,10 @@ class OcpOptions:
         offers neither, so its solve runs in a forked process that is stopped at the
         limit (its iterate is then lost: the result carries the initial guess). A wind
         ramp's solves share one limit.
+    replay : fly every solve's plan again through the simulator's Φ at full accuracy and
+        attach the comparison with the prediction to the result (``OcpResult.replay``,
+        ocp/replay.py), with a ``PlanWarning`` when the plan does not fly. False: skip it
+        (an MPC re-solving every pulse has no use for it).
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -130,6 +134,7 @@ class OcpOptions:
     chain_derivatives: bool = True
     prediction: PredictionMap = PredictionMap.FULL
     time_limit: float | None = OCP_TIME_LIMIT
+    replay: bool = True
 
     def __post_init__(self) -> None:
         t = self.time_limit
@@ -144,6 +149,8 @@ class OcpOptions:
             raise OptionError(
                 f"OcpOptions.prediction must be one of {allowed}, got {self.prediction!r}"
             )
+        if not isinstance(self.replay, bool):
+            raise OptionError(f"OcpOptions.replay must be true or false, got {self.replay!r}")
         if not isinstance(self.chain_derivatives, bool):
             raise OptionError(
                 "OcpOptions.chain_derivatives must be true or false, got "
