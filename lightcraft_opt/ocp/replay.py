@@ -198,7 +198,7 @@ def _faults(problem: OcpProblem, replay: PlanReplay, flight: SimulationResult) -
         if miss > PLAN_GAP_LIMIT:
             out.append(
                 f"its final altitude {z:.2f} m misses the terminal altitude "
-                f"[{con.minimum:g}, {con.maximum:g}] m by {miss:.2f} m"
+                f"[{con.minimum:g}, {con.maximum:g}] m by {miss:.3g} m"
             )
     return tuple(out)
 
