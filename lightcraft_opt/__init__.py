@@ -59,6 +59,8 @@ from lightcraft_opt.ocp import (
     OcpResult,
     OcpSolver,
     OcpStatus,
+    PlanReplay,
+    replay_plan,
     rollout,
 )
 from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOptions
@@ -128,6 +130,7 @@ __all__ = [
     "OpenLoopController",
     "OptionError",
     "ParameterError",
+    "PlanReplay",
     "ProblemFile",
     "ProblemFileError",
     "PulseMap",
@@ -157,6 +160,7 @@ __all__ = [
     "nominal_inputs",
     "parameter_values",
     "read_track",
+    "replay_plan",
     "rollout",
     "run_campaign",
     "simulate",

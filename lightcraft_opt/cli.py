@@ -31,14 +31,17 @@ from lightcraft_opt.errors import LightcraftError, ProblemFileError, renamed
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
 from lightcraft_opt.files.model import load_model, load_record
+from lightcraft_opt.files.plan import read_plan
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.track import read_track
-from lightcraft_opt.layout import initial_state
+from lightcraft_opt.layout import VectorLayout, initial_state, map_input_layout
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
+from lightcraft_opt.ocp.replay import PlanWarning
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
 from lightcraft_opt.outputs import fit_flights
+from lightcraft_opt.params import Model
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI
 from lightcraft_opt.simulation.coast_reference import simulate_coast
@@ -106,23 +109,44 @@ def _simulate(args: argparse.Namespace) -> int:
     _check_kind(args.model, "simulate")
     model = load_model(args.model)
     track = None if args.track is None else read_track(args.track)
+    period = 1.0 / model.flight.pulse_rate
+    plan = None if args.inputs is None else read_plan(args.inputs, _input_layout(model), period)
+    starts = plan is not None and plan.x0 is not None
+    given = [f"--{n.replace('_', '-')}" for n in _INITIAL_FLAGS if getattr(args, n) is not None]
+    if starts and given:
+        raise LightcraftError(
+            f"{args.inputs}: the plan starts from its own state (row k = 0); "
+            f"{', '.join(given)} would move that start: leave them out"
+        )
     out = output_folder(args.out or Path("runs") / Path(args.model).stem)
-    x0 = initial_state(
-        model,
-        r_L=(args.launch_offset_x_cm / 100, args.launch_offset_y_cm / 100, 0.0),
-        v_L=(0.0, 0.0, args.launch_speed),
-        tilt=math.radians(args.tilt_deg),
-        tilt_azimuth=math.radians(args.tilt_azimuth_deg),
+    azimuth = 90.0 if args.tilt_azimuth_deg is None else args.tilt_azimuth_deg
+    x0 = (
+        plan.x0
+        if plan is not None and plan.x0 is not None
+        else initial_state(
+            model,
+            r_L=((args.launch_offset_x_cm or 0.0) / 100, (args.launch_offset_y_cm or 0.0) / 100, 0),
+            v_L=(0.0, 0.0, args.launch_speed or 0.0),
+            tilt=math.radians(args.tilt_deg or 0.0),
+            tilt_azimuth=math.radians(azimuth),
+        )
     )
+    duration = args.duration
+    if plan is not None and duration is None:
+        duration = len(plan.u) * period  # the plan's own length
+    duration = 10.0 if duration is None else duration
     if args.coast_only:
-        print(f"coasting {model.name} for up to {args.duration} s with the laser off ...")
-        result = simulate_coast(model, args.duration, x0=x0)
+        print(f"coasting {model.name} for up to {duration} s with the laser off ...")
+        result = simulate_coast(model, duration, x0=x0)
     else:
-        print(f"simulating {model.name} for up to {args.duration} s under the laser ...")
+        what = "under the laser" if plan is None else f"on the plan {args.inputs}"
+        print(f"simulating {model.name} for up to {duration:g} s {what} ...")
         result = simulate(
             model,
-            args.duration,
+            duration,
+            inputs=None if plan is None else plan.u,
             x0=x0,
+            t0=0.0 if plan is None or plan.t0 is None else plan.t0,
             dropout_rate=args.dropout_rate,
             seed=args.seed,
             compiled=False if args.interpreted else None,
@@ -133,7 +157,7 @@ def _simulate(args: argparse.Namespace) -> int:
         model=model,
         record=load_record(args.model),
         track=track,
-        launch_speed_mps=args.launch_speed,
+        launch_speed_mps=args.launch_speed or 0.0,
     )
     summary = json.loads((out / "summary.json").read_text())
     print(
@@ -141,6 +165,22 @@ def _simulate(args: argparse.Namespace) -> int:
         f"{summary['air_time_s']:.2f} s -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
+
+
+#: simulate's flags that set the initial state (refused with a plan that has its own).
+_INITIAL_FLAGS = (
+    "launch_speed",
+    "tilt_deg",
+    "tilt_azimuth_deg",
+    "launch_offset_x_cm",
+    "launch_offset_y_cm",
+)
+
+
+def _input_layout(model: Model) -> VectorLayout:
+    """The map-input layout of ``model``'s Φ with held RCS levels (the simulator's)."""
+    rcs = model.craft.rcs
+    return map_input_layout(len(rcs.thrusters) if rcs else 0, model.craft.has_carrier)
 
 
 def _optimize(args: argparse.Namespace) -> int:
@@ -169,7 +209,9 @@ def _optimize(args: argparse.Namespace) -> int:
         f"built in {compiled.build_time:.1f} s; solving (wall-clock limit {limit}) ...",
         flush=True,
     )
-    result = compiled.solve(initial_guess=pf.initial_guess())
+    with warnings.catch_warnings():  # a plan that does not fly: the WARNING line below
+        warnings.simplefilter("ignore", PlanWarning)
+        result = compiled.solve(initial_guess=pf.initial_guess())
     if progress is not None and _in_place(sys.stdout):
         print(flush=True)  # end the progress line
     print(
@@ -187,6 +229,11 @@ def _optimize(args: argparse.Namespace) -> int:
         )
     else:  # the figures of an iterate that is no trajectory are no results
         print(f"no flyable plan: {result.open_dynamics()} -> {out}/")
+    replay = result.replay  # None: not replayed, and the message above says why
+    if replay is not None:
+        print("replay: " + replay.summary().split("; DOES")[0])
+    if replay is not None and not replay.flies:
+        print(f"WARNING: the plan does not fly: {'; '.join(replay.faults)}")
     if result.status.value == "max_iter":
         print(_ITERATION_LIMIT.format(n=options.max_iter))
     return 0 if result.success and result.dynamics_closed else 1
@@ -512,42 +559,49 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
         help="simulate a flight from a model file",
         description="Fly the model file's craft under the laser (or coasting, --coast-only) "
         "from the pad or a given initial state until the duration, a landing or the loss of "
-        "the beam, and write trajectory.csv, pulses.csv, summary.json and figures. Exit "
+        "the beam, and write trajectory.csv, pulses.csv, summary.json and figures; --inputs "
+        "flies a saved plan (lightcraft optimize's solution.csv) instead of the nominal "
+        "pulses. Exit "
         "status 0: the flight was simulated (whatever ended it); 2: bad input or the "
         "integration failed.",
     )
     sim.add_argument("model", help="flight model TOML, e.g. models/flight5.toml")
-    sim.add_argument("--duration", type=DURATION, default=10.0, help="seconds (default 10)")
+    sim.add_argument(
+        "--duration",
+        type=DURATION,
+        default=None,
+        help="seconds (default 10; with --inputs the plan's length)",
+    )
     sim.add_argument("--out", default=None, help="output folder (default runs/<model name>)")
     sim.add_argument(
         "--launch-speed",
         type=LAUNCH_SPEED,
-        default=0.0,
+        default=None,
         help="initial vertical speed [m/s] (default 0)",
     )
     sim.add_argument(
         "--tilt-deg",
         type=TILT,
-        default=0.0,
+        default=None,
         help="initial tilt from the vertical [deg] (default 0)",
     )
     sim.add_argument(
         "--tilt-azimuth-deg",
         type=finite,
-        default=90.0,
+        default=None,
         help="direction of the tilt, clockwise from north [deg] (default 90: east)",
     )
     sim.add_argument(
         "--launch-offset-x-cm",
         type=OFFSET,
-        default=0.0,
-        help="initial offset from the beam axis along L x (east) [cm]",
+        default=None,
+        help="initial offset from the beam axis along L x (east) [cm] (default 0)",
     )
     sim.add_argument(
         "--launch-offset-y-cm",
         type=OFFSET,
-        default=0.0,
-        help="initial offset from the beam axis along L y (north) [cm]",
+        default=None,
+        help="initial offset from the beam axis along L y (north) [cm] (default 0)",
     )
     for old, new in _FORMER_SIMULATE_FLAGS.items():
         sim.add_argument(
@@ -579,10 +633,22 @@ def add_simulate(sub: argparse._SubParsersAction) -> None:
         "in $LIGHTCRAFT_CACHE or ~/.cache/lightcraft_opt (the first run of a model structure "
         "compiles for 5-15 s; LIGHTCRAFT_COMPILE=0 also turns it off)",
     )
-    sim.add_argument(
+    flown = sim.add_mutually_exclusive_group()
+    flown.add_argument(
         "--coast-only",
         action="store_true",
         help="laser off: coast from the initial state (variable-step CVODES)",
+    )
+    flown.add_argument(
+        "--inputs",
+        default=None,
+        metavar="FILE",
+        help="fly a saved plan: pulse k takes row k's inputs (the columns pointing_x_m, "
+        "pointing_y_m, focus_m, energy_J[, rcs_thrust_<i>_N, motor_torque_Nm] of the "
+        "solution.csv lightcraft optimize writes), the last row held after the plan's end; "
+        "the flight starts from the plan's row k = 0 (t_s and the state columns) when the "
+        "file has them, else from the initial-state flags; wind and every other parameter "
+        "come from MODEL",
     )
     sim.set_defaults(run=_simulate)
 

@@ -40,6 +40,7 @@ __all__ = [
     "input_columns",
     "node_tilt",
     "offsets_over_capture_radius",
+    "replay_summary",
     "solution_columns",
     "write_ocp_summary",
     "write_solution_csv",
@@ -187,16 +188,47 @@ def rcs_envelope_margin(result: OcpResult, problem: OcpProblem) -> float | None:
     return float(np.min(slack)) if slack.size else None
 
 
+def replay_summary(result: OcpResult) -> dict[str, Any]:
+    """summary.json's replay keys (:class:`~lightcraft_opt.ocp.result.PlanReplay`): how the
+    simulator's flight of the plan ended, whether it flies and stays in the beam, the
+    largest position gap from the prediction [m] and its node, final altitude [m] and
+    largest beam offset over the capture radius, replayed and planned, and the faults;
+    every value null when the result was not replayed."""
+    r = result.replay
+    if r is None:
+        keys = (
+            "status flies stays_in_beam pulses max_position_gap_m max_gap_node "
+            "final_altitude_m planned_final_altitude_m max_offset_over_capture_radius "
+            "planned_max_offset_over_capture_radius pulse_map quadrature faults"
+        )
+        return {f"replay_{k}": None for k in keys.split()}
+    return {
+        "replay_status": r.status.value,
+        "replay_flies": r.flies,
+        "replay_stays_in_beam": r.stays_in_beam,
+        "replay_pulses": r.pulses,
+        "replay_max_position_gap_m": r.max_position_gap,
+        "replay_max_gap_node": r.max_gap_node,
+        "replay_final_altitude_m": r.final_altitude,
+        "replay_planned_final_altitude_m": r.planned_final_altitude,
+        "replay_max_offset_over_capture_radius": r.max_offset_over_capture_radius,
+        "replay_planned_max_offset_over_capture_radius": r.planned_max_offset_over_capture_radius,
+        "replay_pulse_map": f"{r.pulse_map.scheme.value}, {r.pulse_map.substeps} substeps",
+        "replay_quadrature": list(r.quadrature),
+        "replay_faults": list(r.faults),
+    }
+
+
 def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:
     """summary.json: how the solve went (status, cost and its terms by name, iterations,
     times), what it asked (solver, horizon) and what it achieved (laser energy, final
     altitude, largest beam offset over the capture radius against its limit, largest
     tilt, RCS propellant and liner used, each constraint's margin
-    (:func:`constraint_margins`), constraint violation), and whether the returned iterate
-    is a trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest
-    dynamics gap, scaled units): when not, the achieved figures keep their keys but are no
-    results. Beside it, result.json and result.npz: the exact result
-    (:mod:`.result_archive`)."""
+    (:func:`constraint_margins`), constraint violation), whether the returned iterate is a
+    trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest dynamics gap,
+    scaled units; when not, the achieved figures keep their keys but are no results), and
+    how its plan flew when the simulator flew it again (:func:`replay_summary`). Beside it,
+    result.json and result.npz: the exact result (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
     offsets = offsets_over_capture_radius(result, problem)
     limits = [
@@ -236,6 +268,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "liner_used_kg": float(liner[0] - liner[-1]),
         "constraint_margins": constraint_margins(result, problem),
         "constraint_violation": finite_or_none(result.constraint_violation),
+        **replay_summary(result),
     }
     path.write_text(json.dumps(summary, indent=2) + "\n")
     write_archive(result, path.parent)

@@ -6,7 +6,9 @@ transcription, solve) and what came out (result).
   wall-clock limit, stall rule);
 - :mod:`.transcription`: :class:`MultipleShooting`, Φ as the dynamics of an NLP;
 - :mod:`.solve`: :class:`CompiledOcp` (built once, solved warm), :func:`solve`, :func:`rollout`;
-- :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus`;
+- :mod:`.replay`: :func:`replay_plan`, a solve's plan flown again by the simulator
+  (every solve does it: ``OcpOptions.replay``);
+- :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus` and :class:`PlanReplay`;
 - :mod:`.stall`: the stall rule that ends a solve making no progress toward its constraints;
 - :mod:`.constraint_rows`: the names of the NLP's constraint rows and the constraint an
   infeasible solve cannot meet.
@@ -43,7 +45,8 @@ from lightcraft_opt.ocp.problem import (
     TiltLimit,
     TrackReference,
 )
-from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.replay import PLAN_GAP_LIMIT, PlanWarning, replay_plan
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus, PlanReplay
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout, solve
 from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
 
@@ -51,6 +54,7 @@ __all__ = [
     "OCP_PULSE_MAP",
     "OCP_STALL_ITERATIONS",
     "OCP_TIME_LIMIT",
+    "PLAN_GAP_LIMIT",
     "CompiledOcp",
     "Constraint",
     "ControlBound",
@@ -71,12 +75,15 @@ __all__ = [
     "OcpStatus",
     "OffsetFrom",
     "OffsetLimit",
+    "PlanReplay",
+    "PlanWarning",
     "PredictionMap",
     "RcsEnvelope",
     "TerminalAltitude",
     "TerminalState",
     "TiltLimit",
     "TrackReference",
+    "replay_plan",
     "rollout",
     "solve",
     "state_scale",

@@ -127,10 +127,14 @@ class OcpOptions:
         ramp's solves share one limit.
     stall_iterations : W of the stall rule (ocp/stall.py), iterations, >= 1, or None for
         no rule; default :data:`OCP_STALL_ITERATIONS`. IPOPT and sqpmethod stop when
-        their least constraint violation, above ``tol``, has not fallen by 10 % over the
-        last W iterations, with status ``INFEASIBLE`` and the constraint that cannot be
-        met in the message (ocp/result.py). fatrop calls no iteration callback: the rule
-        never stops it.
+        their least constraint violation, above ``tol`` and above 1 (scaled), has not
+        fallen by 10 % over the last W iterations, with status ``INFEASIBLE`` and the
+        constraint that cannot be met in the message (ocp/result.py). fatrop calls no
+        iteration callback: the rule never stops it.
+    replay : fly every solve's plan again through the simulator's Φ at full accuracy and
+        attach the comparison with the prediction to the result (``OcpResult.replay``,
+        ocp/replay.py), with a ``PlanWarning`` when the plan does not fly. False: skip it
+        (an MPC re-solving every pulse has no use for it).
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -146,6 +150,7 @@ class OcpOptions:
     prediction: PredictionMap = PredictionMap.FULL
     time_limit: float | None = OCP_TIME_LIMIT
     stall_iterations: int | None = OCP_STALL_ITERATIONS
+    replay: bool = True
 
     def __post_init__(self) -> None:
         w = self.stall_iterations
@@ -166,6 +171,8 @@ class OcpOptions:
             raise OptionError(
                 f"OcpOptions.prediction must be one of {allowed}, got {self.prediction!r}"
             )
+        if not isinstance(self.replay, bool):
+            raise OptionError(f"OcpOptions.replay must be true or false, got {self.replay!r}")
         if not isinstance(self.chain_derivatives, bool):
             raise OptionError(
                 "OcpOptions.chain_derivatives must be true or false, got "

@@ -3,7 +3,8 @@
 A failed or infeasible solve is a result too: its status says so in words and it carries
 the solver's last iterate, never a raw exception. An iterate whose dynamics gaps are open
 (``dynamics_closed`` false) is no trajectory of Φ: its summary shows no altitude, drift or
-energy as achieved.
+energy as achieved. :class:`PlanReplay` is what the plan did when the simulator flew it
+again (ocp/replay.py).
 """
 
 from __future__ import annotations
@@ -14,9 +15,11 @@ from enum import Enum
 import numpy as np
 
 from lightcraft_opt.layout import STATE, VectorLayout
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.presenters import Presentable
+from lightcraft_opt.simulation.result import SimulationStatus
 
-__all__ = ["OcpResult", "OcpStatus"]
+__all__ = ["OcpResult", "OcpStatus", "PlanReplay"]
 
 
 class OcpStatus(Enum):
@@ -29,6 +32,73 @@ class OcpStatus(Enum):
     INFEASIBLE = "infeasible"  # the solver found the constraints (locally) infeasible, or
     # its constraint violation stalled (OcpOptions.stall_iterations, ocp/stall.py)
     FAILED = "failed"  # anything else: evaluation error, line search or QP failure ...
+
+
+@dataclass(frozen=True, eq=False)
+class PlanReplay:
+    """A plan's inputs flown again by the simulator, against the OCP's prediction.
+
+    Made by :func:`~lightcraft_opt.ocp.replay.replay_plan`: the inputs ``u`` held pulse by
+    pulse from the result's x0 at its t0, through the simulator's Φ at full accuracy, with
+    the simulator's end-of-flight rules (simulation/flight_log.py).
+
+    Attributes
+    ----------
+    status, message : how the replayed flight ended (``duration_reached``: it flew every
+        pulse of the plan) and the simulator's words.
+    pulse_map : options of the Φ that flew it.
+    quadrature : (radial, azimuthal) points of the optic quadrature of the model it flew.
+    pulses : pulses flown (the horizon N unless the flight ended early).
+    t : (n,) times of the nodes reached [s]; n = pulses + 1 unless it landed.
+    x : (n, STATE.size) replayed states at those nodes (docs/frames.md).
+    max_position_gap : largest |r_L replayed - r_L predicted| over the nodes reached [m].
+    max_gap_node : the node k (state before pulse k; N after the last) where it is largest.
+    final_altitude, planned_final_altitude : altitude above the pad at the replay's last
+        node, and the prediction's at node N [m].
+    max_offset_over_capture_radius, planned_max_offset_over_capture_radius : largest
+        |offset_L| / R_c over the pulses fired, replayed and predicted [-].
+    faults : why the plan does not fly, one sentence each; empty when it flies.
+    """
+
+    status: SimulationStatus
+    message: str
+    pulse_map: PulseMapOptions
+    quadrature: tuple[int, int]
+    pulses: int
+    t: np.ndarray
+    x: np.ndarray
+    max_position_gap: float
+    max_gap_node: int
+    final_altitude: float
+    planned_final_altitude: float
+    max_offset_over_capture_radius: float
+    planned_max_offset_over_capture_radius: float
+    faults: tuple[str, ...] = ()
+
+    @property
+    def flies(self) -> bool:
+        """True when the replay flew every pulse, close to the prediction (no faults)."""
+        return not self.faults
+
+    @property
+    def stays_in_beam(self) -> bool:
+        """False when the replayed flight left the beam."""
+        return self.status is not SimulationStatus.LEFT_BEAM
+
+    def summary(self) -> str:
+        """One line: the largest gap and where, final altitude and beam offset, replayed
+        against planned; then the faults, if any."""
+        m, q = self.pulse_map, self.quadrature
+        line = (
+            f"flown by Φ ({m.scheme.value}, {m.substeps} substeps, {q[0]} x {q[1]} optic "
+            f"quadrature): {self.status.value} after "
+            f"{self.pulses} pulses; position gap up to {100 * self.max_position_gap:.3g} cm "
+            f"(node {self.max_gap_node}); final altitude {self.final_altitude:.3f} m "
+            f"(planned {self.planned_final_altitude:.3f}); beam offset up to "
+            f"{self.max_offset_over_capture_radius:.3f} of the capture radius (planned "
+            f"{self.planned_max_offset_over_capture_radius:.3f})"
+        )
+        return line + ("" if self.flies else f"; DOES NOT FLY: {'; '.join(self.faults)}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,6 +128,8 @@ class OcpResult(Presentable):
         liner_loss [kg], health [-].
     inputs : layout of a row of ``u``.
     w, lam_x, lam_g : the NLP's (scaled) primal and dual solution, for a warm start.
+    replay : the plan flown again by the simulator at full accuracy (:class:`PlanReplay`,
+        ``OcpOptions.replay``); None when not replayed (the message says why).
     """
 
     status: OcpStatus
@@ -79,6 +151,7 @@ class OcpResult(Presentable):
     w: np.ndarray = field(default_factory=lambda: np.empty(0))
     lam_x: np.ndarray = field(default_factory=lambda: np.empty(0))
     lam_g: np.ndarray = field(default_factory=lambda: np.empty(0))
+    replay: PlanReplay | None = None
 
     @property
     def success(self) -> bool:
@@ -127,6 +200,7 @@ class OcpResult(Presentable):
             ]
         else:
             rows.append(("no flyable plan", self.open_dynamics()))
+        rows.append(("replay", "not replayed" if self.replay is None else self.replay.summary()))
         width = max(len(n) for n, _ in rows)
         return "\n".join(["OcpResult", *(f"  {n:<{width}}  {v}" for n, v in rows)])
 

@@ -42,6 +42,7 @@ from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver, PredictionMap
 from lightcraft_opt.ocp.problem import OcpProblem
+from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.time_limit import (
     Deadline,
@@ -409,6 +410,7 @@ class CompiledOcp:
         self._bounds = (lbx, ubx)
         self._warm_solver: ca.Function | None = None
         self._nlp_options = (name, solver_opts, nlp)
+        self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
 
     def solve(
@@ -442,8 +444,10 @@ class CompiledOcp:
 
         Returns
         -------
-        OcpResult with status, cost, iterations, solve time, optimal inputs and the
-        predicted trajectory; never raises for a failed or infeasible solve, nor for one
+        OcpResult with status, cost, iterations, solve time, optimal inputs, the
+        predicted trajectory and, with ``OcpOptions.replay``, the plan flown again by the
+        simulator (``result.replay``, ocp/replay.py; a ``PlanWarning`` when it does not
+        fly); never raises for a failed or infeasible solve, nor for one
         stopped by ``OcpOptions.time_limit`` (status ``TIME_LIMIT``: the wall time counts
         from this call; a wind ramp's solves share it).
         """
@@ -464,11 +468,12 @@ class CompiledOcp:
             raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
         limit = self.options.time_limit
         until = math.inf if limit is None else time.perf_counter() + limit
-        if warm_start is None and initial_guess is None and self.options.wind_ramp:
-            scaled = _wind_scaled(pv, 0.0)
-            if not np.array_equal(scaled, pv):
-                return self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
-        return self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
+        ramped = warm_start is None and initial_guess is None and self.options.wind_ramp
+        if ramped and not np.array_equal(_wind_scaled(pv, 0.0), pv):
+            result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
+        else:
+            result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
+        return self.replayer.attach(result, pv) if self.options.replay else result
 
     # ----------------------------------------------------------------- helpers
     def _solve_once(

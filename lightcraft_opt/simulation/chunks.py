@@ -41,10 +41,12 @@ def step_in_chunks(
     p: np.ndarray,
     flight: FlightLog,
     first: int = 0,
+    *,
+    t0: float = 0.0,
 ) -> list[np.ndarray]:
     """Step Φ over the rows of ``U`` (n, map-input size) from ``x0`` (STATE layout) with
     parameters ``p``, checking each pulse in order with ``flight`` and stopping at the
-    first that ends it; row 0 is pulse number ``first`` (at ``first`` periods).
+    first that ends it; row 0 is pulse number ``first`` (at t0 + ``first`` periods [s]).
 
     Returns
     -------
@@ -56,7 +58,8 @@ def step_in_chunks(
     xk = x0
     for k0 in range(0, len(U), chunk):
         m = min(chunk, len(U) - k0)
-        ts = np.arange(first + k0, first + k0 + m) * phi.period  # the same floats as k * period
+        # the same floats as t0 + k * period
+        ts = t0 + np.arange(first + k0, first + k0 + m) * phi.period
         x_next, X, E = (
             np.asarray(v) for v in _chunk_map(phi, m)(xk, U[k0 : k0 + m].T, p, ts[None, :])
         )

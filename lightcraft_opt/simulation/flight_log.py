@@ -96,6 +96,7 @@ class FlightLog:
     inputs : the map-input layout (its ``focus`` and ``energy`` slots are read).
     p : (PARAMETERS.size,) the flight's parameters (beam size and capture radius).
     laser : the beam's profile and size model.
+    t0 : time of the first pulse [s]; the flight ends at t0 + duration.
     """
 
     def __init__(
@@ -106,12 +107,14 @@ class FlightLog:
         inputs: VectorLayout,
         p: np.ndarray,
         laser: Laser,
+        *,
+        t0: float = 0.0,
     ) -> None:
-        self.period, self.duration = period, duration
+        self.period, self.duration, self.end = period, duration, t0 + duration
         self.i_energy = inputs.slot("energy").start
         self.i_focus = inputs.slot("focus").start
         self.p, self.laser = np.asarray(p, dtype=float), laser
-        self.times: list[float] = [0.0]
+        self.times: list[float] = [t0]
         self.states: list[np.ndarray] = [x0]
         self.pulse_t: list[float] = []
         self.pulse_u: list[np.ndarray] = []
@@ -172,7 +175,7 @@ class FlightLog:
         self.pulse_gap.append(gap)
         X = X.T
         tb = t + self.period * np.arange(1, len(X) + 1) / len(X)
-        keep = tb <= self.duration + 1e-12
+        keep = tb <= self.end + 1e-12
         below = X[:, iz] < 0.0
         if np.any(below & keep):
             i = int(np.argmax(below))

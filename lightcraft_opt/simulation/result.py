@@ -74,7 +74,7 @@ class SimulationResult(Presentable):
 
     Attributes
     ----------
-    t : (n,) time since launch [s].
+    t : (n,) time [s], from the first pulse's t0 (0 unless ``simulate`` was given one).
     x : (n, STATE.size) states (docs/frames.md).
     status : how it ended; ``message`` says more (e.g. the integrator's error).
     tilt : (n,) angle between b1 and L up [rad].

@@ -72,6 +72,7 @@ def simulate(
     dropout_rate: float = 0.0,
     seed: int | None = None,
     compiled: bool | None = None,
+    t0: float = 0.0,
 ) -> SimulationResult:
     """Simulate a flight of ``model`` under the laser for ``duration`` seconds.
 
@@ -96,6 +97,8 @@ def simulate(
         back to the interpreted Φ with a warning); None (default): compiled unless
         ``LIGHTCRAFT_COMPILE=0`` (:func:`~lightcraft_opt.compiled.compile_by_default`), and
         a given ``pulse_map`` as it is.
+    t0 : time of the first pulse [s] (gusts and phase-locked RCS thrust depend on it);
+        pulse k fires at t0 + k T and the flight ends by t0 + duration at the latest.
 
     Returns
     -------
@@ -116,14 +119,15 @@ def simulate(
     )
     xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     pk = checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)
+    t0 = float(checked_vector("t0", [t0], 1)[0])
     n_pulses = int(np.ceil(duration / phi.period - 1e-9))
     rng = np.random.default_rng(seed)
     dropped = rng.random(n_pulses) < dropout_rate if dropout_rate else np.zeros(n_pulses, bool)
     i_energy = lay.slot("energy").start
-    flight = FlightLog(xk, phi.period, duration, lay, pk, model.laser)
+    flight = FlightLog(xk, phi.period, duration, lay, pk, model.laser, t0=t0)
     if callable(inputs):
         for k in range(n_pulses):
-            t = k * phi.period
+            t = t0 + k * phi.period
             u = checked_vector(f"inputs[{k}]", inputs(k, t, xk), lay.size).copy()
             if dropped[k]:
                 u[i_energy] = 0.0
@@ -139,8 +143,8 @@ def simulate(
         U[dropped, i_energy] = 0.0
         resting = flight.resting_pulses(U)
         for k in range(resting):
-            flight.rest(k * phi.period, U[k], xk, ENGINE.size)
-        step_in_chunks(phi, U[resting:], xk, pk, flight, resting)
+            flight.rest(t0 + k * phi.period, U[k], xk, ENGINE.size)
+        step_in_chunks(phi, U[resting:], xk, pk, flight, resting, t0=t0)
     record = PulseRecord(
         t=np.asarray(flight.pulse_t),
         u=np.asarray(flight.pulse_u).reshape(-1, lay.size),
