@@ -75,6 +75,7 @@ A problem file::
     print_level = 0
     wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
     prediction = "full"                    # or "reduced": the coning-aware reduced map
+    start = "flown"                        # the director's flight where it applies, or "rollout"
     time_limit_s = 1800.0                  # wall-clock limit of a solve (OcpOptions)
     stall_iterations = 30                  # stop when the constraint violation has not
                                            # fallen 10 % in this many iterations; 0: never
@@ -147,6 +148,7 @@ from lightcraft_opt.ocp.options import (
     HessianApproximation,
     OcpOptions,
     OcpSolver,
+    OcpStart,
     PredictionMap,
 )
 from lightcraft_opt.ocp.problem import (
@@ -204,6 +206,7 @@ _SOLVER: Mapping[str, Spec] = {
     "print_level": INTEGER,
     "wind_ramp": INTEGER,
     "prediction": choice(PredictionMap),
+    "start": choice(OcpStart),
     "time_limit": quantity("time"),
     "stall_iterations": INTEGER,
 }

@@ -6,6 +6,8 @@ transcription, solve) and what came out (result).
   wall-clock limit, stall rule);
 - :mod:`.transcription`: :class:`MultipleShooting`, Φ as the dynamics of an NLP;
 - :mod:`.solve`: :class:`CompiledOcp` (built once, solved warm), :func:`solve`, :func:`rollout`;
+- :mod:`.start`: the cold start, the director's flight where it applies (:class:`Start`);
+- :mod:`.evaluation`: Φ over the horizon once per point, shared by the NLP's functions;
 - :mod:`.replay`: :func:`replay_plan`, a solve's plan flown again by the simulator
   (every solve does it: ``OcpOptions.replay``);
 - :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus` and :class:`PlanReplay`;
@@ -23,6 +25,7 @@ from lightcraft_opt.ocp.options import (
     HessianApproximation,
     OcpOptions,
     OcpSolver,
+    OcpStart,
     PredictionMap,
 )
 from lightcraft_opt.ocp.problem import (
@@ -48,6 +51,7 @@ from lightcraft_opt.ocp.problem import (
 from lightcraft_opt.ocp.replay import PLAN_GAP_LIMIT, PlanWarning, replay_plan
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus, PlanReplay
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout, solve
+from lightcraft_opt.ocp.start import Start, director_start
 from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
 
 __all__ = [
@@ -72,6 +76,7 @@ __all__ = [
     "OcpProblem",
     "OcpResult",
     "OcpSolver",
+    "OcpStart",
     "OcpStatus",
     "OffsetFrom",
     "OffsetLimit",
@@ -79,10 +84,12 @@ __all__ = [
     "PlanWarning",
     "PredictionMap",
     "RcsEnvelope",
+    "Start",
     "TerminalAltitude",
     "TerminalState",
     "TiltLimit",
     "TrackReference",
+    "director_start",
     "replay_plan",
     "rollout",
     "solve",

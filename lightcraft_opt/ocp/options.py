@@ -17,6 +17,7 @@ __all__ = [
     "HessianApproximation",
     "OcpOptions",
     "OcpSolver",
+    "OcpStart",
     "PredictionMap",
 ]
 
@@ -36,6 +37,18 @@ class OcpSolver(Enum):
     SQP_QRQP = "sqp_qrqp"
     SQP_HPIPM = "sqp_hpipm"
     SQP_OSQP = "sqp_osqp"
+
+
+class OcpStart(Enum):
+    """Where a cold solve starts without an initial guess (ocp/start.py).
+
+    ``FLOWN``: a closed-loop flight of the problem's own map and inputs, the director's
+    where it applies (the beam's pointing free, the waist beam), else the nominal rollout.
+    ``ROLLOUT``: the nominal rollout always (the beam under the craft, the flight's energy).
+    """
+
+    FLOWN = "flown"
+    ROLLOUT = "rollout"
 
 
 class PredictionMap(Enum):
@@ -131,6 +144,7 @@ class OcpOptions:
         fallen by 10 % over the last W iterations, with status ``INFEASIBLE`` and the
         constraint that cannot be met in the message (ocp/result.py). fatrop calls no
         iteration callback: the rule never stops it.
+    start : where a cold solve starts without an initial guess (:class:`OcpStart`).
     replay : fly every solve's plan again through the simulator's Φ at full accuracy and
         attach the comparison with the prediction to the result (``OcpResult.replay``,
         ocp/replay.py), with a ``PlanWarning`` when the plan does not fly. False: skip it
@@ -150,6 +164,7 @@ class OcpOptions:
     prediction: PredictionMap = PredictionMap.FULL
     time_limit: float | None = OCP_TIME_LIMIT
     stall_iterations: int | None = OCP_STALL_ITERATIONS
+    start: OcpStart = OcpStart.FLOWN
     replay: bool = True
 
     def __post_init__(self) -> None:
@@ -166,6 +181,9 @@ class OcpOptions:
             raise OptionError(
                 f"OcpOptions.time_limit must be a positive number of seconds or None, got {t!r}"
             )
+        if not isinstance(self.start, OcpStart):
+            allowed = [m.value for m in OcpStart]
+            raise OptionError(f"OcpOptions.start must be one of {allowed}, got {self.start!r}")
         if not isinstance(self.prediction, PredictionMap):
             allowed = [m.value for m in PredictionMap]
             raise OptionError(

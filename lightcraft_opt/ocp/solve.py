@@ -40,10 +40,17 @@ from lightcraft_opt.compiled import (
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
-from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver, PredictionMap
+from lightcraft_opt.ocp.options import (
+    HessianApproximation,
+    OcpOptions,
+    OcpSolver,
+    OcpStart,
+    PredictionMap,
+)
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.start import Start, StartKind, director_applies, director_start
 from lightcraft_opt.ocp.time_limit import (
     Deadline,
     Progress,
@@ -345,6 +352,8 @@ class CompiledOcp:
             self.pulse_map = reduced_pulse_map(problem.model, reduced)
         else:
             self.pulse_map = pulse_map_for(problem.model, map_options, compiled=False)
+        built = pulse_map is None and opts.prediction is PredictionMap.FULL
+        self._map_options = map_options if built else None
         if self.pulse_map.step.size1_in(1) != problem.inputs.size or (
             self.pulse_map.inputs is not None and self.pulse_map.inputs != problem.inputs
         ):
@@ -435,8 +444,10 @@ class CompiledOcp:
             had one: its presence is structure).
         reference : (N + 1, width) TrackReference paths side by side.
         initial_guess : (N, map-input size) inputs, rolled out from x0 through Φ; or a pair
-            (X (N + 1, STATE.size), U (N, map-input size)) used as is. Default: the
-            nominal policy's rollout.
+            (X (N + 1, STATE.size), U (N, map-input size)) used as is. Default
+            (``OcpOptions.start``, ocp/start.py): the director's closed-loop flight where it
+            applies (pointing free, waist beam), IPOPT then started as from a warm start
+            with no multipliers; else the nominal policy's rollout.
         warm_start : a previous result of this compiled problem: its primal and dual
             solution start the solver (overrides ``initial_guess``); IPOPT then starts with
             a barrier parameter of 1e-6 instead of 0.1 (a second IPOPT instance, built on
@@ -497,10 +508,15 @@ class CompiledOcp:
             if not isinstance(warm_start, OcpResult) or warm_start.w.size != tr.n_w:
                 raise ParameterError("warm_start", "must be a result of this compiled problem")
             w0, lam_x0, lam_g0 = warm_start.w, warm_start.lam_x, warm_start.lam_g
+            cold = None
         else:
-            w0 = tr.pack(*self._guess(x0, p, t0, initial_guess), u_previous)
+            cold = self._start(x0, p, t0, initial_guess)
+            w0 = tr.pack(cold.X, cold.U, u_previous)
         lbx, ubx = self._bounds
-        solver = self.solver if warm_start is None else self._warm_started()
+        # a start that flew is near-feasible: IPOPT starts it as it starts a warm start
+        # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet
+        flown = cold is not None and cold.flown
+        solver = self.solver if warm_start is None and not flown else self._warm_started()
         args = dict(
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
@@ -516,6 +532,8 @@ class CompiledOcp:
         status, message, iterations = _status(call, self.options, violation)
         if not finite:
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
+        if cold is not None and cold.flown:
+            message += f"; {cold.describe()}"
         return self._result(
             w, lam_x, lam_g, P, g, violation, status, message, iterations, solve_time, t0
         )
@@ -578,6 +596,33 @@ class CompiledOcp:
             }
             self._warm_solver = ca.nlpsol("ocp_nlp_warm", name, nlp, {**opts, "ipopt": ipopt})
         return self._warm_solver
+
+    def _start(
+        self,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+    ) -> Start:
+        """The cold start (ocp/start.py): the caller's guess, else the director's flight
+        where it applies and ``OcpOptions.start`` is "flown", else the nominal rollout."""
+        if (
+            guess is None
+            and self.options.start is OcpStart.FLOWN
+            and director_applies(self.problem)
+        ):
+            return director_start(self.problem, self._flight_map(), x0, p, t0)
+        began = time.perf_counter()
+        X, U = self._guess(x0, p, t0, guess)
+        kind = StartKind.ROLLOUT if guess is None else StartKind.GIVEN
+        return Start(kind, X, U, time.perf_counter() - began)
+
+    def _flight_map(self) -> PulseMap:
+        """Φ to fly a start with: the prediction map compiled where this CompiledOcp built
+        it (the same values to rounding, tests/test_compiled.py), else the given one."""
+        if self._map_options is None:
+            return self.pulse_map
+        return pulse_map_for(self.problem.model, self._map_options)
 
     def _guess(
         self,
