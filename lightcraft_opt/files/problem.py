@@ -76,6 +76,7 @@ A problem file::
     wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
     prediction = "full"                    # or "reduced": the coning-aware reduced map
     start = "flown"                        # the director's flight where it applies, or "rollout"
+    convex_iterations = 80                 # first iterations with the convexified Hessian
     time_limit_s = 1800.0                  # wall-clock limit of a solve (OcpOptions)
     stall_iterations = 30                  # stop when the constraint violation has not
                                            # fallen 10 % in this many iterations; 0: never
@@ -207,6 +208,7 @@ _SOLVER: Mapping[str, Spec] = {
     "wind_ramp": INTEGER,
     "prediction": choice(PredictionMap),
     "start": choice(OcpStart),
+    "convex_iterations": INTEGER,
     "time_limit": quantity("time"),
     "stall_iterations": INTEGER,
 }

@@ -102,3 +102,44 @@ class SharedEvaluation(ca.Callback):
     def forget(self) -> None:
         """Drop the remembered points (the counts stay)."""
         self._memory.clear()
+
+
+class ConvexBlocks(ca.Callback):
+    """``convex_blocks(H) -> H_plus``: each (n, n) block of H (n, n N), side by side, made
+    positive semidefinite by clipping its negative eigenvalues to zero (symmetric
+    eigendecomposition per block, numpy).
+
+    Φ's curvature weighted by the multipliers, μᵀ∇²Φ per pulse, is what makes the NLP's
+    Hessian indefinite; with its negative part dropped the Lagrangian Hessian is the cost's
+    curvature plus a positive semidefinite model of the dynamics' (the exact Hessian "made
+    positive definite" per stage, as SQP codes do before a structured QP). Derivatives of
+    f and g stay exact, so the optimum is the same; only the Newton model changes.
+    """
+
+    def __init__(self, name: str, n: int, horizon: int) -> None:
+        ca.Callback.__init__(self)
+        self._n, self._horizon = n, horizon
+        self.construct(name, {})
+
+    def get_n_in(self) -> int:
+        return 1
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_sparsity_in(self, i: int) -> Any:
+        return ca.Sparsity.dense(self._n, self._n * self._horizon)
+
+    def get_sparsity_out(self, i: int) -> Any:
+        return ca.Sparsity.dense(self._n, self._n * self._horizon)
+
+    def has_jacobian(self) -> bool:
+        return False
+
+    def eval(self, arg: list[ca.DM]) -> list[ca.DM]:
+        n, N = self._n, self._horizon
+        H = np.asarray(arg[0], dtype=float).reshape(n, N, n).transpose(1, 0, 2)  # (N, n, n)
+        H = 0.5 * (H + H.transpose(0, 2, 1))
+        values, vectors = np.linalg.eigh(H)
+        clipped = np.einsum("kij,kj,klj->kil", vectors, np.maximum(values, 0.0), vectors)
+        return [ca.DM(clipped.transpose(1, 0, 2).reshape(n, N * n))]

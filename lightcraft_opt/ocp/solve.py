@@ -125,7 +125,7 @@ def _uses_chain(opts: OcpOptions) -> bool:
     return (
         opts.chain_derivatives
         and opts.solver is OcpSolver.IPOPT
-        and opts.hessian is HessianApproximation.EXACT
+        and opts.hessian in (HessianApproximation.EXACT, HessianApproximation.CONVEX)
     )
 
 
@@ -150,8 +150,10 @@ def _solver_options(
         common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
     nlp: dict[str, ca.MX] | ca.Function = tr.nlp
     if _uses_chain(opts) and tr.derivatives is not None:
-        chain = tr.chain_derivatives(upper=True)
+        convex = opts.hessian is HessianApproximation.CONVEX
+        chain = tr.chain_derivatives(upper=True, convex=convex)
         nlp = chain.pop("nlp")
+        del chain["hess_lag_convex"]  # kept as tr.convex_hess_lag for the convex phase
         # the NLP's Function is not differentiable (Φ's chain gives its derivatives):
         # no multipliers of the parameters, which would need casadi's AD of it
         common.update(chain, no_nlp_grad=True, calc_lam_p=False)
@@ -234,6 +236,19 @@ def _wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
         out[PARAMETERS.index(name)] *= factor
     return out
 
+
+#: IPOPT started at a given point as from a warm start: small barrier, bounds barely pushed.
+_WARM_IPOPT: dict[str, Any] = {
+    "warm_start_init_point": "yes",
+    "mu_init": 1e-6,
+    "warm_start_bound_push": 1e-6,
+    "warm_start_mult_bound_push": 1e-6,
+    "warm_start_slack_bound_push": 1e-6,
+}
+
+#: Tolerance of the convex phase (OcpOptions.convex_iterations): near the optimum the
+#: exact Hessian takes over, where the convexified one would converge only linearly.
+CONVEX_PHASE_TOL = 1e-3
 
 #: IPOPT's words for its own wall-clock (and CPU-time) limit.
 _IPOPT_TIME_LIMIT = ("Maximum_WallTime_Exceeded", "Maximum_CpuTime_Exceeded")
@@ -418,6 +433,7 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._warm_solver: ca.Function | None = None
+        self._convex_solvers: dict[bool, ca.Function] = {}
         self._nlp_options = (name, solver_opts, nlp)
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
@@ -521,6 +537,16 @@ class CompiledOcp:
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
         start = time.perf_counter()
+        convex = self._convex_phase(flown) if warm_start is None else None
+        phase = ""
+        if convex is not None:  # the convexified Hessian first, then the exact one, warm
+            first = call_solver(convex, args, self._deadline, until)
+            done = int(first.stats.get("iter_count", 0)) if first.stats else 0
+            if first.solution is not None and np.all(np.isfinite(first.solution[0])):
+                w1, l1, m1 = first.solution
+                args = {**args, "x0": w1, "lam_x0": l1, "lam_g0": m1}
+                solver = self._warm_started()
+            phase = f" (after {done} iterations with the convexified Hessian)"
         if self.options.solver is OcpSolver.FATROP and until < math.inf and can_fork():
             call = call_forked(solver, args, until - start)
         else:
@@ -532,6 +558,9 @@ class CompiledOcp:
         status, message, iterations = _status(call, self.options, violation)
         if not finite:
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
+        if convex is not None:
+            iterations += done
+            message += phase
         if cold is not None and cold.flown:
             message += f"; {cold.describe()}"
         return self._result(
@@ -577,6 +606,38 @@ class CompiledOcp:
             result, iterations=iterations, solve_time=seconds, message=message
         )
 
+    def _convex_phase(self, flown: bool) -> ca.Function | None:
+        """IPOPT with the convexified Hessian for the first ``OcpOptions.convex_iterations``
+        iterations of a cold solve, to :data:`CONVEX_PHASE_TOL` (None when the options
+        have no such phase: not IPOPT with the chain's exact Hessian, or 0 iterations).
+        Started as a warm start when the start flew. Built once per kind, on first use."""
+        opts = self.options
+        tr = self.transcription
+        if (
+            not opts.convex_iterations
+            or opts.hessian is not HessianApproximation.EXACT
+            or not _uses_chain(opts)
+            or tr.convex_hess_lag is None
+        ):
+            return None
+        if flown not in self._convex_solvers:
+            name, base, nlp = self._nlp_options
+            ipopt = {
+                **base["ipopt"],
+                "max_iter": opts.convex_iterations,
+                "tol": max(CONVEX_PHASE_TOL, opts.tol),
+                "constr_viol_tol": max(CONVEX_PHASE_TOL, opts.tol),
+            }
+            if flown:
+                ipopt.update(_WARM_IPOPT)
+            self._convex_solvers[flown] = ca.nlpsol(
+                "ocp_nlp_convex",
+                name,
+                nlp,
+                {**base, "hess_lag": tr.convex_hess_lag, "ipopt": ipopt},
+            )
+        return self._convex_solvers[flown]
+
     def _warm_started(self) -> ca.Function:
         """The solver for warm starts: IPOPT told to start from the given primal and dual
         point with a small barrier parameter (built once, on first use; it shares the
@@ -585,15 +646,7 @@ class CompiledOcp:
             return self.solver
         if self._warm_solver is None:
             name, opts, nlp = self._nlp_options
-            push = 1e-6
-            ipopt = {
-                **opts["ipopt"],
-                "warm_start_init_point": "yes",
-                "mu_init": push,
-                "warm_start_bound_push": push,
-                "warm_start_mult_bound_push": push,
-                "warm_start_slack_bound_push": push,
-            }
+            ipopt = {**opts["ipopt"], **_WARM_IPOPT}
             self._warm_solver = ca.nlpsol("ocp_nlp_warm", name, nlp, {**opts, "ipopt": ipopt})
         return self._warm_solver
 

@@ -56,7 +56,7 @@ import numpy as np
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
-from lightcraft_opt.ocp.evaluation import SharedEvaluation, horizon_map
+from lightcraft_opt.ocp.evaluation import ConvexBlocks, SharedEvaluation, horizon_map
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
@@ -186,6 +186,7 @@ class MultipleShooting:
     ) -> None:
         self.problem, self.period = problem, phi.period
         self.derivatives, self.threads = derivatives, threads
+        self.convex_hess_lag: ca.Function | None = None  # set by chain_derivatives
         self._phi = phi
         N, nu = problem.horizon, problem.inputs.size
         free = np.flatnonzero(problem.free)
@@ -480,11 +481,16 @@ class MultipleShooting:
         N = self.problem.horizon
         return self.parameters.get("t0", self.P) + ca.DM(self.period * np.arange(N)).T
 
-    def chain_derivatives(self, *, upper: bool = True) -> dict[str, ca.Function]:
+    def chain_derivatives(
+        self, *, upper: bool = True, convex: bool = False
+    ) -> dict[str, ca.Function]:
         """nlpsol's NLP and derivatives from Φ's explicit chain (module docstring):
         ``nlp(x, p) -> (f, g)`` (pass it to nlpsol in place of :attr:`nlp`), ``grad_f``,
-        ``jac_g`` and ``hess_lag`` (upper triangle with ``upper``). They equal casadi's AD
-        of the NLP to rounding (tests/ocp/test_chain_derivatives.py).
+        ``jac_g`` and ``hess_lag`` (upper triangle with ``upper``; with ``convex`` the
+        convexified one), and ``hess_lag_convex``: the Hessian with each pulse's block
+        μᵀ∇²Φ projected on the positive semidefinite cone (HessianApproximation.CONVEX,
+        also kept as :attr:`convex_hess_lag`). The exact ones equal casadi's AD of the NLP
+        to rounding (tests/ocp/test_chain_derivatives.py).
 
         Φ over the horizon is evaluated once per primal point and shared
         (ocp/evaluation.py): its values by f and g, its values and Jacobians by ∇f, ∂g/∂w
@@ -578,14 +584,26 @@ class MultipleShooting:
         mu_x, mu_e = mu(w, xn, en, P, lam_f, lam_g)
         hessians = horizon_map(der.hessian, N, self.threads)
         Hb = hessians(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
-        hess_lag = ca.Function(
-            "nlp_hess_l",
-            [w, P, lam_f, lam_g],
-            [surrogate_hess(w, P, *point, Hb, lam_f, lam_g)],
-            ["x", "p", "lam_f", "lam_g"],
-            ["hess_gamma_x_x"],
+        # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
+        psd = self.convex_blocks = ConvexBlocks("ocp_convex_blocks", nv, N)  # kept alive
+        hess_lag, hess_convex = (
+            ca.Function(
+                name,
+                [w, P, lam_f, lam_g],
+                [surrogate_hess(w, P, *point, blocks, lam_f, lam_g)],
+                ["x", "p", "lam_f", "lam_g"],
+                ["hess_gamma_x_x"],
+            )
+            for name, blocks in (("nlp_hess_l", Hb), ("nlp_hess_l_convex", psd(Hb)))
         )
-        return {"nlp": nlp, "grad_f": grad_f, "jac_g": jac_g, "hess_lag": hess_lag}
+        self.convex_hess_lag = hess_convex
+        return {
+            "nlp": nlp,
+            "grad_f": grad_f,
+            "jac_g": jac_g,
+            "hess_lag": hess_convex if convex else hess_lag,
+            "hess_lag_convex": hess_convex,
+        }
 
     def _phi_sparsity(self, nx: int, ne: int, nv: int) -> tuple[ca.Sparsity, ca.Sparsity]:
         """Structural patterns of Φ's Jacobian in v = (x, u), (nx + ne, nv), and of the
