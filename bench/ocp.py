@@ -1,9 +1,12 @@
 """Benchmark: problem (a), the crosswind climb, over 260 pulses: cold and warm solve times
 per solver (on demand, not in CI).
 
-For each solver in ``--solvers`` (``name:hessian[:reduced][:ad]``, e.g. ``ipopt:exact``,
-``ipopt:exact:reduced`` for the coning-aware reduced map Ψ as the prediction, ``:ad`` for
-casadi's AD through the map instead of the chain over compiled pieces), in one process:
+For each solver in ``--solvers`` (``name:hessian[:flag...]``, e.g. ``ipopt:exact``,
+``ipopt:convex``; flags ``reduced`` for the coning-aware reduced map Ψ as the prediction,
+``ad`` for casadi's AD through the map instead of the chain over compiled pieces, ``spral``
+for IPOPT's SPRAL in place of MUMPS, ``exact_only`` for no convexified first phase
+(OcpOptions.convex_iterations = 0), ``rollout`` for the nominal rollout as the start), in
+one process:
 
 * **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.solve.CompiledOcp`;
   the pulse map Φ is built once and shared, so only the first build pays for casadi's
@@ -61,8 +64,10 @@ from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.ocp.options import (
     HessianApproximation,
+    LinearSolver,
     OcpOptions,
     OcpSolver,
+    OcpStart,
     PredictionMap,
 )
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
@@ -155,15 +160,21 @@ def main() -> None:
         name, *rest = spec.split(":")
         hessian = rest[0] if rest else "exact"
         flags = set(rest[1:])
-        unknown = flags - {"reduced", "full", "ad"}
+        unknown = flags - {"reduced", "full", "ad", "spral", "exact_only", "rollout"}
         if unknown:
-            parser.error(f"--solvers {spec!r}: unknown {sorted(unknown)}; use reduced, full, ad")
+            parser.error(
+                f"--solvers {spec!r}: unknown {sorted(unknown)}; use reduced, full, ad, spral, "
+                "exact_only, rollout"
+            )
         options = replace(
             base,
             solver=OcpSolver(name),
             hessian=HessianApproximation(hessian or "exact"),
             prediction=PredictionMap.REDUCED if "reduced" in flags else PredictionMap.FULL,
             chain_derivatives="ad" not in flags,
+            linear_solver=LinearSolver.SPRAL if "spral" in flags else LinearSolver.MUMPS,
+            convex_iterations=0 if "exact_only" in flags else base.convex_iterations,
+            start=OcpStart.ROLLOUT if "rollout" in flags else base.start,
         )
         start = time.perf_counter()
         full = options.prediction is PredictionMap.FULL

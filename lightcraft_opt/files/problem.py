@@ -77,6 +77,7 @@ A problem file::
     prediction = "full"                    # or "reduced": the coning-aware reduced map
     start = "flown"                        # the director's flight where it applies, or "rollout"
     convex_iterations = 80                 # first iterations with the convexified Hessian
+    linear_solver = "mumps"                # IPOPT's; or "spral"
     time_limit_s = 1800.0                  # wall-clock limit of a solve (OcpOptions)
     stall_iterations = 30                  # stop when the constraint violation has not
                                            # fallen 10 % in this many iterations; 0: never
@@ -147,6 +148,7 @@ from lightcraft_opt.layout import initial_state
 from lightcraft_opt.ocp.options import (
     OCP_PULSE_MAP,
     HessianApproximation,
+    LinearSolver,
     OcpOptions,
     OcpSolver,
     OcpStart,
@@ -209,6 +211,7 @@ _SOLVER: Mapping[str, Spec] = {
     "prediction": choice(PredictionMap),
     "start": choice(OcpStart),
     "convex_iterations": INTEGER,
+    "linear_solver": choice(LinearSolver),
     "time_limit": quantity("time"),
     "stall_iterations": INTEGER,
 }

@@ -15,6 +15,7 @@ __all__ = [
     "OCP_STALL_ITERATIONS",
     "OCP_TIME_LIMIT",
     "HessianApproximation",
+    "LinearSolver",
     "OcpOptions",
     "OcpSolver",
     "OcpStart",
@@ -37,6 +38,15 @@ class OcpSolver(Enum):
     SQP_QRQP = "sqp_qrqp"
     SQP_HPIPM = "sqp_hpipm"
     SQP_OSQP = "sqp_osqp"
+
+
+class LinearSolver(Enum):
+    """IPOPT's sparse symmetric indefinite solver, both in the casadi wheel: ``MUMPS``
+    (multifrontal, the default) or ``SPRAL`` (its own ordering and pivoting; compared in
+    bench/ocp.py)."""
+
+    MUMPS = "mumps"
+    SPRAL = "spral"
 
 
 class OcpStart(Enum):
@@ -150,13 +160,17 @@ class OcpOptions:
         fallen by 10 % over the last W iterations, with status ``INFEASIBLE`` and the
         constraint that cannot be met in the message (ocp/result.py). fatrop calls no
         iteration callback: the rule never stops it.
-    convex_iterations : with IPOPT and the chain's exact Hessian, a cold solve first runs
-        up to this many iterations with the convexified Hessian (``CONVEX``) to a
-        tolerance of 1e-3, then goes on with the exact Hessian from there, warm (0: none).
+    convex_iterations : with IPOPT and the chain's exact Hessian, a cold solve from a start
+        that flew (``start``) first runs up to this many iterations with the convexified
+        Hessian (``CONVEX``) to a tolerance of 1e-3, then goes on with the exact Hessian
+        from there, warm, for up to ``max_iter`` more (0: none). From the nominal rollout
+        it does not help (problem (a) without a ramp fails either way; an infeasible
+        problem wanders further before the stall rule stops it), so none there.
         Far from the optimum the exact Hessian is indefinite and IPOPT regularises it as a
         whole, crawling; near it the convexified one converges only linearly. Measured on
         problems/beam_tracking_focus.toml (docs/ocp.md): 595 iterations, 60 s, with the
         exact Hessian alone; 80 + 73, 17 s, in two phases.
+    linear_solver : IPOPT's linear solver (:class:`LinearSolver`).
     start : where a cold solve starts without an initial guess (:class:`OcpStart`).
     replay : fly every solve's plan again through the simulator's Φ at full accuracy and
         attach the comparison with the prediction to the result (``OcpResult.replay``,
@@ -178,6 +192,7 @@ class OcpOptions:
     time_limit: float | None = OCP_TIME_LIMIT
     stall_iterations: int | None = OCP_STALL_ITERATIONS
     convex_iterations: int = 80
+    linear_solver: LinearSolver = LinearSolver.MUMPS
     start: OcpStart = OcpStart.FLOWN
     replay: bool = True
 
@@ -194,6 +209,11 @@ class OcpOptions:
         ):
             raise OptionError(
                 f"OcpOptions.time_limit must be a positive number of seconds or None, got {t!r}"
+            )
+        if not isinstance(self.linear_solver, LinearSolver):
+            allowed = [m.value for m in LinearSolver]
+            raise OptionError(
+                f"OcpOptions.linear_solver must be one of {allowed}, got {self.linear_solver!r}"
             )
         if not isinstance(self.start, OcpStart):
             allowed = [m.value for m in OcpStart]

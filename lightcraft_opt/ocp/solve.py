@@ -167,6 +167,7 @@ def _solver_options(
             "tol": opts.tol,
             "constr_viol_tol": opts.tol,
             "bound_relax_factor": 0.0,
+            "linear_solver": opts.linear_solver.value,
         }
         if not exact:
             ipopt["hessian_approximation"] = "limited-memory"
@@ -433,7 +434,7 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._warm_solver: ca.Function | None = None
-        self._convex_solvers: dict[bool, ca.Function] = {}
+        self._convex_solver: ca.Function | None = None
         self._nlp_options = (name, solver_opts, nlp)
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
@@ -537,8 +538,9 @@ class CompiledOcp:
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
         start = time.perf_counter()
-        convex = self._convex_phase(flown) if warm_start is None else None
-        phase = ""
+        convex = self._convex_phase() if warm_start is None and flown else None
+        phase, done = "", 0
+        first = None
         if convex is not None:  # the convexified Hessian first, then the exact one, warm
             first = call_solver(convex, args, self._deadline, until)
             done = int(first.stats.get("iter_count", 0)) if first.stats else 0
@@ -547,10 +549,12 @@ class CompiledOcp:
                 args = {**args, "x0": w1, "lam_x0": l1, "lam_g0": m1}
                 solver = self._warm_started()
             phase = f" (after {done} iterations with the convexified Hessian)"
-        if self.options.solver is OcpSolver.FATROP and until < math.inf and can_fork():
+        if first is not None and (first.stall is not None or first.deadline_reached):
+            call, done, phase = first, 0, " (with the convexified Hessian)"  # ends here
+        elif self.options.solver is OcpSolver.FATROP and until < math.inf and can_fork():
             call = call_forked(solver, args, until - start)
         else:
-            call = call_solver(solver, args, self._deadline, until)
+            call = call_solver(solver, args, self._deadline, until, first_iteration=done)
         solve_time = time.perf_counter() - start
         w, lam_x, lam_g = call.solution or (w0, lam_x0, lam_g0)
         finite = bool(np.all(np.isfinite(w)))
@@ -606,11 +610,11 @@ class CompiledOcp:
             result, iterations=iterations, solve_time=seconds, message=message
         )
 
-    def _convex_phase(self, flown: bool) -> ca.Function | None:
+    def _convex_phase(self) -> ca.Function | None:
         """IPOPT with the convexified Hessian for the first ``OcpOptions.convex_iterations``
-        iterations of a cold solve, to :data:`CONVEX_PHASE_TOL` (None when the options
-        have no such phase: not IPOPT with the chain's exact Hessian, or 0 iterations).
-        Started as a warm start when the start flew. Built once per kind, on first use."""
+        iterations of a cold solve from a start that flew, to :data:`CONVEX_PHASE_TOL`,
+        started as a warm start (None when the options have no such phase: not IPOPT with
+        the chain's exact Hessian, or 0 iterations). Built once, on first use."""
         opts = self.options
         tr = self.transcription
         if (
@@ -620,7 +624,7 @@ class CompiledOcp:
             or tr.convex_hess_lag is None
         ):
             return None
-        if flown not in self._convex_solvers:
+        if self._convex_solver is None:
             name, base, nlp = self._nlp_options
             ipopt = {
                 **base["ipopt"],
@@ -628,15 +632,14 @@ class CompiledOcp:
                 "tol": max(CONVEX_PHASE_TOL, opts.tol),
                 "constr_viol_tol": max(CONVEX_PHASE_TOL, opts.tol),
             }
-            if flown:
-                ipopt.update(_WARM_IPOPT)
-            self._convex_solvers[flown] = ca.nlpsol(
+            ipopt.update(_WARM_IPOPT)
+            self._convex_solver = ca.nlpsol(
                 "ocp_nlp_convex",
                 name,
                 nlp,
                 {**base, "hess_lag": tr.convex_hess_lag, "ipopt": ipopt},
             )
-        return self._convex_solvers[flown]
+        return self._convex_solver
 
     def _warm_started(self) -> ca.Function:
         """The solver for warm starts: IPOPT told to start from the given primal and dual

@@ -154,13 +154,19 @@ class Deadline(ca.Callback):
 
 
 def call_solver(
-    solver: Any, args: dict[str, Any], deadline: Deadline | None, until: float
+    solver: Any,
+    args: dict[str, Any],
+    deadline: Deadline | None,
+    until: float,
+    first_iteration: int = 0,
 ) -> SolverCall:
     """Call ``solver`` (an nlpsol Function) on ``args`` in this process, ``deadline`` (if
     any) armed until ``until`` (a ``time.perf_counter()`` time, +inf for none), with its
-    stall rule (if any)."""
+    stall rule (if any); progress counts iterations from ``first_iteration`` (a solve's
+    second phase goes on counting)."""
     if deadline is not None:
-        deadline.deadline, deadline.reached, deadline.iteration = until, False, 0
+        deadline.deadline, deadline.reached = until, False
+        deadline.iteration = first_iteration
         deadline.armed, deadline.violations, deadline.stall = True, [], None
     try:
         sol = solver(**args)

@@ -8,9 +8,9 @@ References:
 - the NLP's Hessian with the blocks convexified differs from the exact one only by the
   clipped part of Φ's curvature: on the lateral problem with random multipliers, the
   difference is negative semidefinite;
-- the optimum does not depend on the Hessian: the lateral problem solved with the exact
-  Hessian alone, with the convexified one alone and in two phases reaches one cost and
-  one input schedule (only the Newton model differs, never f, g or their derivatives).
+- the two-phase optimum is a KKT point of the exact problem: IPOPT with the exact Hessian,
+  warm-started there, stays; the convexified Hessian alone reaches the same cost (only the
+  Newton model differs, never f, g or their derivatives).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from dataclasses import replace
 import casadi as ca
 import numpy as np
 import pytest
-from ocp.test_chain_derivatives import _lateral
+from ocp.test_chain_derivatives import _focus_free, _lateral
 from ocp.test_ocp import TOL
 
 from lightcraft_opt.errors import OptionError
@@ -75,7 +75,10 @@ def test_the_convexified_hessian_drops_only_negative_curvature():
 
 @pytest.fixture(scope="module")
 def lateral_solves():
-    problem, options = _lateral()
+    """The lateral problem under the waist beam, focus held, pointing steered: the director
+    flies its start, so a cold solve has its convexified first phase."""
+    problem, options = _focus_free()
+    problem = replace(problem, controls=tuple(c for c in problem.controls if c.slot != "focus"))
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
     base = OcpOptions(pulse_map=options, tol=TOL, replay=False, max_iter=1000)
     variants = {
@@ -83,17 +86,34 @@ def lateral_solves():
         "convex": replace(base, hessian=HessianApproximation.CONVEX),
         "two phases": replace(base, convex_iterations=5),
     }
-    return {k: CompiledOcp(problem, o, pulse_map=phi).solve() for k, o in variants.items()}
+    compiled = {k: CompiledOcp(problem, o, pulse_map=phi) for k, o in variants.items()}
+    return compiled, {k: c.solve() for k, c in compiled.items()}
 
 
-@pytest.mark.parametrize("variant", ["convex", "two phases"])
-def test_the_optimum_does_not_depend_on_the_hessian(lateral_solves, variant):
-    exact, other = lateral_solves["exact"], lateral_solves[variant]
-    assert exact.status is OcpStatus.SOLVED and other.status is OcpStatus.SOLVED, other.message
-    assert other.cost == pytest.approx(exact.cost, rel=1e-7)
-    np.testing.assert_allclose(other.u, exact.u, atol=1e-6)
-    if variant == "two phases":
-        assert "iterations with the convexified Hessian" in other.message
+def test_the_two_phase_optimum_is_a_kkt_point_of_the_exact_problem(lateral_solves):
+    """Warm-started at the two-phase optimum, IPOPT with the exact Hessian alone stays: the
+    same cost and inputs within a couple of iterations. The convexified Hessian alone
+    reaches that cost too (linearly, more slowly)."""
+    compiled, results = lateral_solves
+    two = results["two phases"]
+    assert two.status is OcpStatus.SOLVED, two.message
+    assert "after 5 iterations with the convexified Hessian" in two.message
+    again = compiled["exact"].solve(warm_start=two)
+    assert again.status is OcpStatus.SOLVED and again.iterations <= 3
+    assert again.cost == pytest.approx(two.cost, rel=1e-8)
+    np.testing.assert_allclose(again.u, two.u, atol=1e-6)
+    convex = results["convex"]
+    assert convex.status is OcpStatus.SOLVED
+    assert convex.cost == pytest.approx(two.cost, rel=1e-4)
+
+
+def test_from_the_directors_flight_the_exact_hessian_alone_found_a_worse_optimum(lateral_solves):
+    """Not convex: from the director's flight the exact Hessian alone converged to a local
+    optimum of cost 0.387, the two phases to 0.092 (measured 2026-12-03)."""
+    _, results = lateral_solves
+    exact, two = results["exact"], results["two phases"]
+    assert exact.status is OcpStatus.SOLVED
+    assert two.cost < exact.cost
 
 
 def test_the_convexified_hessian_needs_ipopt_and_the_chain():
