@@ -19,13 +19,13 @@ naming the file, the line and the column.
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.files.csv_cells import cell_number
 from lightcraft_opt.files.ocp_outputs import input_columns
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS
 from lightcraft_opt.layout import STATE, VectorLayout
@@ -124,16 +124,5 @@ def _numbers(
     out = np.empty((len(rows), len(cols)))
     for r, row in enumerate(rows):
         for j, (i, name) in enumerate(zip(cols, names, strict=True)):
-            cell = row[i].strip()
-            try:
-                v = float(cell)
-            except ValueError:
-                raise ProblemFileError(
-                    src, f"line {r + 2}, column {name}", f"must be a number, got {cell!r}"
-                ) from None
-            if not math.isfinite(v):
-                raise ProblemFileError(
-                    src, f"line {r + 2}, column {name}", f"must be finite, got {cell!r}"
-                )
-            out[r, j] = v
+            out[r, j] = cell_number(src, r + 2, name, row[i])
     return out

@@ -20,7 +20,6 @@ the file, the line and the column.
 from __future__ import annotations
 
 import csv
-import math
 from decimal import Decimal
 from pathlib import Path
 
@@ -28,6 +27,7 @@ import numpy as np
 
 from lightcraft_opt.calibration.problem import Track
 from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.files.csv_cells import cell_number
 from lightcraft_opt.files.model import QUANTITIES
 
 __all__ = ["TRACK_COLUMNS", "read_track"]
@@ -96,16 +96,7 @@ def read_track(path: str | Path) -> Track:
             continue
         values = []
         for (_, factor, name), f in zip(cols, fields, strict=True):
-            try:
-                v = float(f)
-            except ValueError:
-                raise ProblemFileError(
-                    src, f"line {line}, column {name}", f"must be a number, got {f!r}"
-                ) from None
-            if not math.isfinite(v):
-                raise ProblemFileError(
-                    src, f"line {line}, column {name}", f"must be finite, got {f!r}"
-                )
+            v = cell_number(src, line, name, f)
             values.append(
                 float(Decimal(f) * Decimal(factor)) if isinstance(factor, str) else v * factor
             )

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support.nlp_points import cost_of
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.files.problem import load_problem
@@ -60,16 +61,7 @@ def test_the_plan_flies_in_the_simulator(focus):
 def test_the_optimum_improves_on_the_directors_flight(focus):
     problem, compiled, result = focus
     start = director_start(problem, compiled._flight_map(), problem.x0, problem.p, problem.t0)
-    tr = compiled.transcription
-    P = tr.parameter_vector(
-        problem.x0,
-        problem.p,
-        problem.t0,
-        None,
-        np.where(problem.free, 0.0, problem.lower),
-        problem.reference(),
-    )
-    start_cost = float(np.sum(np.asarray(tr.cost_terms(tr.pack(start.X, start.U, None), P))))
+    start_cost = cost_of(compiled.transcription, problem, start.X, start.U)
     assert result.cost < 0.5 * start_cost
     drift = np.hypot(*result.x[:, :2].T).max()
     assert drift < np.hypot(*start.X[:, :2].T).max()

@@ -29,6 +29,7 @@ import numpy as np
 import pytest
 from ocp.test_ocp import CHEAP_MAP, QUADRATURE, TOL, lateral_problem
 from support.models import table1_flight5
+from support.nlp_points import off_optimum
 from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
@@ -43,12 +44,10 @@ from lightcraft_opt.ocp.problem import (
     TrackReference,
 )
 from lightcraft_opt.ocp.result import OcpStatus
-from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.ocp.transcription import MultipleShooting
+from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import BeamSizeModel, Engine
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
 
 RTOL = 1e-12
 
@@ -101,14 +100,7 @@ def nlp(request):
         "focus_free": _focus_free,
     }[request.param]()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
-    tr = MultipleShooting(problem, phi, derivatives=build_pulse_map_derivatives(phi))
-    X, U = rollout(problem, phi)
-    rng = np.random.default_rng(5)
-    w = tr.pack(X, U, problem.u_previous) * (1 + 1e-3 * rng.normal(size=tr.n_w))
-    u_fixed = np.where(problem.free, 0.0, problem.lower)
-    P = tr.parameter_vector(
-        problem.x0, problem.p, problem.t0, problem.u_previous, u_fixed, problem.reference()
-    )
+    tr, w, P, rng = off_optimum(problem, phi)
     return tr, w, P, 0.7, rng.normal(size=tr.lbg.size)
 
 

@@ -22,15 +22,14 @@ import numpy as np
 import pytest
 from ocp.test_chain_derivatives import _focus_free, _lateral
 from ocp.test_ocp import TOL
+from support.nlp_points import off_optimum
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.ocp.evaluation import ConvexBlocks
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.result import OcpStatus
-from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.ocp.transcription import MultipleShooting
+from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
 
 
 def test_each_block_is_projected_on_the_psd_cone():
@@ -57,14 +56,7 @@ def test_each_block_is_projected_on_the_psd_cone():
 def test_the_convexified_hessian_drops_only_negative_curvature():
     problem, options = _lateral()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
-    tr = MultipleShooting(problem, phi, derivatives=build_pulse_map_derivatives(phi))
-    X, U = rollout(problem, phi)
-    rng = np.random.default_rng(5)
-    w = tr.pack(X, U, problem.u_previous) * (1 + 1e-3 * rng.normal(size=tr.n_w))
-    u_fixed = np.where(problem.free, 0.0, problem.lower)
-    P = tr.parameter_vector(
-        problem.x0, problem.p, problem.t0, problem.u_previous, u_fixed, problem.reference()
-    )
+    tr, w, P, rng = off_optimum(problem, phi)
     lam_g = 10 * rng.normal(size=tr.lbg.size)
     chain = tr.chain_derivatives(upper=False)
     exact = np.asarray(ca.densify(chain["hess_lag"](w, P, 1.0, lam_g)))

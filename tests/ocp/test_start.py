@@ -17,6 +17,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from ocp.test_chain_derivatives import _focus_free, _lateral
+from support.nlp_points import cost_of
 
 from lightcraft_opt.ocp.options import OcpOptions, OcpStart
 from lightcraft_opt.ocp.problem import ControlBound
@@ -79,15 +80,6 @@ def test_a_solve_from_the_directors_flight_improves_on_it(waist):
     assert "started from the director's flight" in flown.message
     assert "director" not in rolled.message
     start = director_start(problem, phi, problem.x0, problem.p, problem.t0)
-    tr = compiled.transcription
-    P = tr.parameter_vector(
-        problem.x0,
-        problem.p,
-        problem.t0,
-        None,
-        np.where(problem.free, 0.0, problem.lower),
-        problem.reference(),
-    )
-    start_cost = float(np.sum(np.asarray(tr.cost_terms(tr.pack(start.X, start.U, None), P))))
+    start_cost = cost_of(compiled.transcription, problem, start.X, start.U)
     assert flown.cost < start_cost
     assert flown.constraint_violation <= TOL and rolled.constraint_violation <= TOL

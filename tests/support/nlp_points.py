@@ -1,0 +1,37 @@
+"""NLP points for derivative checks and costs of starts, shared by the OCP tests."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lightcraft_opt.ocp.problem import OcpProblem
+from lightcraft_opt.ocp.solve import rollout
+from lightcraft_opt.ocp.transcription import MultipleShooting
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+
+
+def parameters(tr: MultipleShooting, problem: OcpProblem) -> np.ndarray:
+    """The NLP's parameter vector of ``problem`` as given (x0, p, t0, held inputs ...)."""
+    u_fixed = np.where(problem.free, 0.0, problem.lower)
+    return tr.parameter_vector(
+        problem.x0, problem.p, problem.t0, problem.u_previous, u_fixed, problem.reference()
+    )
+
+
+def off_optimum(
+    problem: OcpProblem, phi: PulseMap, seed: int = 5
+) -> tuple[MultipleShooting, np.ndarray, np.ndarray, np.random.Generator]:
+    """(transcription with Φ's chain, w: the nominal rollout perturbed by 1e-3 relative,
+    P, the random generator for multipliers)."""
+    tr = MultipleShooting(problem, phi, derivatives=build_pulse_map_derivatives(phi))
+    X, U = rollout(problem, phi)
+    rng = np.random.default_rng(seed)
+    w = tr.pack(X, U, problem.u_previous) * (1 + 1e-3 * rng.normal(size=tr.n_w))
+    return tr, w, parameters(tr, problem), rng
+
+
+def cost_of(tr: MultipleShooting, problem: OcpProblem, X: np.ndarray, U: np.ndarray) -> float:
+    """The objective at states X (N + 1, STATE.size) and inputs U (N, map-input size)."""
+    w = tr.pack(X, U, problem.u_previous)
+    return float(np.sum(np.asarray(tr.cost_terms(w, parameters(tr, problem)))))
