@@ -203,7 +203,7 @@ def _optimize(args: argparse.Namespace) -> int:
         flush=True,
     )
     progress = None if args.verbose else _progress_line(sys.stdout)
-    compiled = CompiledOcp(problem, options, progress=progress)
+    compiled = CompiledOcp(problem, options, progress=progress, build_progress=_build_line)
     limit = "none" if options.time_limit is None else f"{options.time_limit:g} s"
     print(
         f"built in {compiled.build_time:.1f} s; solving (wall-clock limit {limit}) ...",
@@ -243,6 +243,12 @@ def _optimize(args: argparse.Namespace) -> int:
 _ITERATION_LIMIT = (
     "iteration limit ({n}) reached: not converged; run again with a larger --max-iter"
 )
+
+
+def _build_line(message: str) -> None:
+    """The build's progress hook of ``lightcraft optimize``: each slow step of the build
+    (or its load from the cache) on a line of its own, indented under ``building ...``."""
+    print(f"  {message.strip()}", flush=True)
 
 
 #: Iterations between two progress lines when they cannot be rewritten in place.

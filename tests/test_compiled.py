@@ -26,13 +26,17 @@ from support.models import table1_flight5
 
 from lightcraft_opt import compiled
 from lightcraft_opt.compiled import (
+    DERIVATIVES_CACHE,
     CompilationWarning,
     compile_function,
     compile_pulse_map,
     compile_pulse_map_derivatives,
+    derivatives_key,
     library_path,
+    saved_pulse_map_derivatives,
 )
 from lightcraft_opt.files.model import load_model
+from lightcraft_opt.function_cache import CacheWarning, cache_path, load_functions
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine
@@ -375,3 +379,48 @@ def test_cli_without_a_compiler_warns_in_one_line_and_flies(tmp_path):
     assert warning_lines[0].startswith("lightcraft: warning: could not compile")
     assert "/nonexistent/cc" in warning_lines[0]
     assert (out / "summary.json").exists()
+
+
+def test_compiled_chain_derivatives_are_saved_and_loaded_by_structure(small, monkeypatch):
+    """saved_pulse_map_derivatives: the first call compiles (here: reuses the libraries of
+    the test above) and saves the chain's Functions; the next loads them without building
+    anything and gives the same numbers to the last bit. Other numbers through p share the
+    key, other substeps do not; a damaged file is built again with a CacheWarning."""
+    model, phi, _ = small
+    limit = 40_000
+    first = saved_pulse_map_derivatives(phi, max_instructions=limit)
+    key = derivatives_key(phi, limit)
+    assert key is not None and cache_path(DERIVATIVES_CACHE, key).exists()
+    same = table1_flight5(engine=COARSE_OPTIC, mass=0.04, spin=500.0)
+    assert derivatives_key(build_pulse_map(same, SMALL), limit) == key
+    other = build_pulse_map(model, PulseMapOptions(substeps=2, dense=2))
+    assert derivatives_key(other, limit) not in (key, None)
+    assert derivatives_key(phi) != key  # another instruction limit
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("built again instead of loading the saved derivatives")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(compiled, "compile_pulse_map_derivatives", no_build)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CacheWarning)
+            loaded = saved_pulse_map_derivatives(phi, max_instructions=limit)
+    assert loaded.hessian is not None and first.hessian is not None
+    rng = np.random.default_rng(5)
+    x = initial_state(model, r_L=(0.01, -0.02, 4.0), v_L=(0.2, 0.1, 8.0), w_B=(0.0, 2.0, -1.0))
+    u, p = nominal_inputs(model), parameter_values(model)
+    lam_x, lam_e = rng.normal(size=x.size), rng.normal(size=11)
+    for f, g in ((first.jacobian, loaded.jacobian), (first.values, loaded.values)):
+        for a, b in zip(f(x, u, p, 0.4), g(x, u, p, 0.4), strict=True):
+            assert np.array_equal(np.asarray(a), np.asarray(b))
+    hess = (first.hessian(x, u, p, 0.4, lam_x, lam_e), loaded.hessian(x, u, p, 0.4, lam_x, lam_e))
+    assert np.array_equal(*(np.asarray(h) for h in hess))
+
+    path = cache_path(DERIVATIVES_CACHE, key)
+    path.write_bytes(path.read_bytes()[:-100])
+    with pytest.warns(CacheWarning, match="damaged"):
+        rebuilt = saved_pulse_map_derivatives(phi, max_instructions=limit)
+    assert rebuilt.hessian is not None
+    again = rebuilt.hessian(x, u, p, 0.4, lam_x, lam_e)
+    assert np.array_equal(np.asarray(again), np.asarray(hess[0]))
+    assert load_functions(DERIVATIVES_CACHE, key) is not None  # whole again

@@ -33,11 +33,12 @@ import numpy as np
 
 from lightcraft_opt.compiled import (
     compile_by_default,
-    compile_pulse_map_derivatives,
     derivatives_for,
     pulse_map_for,
+    saved_pulse_map_derivatives,
 )
 from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.function_cache import BuildReport
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.options import (
@@ -130,12 +131,15 @@ def _uses_chain(opts: OcpOptions) -> bool:
 
 
 def _solver_options(
-    opts: OcpOptions, tr: MultipleShooting, deadline: Deadline | None
+    opts: OcpOptions,
+    tr: MultipleShooting,
+    deadline: Deadline | None,
+    report: BuildReport | None = None,
 ) -> tuple[str, dict[str, Any], dict[str, ca.MX] | ca.Function]:
     """nlpsol plugin name, options and NLP for ``opts``; ``deadline`` the iteration
     callback that holds IPOPT and sqpmethod to the time limit (fatrop calls none). The NLP
     is the transcription's expressions, or with the chain its Function that evaluates Φ
-    once per point (ocp/evaluation.py)."""
+    once per point (ocp/evaluation.py), whose build ``report`` hears about."""
     quiet = opts.print_level == 0
     # Trial points where Φ is not finite (IPOPT then shortens its step) are not warned about
     # unless the solver is verbose.
@@ -151,7 +155,7 @@ def _solver_options(
     nlp: dict[str, ca.MX] | ca.Function = tr.nlp
     if _uses_chain(opts) and tr.derivatives is not None:
         convex = opts.hessian is HessianApproximation.CONVEX
-        chain = tr.chain_derivatives(upper=True, convex=convex)
+        chain = tr.chain_derivatives(upper=True, convex=convex, report=report)
         nlp = chain.pop("nlp")
         del chain["hess_lag_convex"]  # kept as tr.convex_hess_lag for the convex phase
         # the NLP's Function is not differentiable (Φ's chain gives its derivatives):
@@ -323,6 +327,9 @@ class CompiledOcp:
         so only the first build pays for the exact Hessian.
     progress : called at each iterate of IPOPT or sqpmethod with (iteration from 0,
         objective, largest constraint violation in scaled units); fatrop calls none.
+    build_progress : called with one line of text at each slow step of the build (Φ's
+        derivative pieces built, their libraries compiled k of n, the NLP's derivatives
+        built, or either loaded from the disk cache; docs/ocp.md#the-build-cache).
 
     Attributes
     ----------
@@ -343,6 +350,7 @@ class CompiledOcp:
         *,
         pulse_map: PulseMap | None = None,
         progress: Progress | None = None,
+        build_progress: BuildReport | None = None,
     ) -> None:
         if not isinstance(problem, OcpProblem):
             raise ParameterError("problem", f"must be an OcpProblem, got {problem!r}")
@@ -383,9 +391,9 @@ class CompiledOcp:
         derivatives = None
         if _uses_chain(opts) and self.pulse_map.pieces is not None:
             derivatives = (
-                derivatives_for(problem.model, map_options)
+                derivatives_for(problem.model, map_options, report=build_progress)
                 if pulse_map is None and opts.prediction is PredictionMap.FULL
-                else compile_pulse_map_derivatives(self.pulse_map)
+                else saved_pulse_map_derivatives(self.pulse_map, report=build_progress)
                 if compile_by_default()
                 else build_pulse_map_derivatives(self.pulse_map)
             )
@@ -413,7 +421,7 @@ class CompiledOcp:
             and opts.solver is not OcpSolver.FATROP
             else None
         )
-        name, solver_opts, nlp = _solver_options(opts, tr, self._deadline)
+        name, solver_opts, nlp = _solver_options(opts, tr, self._deadline, build_progress)
         try:
             self.solver = ca.nlpsol("ocp_nlp", name, nlp, solver_opts)
         except RuntimeError as err:

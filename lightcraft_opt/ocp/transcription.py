@@ -47,13 +47,22 @@ The run-time inputs of the NLP, its parameter vector (:attr:`MultipleShooting.pa
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import sys
+import time
+from dataclasses import dataclass, fields
 from typing import assert_never
 
 import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.function_cache import (
+    BuildReport,
+    load_functions,
+    save_functions,
+    source_digest,
+    structure_key,
+)
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.evaluation import ConvexBlocks, SharedEvaluation, horizon_map
@@ -79,7 +88,7 @@ from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_puls
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.pulse_map_derivatives import PulseMapDerivatives
 
-__all__ = ["MultipleShooting", "state_scale"]
+__all__ = ["SURROGATE_CACHE", "MultipleShooting", "Surrogate", "state_scale"]
 
 
 def _reciprocal_entries(problem: OcpProblem, free: np.ndarray) -> np.ndarray:
@@ -140,6 +149,39 @@ class _Stages:
     engine: ca.MX  # (11, N) Φ's engine outputs
     nodes: tuple[ca.MX, ...]  # altitude, drift_L, cos_tilt, energy_fired: (., N + 1)
     pulses: tuple[ca.MX, ...]  # offset_L, capture_use: (., N)
+
+
+@dataclass(frozen=True)
+class Surrogate:
+    """The SX Functions around Φ's shared evaluations in the chain's NLP
+    (:meth:`MultipleShooting.chain_derivatives`), pure structure.
+
+    Attributes
+    ----------
+    outputs_nlp : ``ocp_nlp_of_outputs(w, Y_x, Y_e, P) -> (f, g)``, the NLP with Φ's outputs
+        as symbols.
+    multipliers : ``ocp_output_multipliers(w, Y_x, Y_e, P, lam_f, lam_g) -> (mu_x, mu_e)``,
+        ∂ℓ/∂Y.
+    arguments : ``ocp_pulse_arguments(w, P) -> Z``, Φ's arguments (x_k, u_k) side by side.
+    grad_f, jac_g, hess : the surrogate's ``(w, P, z_bar, x_next_bar, engine_bar, dx_bar,
+        de_bar) -> (f, ∇f)``, ``-> (g, ∂g/∂w)`` and ``(..., hess_bar, lam_f, lam_g) -> H``.
+    """
+
+    outputs_nlp: ca.Function
+    multipliers: ca.Function
+    arguments: ca.Function
+    grad_f: ca.Function
+    jac_g: ca.Function
+    hess: ca.Function
+
+
+#: Name of the cache files of the surrogates (function_cache.py).
+SURROGATE_CACHE = "ocp_surrogate"
+_THIS_MODULE = sys.modules[__name__]
+
+
+def _since(start: float) -> str:
+    return f"{time.perf_counter() - start:.1f} s"
 
 
 class MultipleShooting:
@@ -482,7 +524,11 @@ class MultipleShooting:
         return self.parameters.get("t0", self.P) + ca.DM(self.period * np.arange(N)).T
 
     def chain_derivatives(
-        self, *, upper: bool = True, convex: bool = False
+        self,
+        *,
+        upper: bool = True,
+        convex: bool = False,
+        report: BuildReport | None = None,
     ) -> dict[str, ca.Function]:
         """nlpsol's NLP and derivatives from Φ's explicit chain (module docstring):
         ``nlp(x, p) -> (f, g)`` (pass it to nlpsol in place of :attr:`nlp`), ``grad_f``,
@@ -496,43 +542,122 @@ class MultipleShooting:
         (ocp/evaluation.py): its values by f and g, its values and Jacobians by ∇f, ∂g/∂w
         and the Hessian's multipliers; the chain's Hessian blocks once per iterate. Every
         other piece is an SX Function (the NLP with Φ's outputs as symbols, and the
-        surrogate below), a few microseconds a pulse in casadi's SX machine.
+        surrogate below), a few microseconds a pulse in casadi's SX machine; those are
+        pure structure, kept on disk (:meth:`surrogate`). ``report`` hears which.
         """
         der = self.derivatives
         if der is None or der.hessian is None:
             raise ParameterError(
                 "derivatives", "MultipleShooting needs Φ's chain derivatives with Hessians"
             )
+        N, nx = self.problem.horizon, STATE.size
+        w, P = self.nlp["x"], self.P
+        p = self.parameters.get("p", P)
+        s = self.surrogate(upper=upper, report=report)
+        # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
+        values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, self.threads))
+        jacobians = SharedEvaluation(
+            "ocp_pulse_jacobians", horizon_map(der.jacobian, N, self.threads)
+        )
+        self.shared = (values, jacobians)  # the Callbacks must outlive the solver
+        times = self._pulse_times()
+        z = s.arguments(w, P)
+        nlp = ca.Function(
+            "ocp_nlp",
+            [w, P],
+            s.outputs_nlp(w, *values(z[:nx, :], z[nx:, :], p, times), P),
+            ["x", "p"],
+            ["f", "g"],
+        )
+        point = [z, *jacobians(z[:nx, :], z[nx:, :], p, times)]
+        grad_f = ca.Function(
+            "nlp_grad_f", [w, P], s.grad_f.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
+        )
+        jac_g = ca.Function(
+            "nlp_jac_g", [w, P], s.jac_g.call([w, P, *point]), ["x", "p"], ["g", "jac_g_x"]
+        )
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
+        _, xn, en, _, _ = point
+        mu_x, mu_e = s.multipliers(w, xn, en, P, lam_f, lam_g)
+        hessians = horizon_map(der.hessian, N, self.threads)
+        Hb = hessians(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
+        # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
+        psd = self.convex_blocks = ConvexBlocks("ocp_convex_blocks", der.n_v, N)  # kept alive
+        hess_lag, hess_convex = (
+            ca.Function(
+                name,
+                [w, P, lam_f, lam_g],
+                [s.hess(w, P, *point, blocks, lam_f, lam_g)],
+                ["x", "p", "lam_f", "lam_g"],
+                ["hess_gamma_x_x"],
+            )
+            for name, blocks in (("nlp_hess_l", Hb), ("nlp_hess_l_convex", psd(Hb)))
+        )
+        self.convex_hess_lag = hess_convex
+        return {
+            "nlp": nlp,
+            "grad_f": grad_f,
+            "jac_g": jac_g,
+            "hess_lag": hess_convex if convex else hess_lag,
+            "hess_lag_convex": hess_convex,
+        }
+
+    def surrogate(self, *, upper: bool = True, report: BuildReport | None = None) -> Surrogate:
+        """The SX Functions of :meth:`chain_derivatives` (module docstring), from the disk
+        cache (function_cache.py) when this structure was built before, else built
+        (casadi's AD and expansion: seconds at a hundred pulses) and saved. The key is the
+        graph they are built from: the NLP with Φ's outputs as symbols and Φ's arguments
+        (both before expansion), Φ's sparsity patterns, the sizes, ``upper`` and the
+        source of this module; never run-time values."""
+        der = self.derivatives
+        assert der is not None
         xs, as_, vs, st = self._symbols
         N, nx = self.problem.horizon, STATE.size
         ne = int(der.jacobian.size_out(1)[0])
         nv = der.n_v
         w, P = self.nlp["x"], self.P
-        p = self.parameters.get("p", P)
         # the NLP with Φ's outputs as symbols: ℓ is cheap to differentiate
         Yx, Ye = ca.MX.sym("Y_x", nx, N), ca.MX.sym("Y_e", ne, N)
         sy = self._stages(None, xs, as_, vs, 1, outputs=(Yx, Ye))
         g_y, _, _ = self._constraints(sy)
         terms_y, _ = self._objective(sy)
         f_y = ca.sum1(terms_y)
+        tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y])
+        # Φ's arguments z_k = (x_k, u_k), affine in w
+        Z = ca.vertcat(st.X[:, :N], st.U)
+        z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z])
+        # Φ's structural zeros (casadi's sparsity propagation through Φ), so the NLP's
+        # Jacobian and Hessian keep the sparsity AD would give them
+        jac_sp, hess_sp = self._phi_sparsity(nx, ne, nv)
+        key = structure_key(
+            SURROGATE_CACHE,
+            tilde,
+            z_of,
+            jac_sp,
+            hess_sp,
+            repr((N, nx, ne, nv, upper)),
+            source_digest(_THIS_MODULE),
+        )
+        start = time.perf_counter()
+        loaded = load_functions(SURROGATE_CACHE, key)
+        if loaded is not None and len(loaded) == len(fields(Surrogate)):
+            if report is not None:
+                report(f"the NLP's derivatives: loaded from the cache in {_since(start)}")
+            return Surrogate(*loaded)
+        if report is not None:
+            report(f"building the NLP's derivatives ({N} pulses, {self.n_w} variables) ...")
         lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
         ell_y = lam_f * f_y + ca.dot(lam_g, g_y)
-        tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y]).expand()
-        mu = ca.Function(
+        multipliers = ca.Function(
             "ocp_output_multipliers",
             [w, Yx, Ye, P, lam_f, lam_g],
             [ca.gradient(ell_y, Yx), ca.gradient(ell_y, Ye)],
         ).expand()
-        # Φ's arguments z_k = (x_k, u_k), affine in w
-        Z = ca.vertcat(st.X[:, :N], st.U)
-        z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z]).expand()
+        tilde = tilde.expand()
         # the surrogate at w̄, whose Φ quantities enter as symbols: casadi differentiates it
         # in w without ever differentiating Φ or its chain
         Zb = ca.MX.sym("z_bar", nv, N)
         XN, EN = ca.MX.sym("x_next_bar", nx, N), ca.MX.sym("engine_bar", ne, N)
-        # Φ's structural zeros (casadi's sparsity propagation through Φ), so the NLP's
-        # Jacobian and Hessian keep the sparsity AD would give them
-        jac_sp, hess_sp = self._phi_sparsity(nx, ne, nv)
         pattern = ca.DM(jac_sp, 1)
         DX = ca.MX.sym("dx_bar", ca.repmat(pattern[:nx, :], 1, N).sparsity())
         DE = ca.MX.sym("de_bar", ca.repmat(pattern[nx:, :], 1, N).sparsity())
@@ -550,60 +675,20 @@ class MultipleShooting:
         H = ca.hessian(lam_f * f_lin + ca.dot(lam_g, g_lin) + quad, w)[0]
         H = ca.triu(H) if upper else H
         first = [w, P, Zb, XN, EN, DX, DE]
-        surrogate_grad = ca.Function(
-            "ocp_surrogate_grad_f", first, [f_lin, ca.gradient(f_lin, w)]
-        ).expand()
-        surrogate_jac = ca.Function(
-            "ocp_surrogate_jac_g", first, [g_lin, ca.jacobian(g_lin, w)]
-        ).expand()
-        surrogate_hess = ca.Function("ocp_surrogate_hess", [*first, HB, lam_f, lam_g], [H]).expand()
-
-        # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
-        values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, self.threads))
-        jacobians = SharedEvaluation(
-            "ocp_pulse_jacobians", horizon_map(der.jacobian, N, self.threads)
+        built = Surrogate(
+            outputs_nlp=tilde,
+            multipliers=multipliers,
+            arguments=z_of.expand(),
+            grad_f=ca.Function(
+                "ocp_surrogate_grad_f", first, [f_lin, ca.gradient(f_lin, w)]
+            ).expand(),
+            jac_g=ca.Function(
+                "ocp_surrogate_jac_g", first, [g_lin, ca.jacobian(g_lin, w)]
+            ).expand(),
+            hess=ca.Function("ocp_surrogate_hess", [*first, HB, lam_f, lam_g], [H]).expand(),
         )
-        self.shared = (values, jacobians)  # the Callbacks must outlive the solver
-        times = self._pulse_times()
-        z = z_of(w, P)
-        nlp = ca.Function(
-            "ocp_nlp",
-            [w, P],
-            tilde(w, *values(z[:nx, :], z[nx:, :], p, times), P),
-            ["x", "p"],
-            ["f", "g"],
-        )
-        point = [z, *jacobians(z[:nx, :], z[nx:, :], p, times)]
-        grad_f = ca.Function(
-            "nlp_grad_f", [w, P], surrogate_grad.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
-        )
-        jac_g = ca.Function(
-            "nlp_jac_g", [w, P], surrogate_jac.call([w, P, *point]), ["x", "p"], ["g", "jac_g_x"]
-        )
-        _, xn, en, _, _ = point
-        mu_x, mu_e = mu(w, xn, en, P, lam_f, lam_g)
-        hessians = horizon_map(der.hessian, N, self.threads)
-        Hb = hessians(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
-        # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
-        psd = self.convex_blocks = ConvexBlocks("ocp_convex_blocks", nv, N)  # kept alive
-        hess_lag, hess_convex = (
-            ca.Function(
-                name,
-                [w, P, lam_f, lam_g],
-                [surrogate_hess(w, P, *point, blocks, lam_f, lam_g)],
-                ["x", "p", "lam_f", "lam_g"],
-                ["hess_gamma_x_x"],
-            )
-            for name, blocks in (("nlp_hess_l", Hb), ("nlp_hess_l_convex", psd(Hb)))
-        )
-        self.convex_hess_lag = hess_convex
-        return {
-            "nlp": nlp,
-            "grad_f": grad_f,
-            "jac_g": jac_g,
-            "hess_lag": hess_convex if convex else hess_lag,
-            "hess_lag_convex": hess_convex,
-        }
+        save_functions(SURROGATE_CACHE, key, [getattr(built, f.name) for f in fields(Surrogate)])
+        return built
 
     def _phi_sparsity(self, nx: int, ne: int, nv: int) -> tuple[ca.Sparsity, ca.Sparsity]:
         """Structural patterns of Φ's Jacobian in v = (x, u), (nx + ne, nv), and of the
