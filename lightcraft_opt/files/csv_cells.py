@@ -1,12 +1,27 @@
-"""A number from one cell of a CSV file, or an error that names the file, line and column."""
+"""CSV files read with errors that name the file, line and column: the text, and a number
+from one cell."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from lightcraft_opt.errors import ProblemFileError
 
-__all__ = ["cell_number"]
+__all__ = ["cell_number", "csv_text"]
+
+
+def csv_text(path: str | Path) -> tuple[str, str]:
+    """(the file's name as errors give it, its text); a leading byte-order mark (as a
+    spreadsheet may write) dropped. ProblemFileError when it is missing or unreadable."""
+    file = Path(path)
+    src = str(file)
+    try:
+        return src, file.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise ProblemFileError(src, None, "no such file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ProblemFileError(src, None, f"cannot read the file: {err}") from err
 
 
 def cell_number(src: str, line: int, column: str, cell: str) -> float:

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from lightcraft_opt.errors import ProblemFileError
-from lightcraft_opt.files.csv_cells import cell_number
+from lightcraft_opt.files.csv_cells import cell_number, csv_text
 from lightcraft_opt.files.ocp_outputs import input_columns
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS
 from lightcraft_opt.layout import STATE, VectorLayout
@@ -63,14 +63,7 @@ def read_plan(path: str | Path, inputs: VectorLayout, period: float) -> Plan:
     ProblemFileError
         Naming the file, line and column of the first problem.
     """
-    file = Path(path)
-    src = str(file)
-    try:
-        text = file.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise ProblemFileError(src, None, "no such file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ProblemFileError(src, None, f"cannot read the file: {err}") from err
+    src, text = csv_text(path)
     rows = [r for r in csv.reader(text.splitlines()) if r]
     wanted = input_columns(inputs)
     if not rows:

@@ -27,7 +27,7 @@ import numpy as np
 
 from lightcraft_opt.calibration.problem import Track
 from lightcraft_opt.errors import ProblemFileError
-from lightcraft_opt.files.csv_cells import cell_number
+from lightcraft_opt.files.csv_cells import cell_number, csv_text
 from lightcraft_opt.files.model import QUANTITIES
 
 __all__ = ["TRACK_COLUMNS", "read_track"]
@@ -69,14 +69,7 @@ def read_track(path: str | Path) -> Track:
     ProblemFileError
         Naming the file, line and column of the first problem.
     """
-    file = Path(path)
-    src = str(file)
-    try:
-        text = file.read_text(encoding="utf-8-sig")  # a spreadsheet may open with a BOM
-    except FileNotFoundError:
-        raise ProblemFileError(src, None, "no such file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ProblemFileError(src, None, f"cannot read the file: {err}") from err
+    src, text = csv_text(path)
     rows = list(csv.reader(line for line in text.splitlines() if not line.lstrip().startswith("#")))
     rows = [r for r in rows if r]
     if not rows:
