@@ -99,10 +99,6 @@ class SharedEvaluation(ca.Callback):
             self._memory.popitem(last=False)
         return out
 
-    def forget(self) -> None:
-        """Drop the remembered points (the counts stay)."""
-        self._memory.clear()
-
 
 class ConvexBlocks(ca.Callback):
     """``convex_blocks(H) -> H_plus``: each (n, n) block of H (n, n N), side by side, made

@@ -229,6 +229,7 @@ class MultipleShooting:
         self.problem, self.period = problem, phi.period
         self.derivatives, self.threads = derivatives, threads
         self.convex_hess_lag: ca.Function | None = None  # set by chain_derivatives
+        self.shared: tuple[SharedEvaluation, ...] = ()  # likewise: Φ's shared evaluations
         self._phi = phi
         N, nu = problem.horizon, problem.inputs.size
         free = np.flatnonzero(problem.free)
@@ -312,8 +313,7 @@ class MultipleShooting:
         U = ca.repmat(held, 1, N) + ca.mtimes(ca.DM(select), V_map)
         if outputs is None:
             assert phi is not None
-            step = phi.step.map(N, "thread", threads) if threads > 1 else phi.step.map(N)
-            x_next, engine = step(X[:, :N], U, p, self._pulse_times())
+            x_next, engine = horizon_map(phi.step, N, threads)(X[:, :N], U, p, self._pulse_times())
         else:
             x_next, engine = outputs
         nodes = tuple(build_node_measures().map(N + 1)(X, p))
@@ -381,7 +381,9 @@ class MultipleShooting:
                 first = ConstraintRow("initial_memory", "pulse 0", unit=SCALED)
                 if self.coupled and has_previous:
                     u_prev = self.parameters.get("u_previous", P)[self.free.tolist()]
-                    u_prev = ca.if_else(ca.DM(self.reciprocal.astype(float)), 1 / u_prev, u_prev)
+                    u_prev = ca.vertcat(
+                        *(1 / u_prev[i] if r else u_prev[i] for i, r in enumerate(self.reciprocal))
+                    )
                     add(st.as_[0] - u_prev / su, 0.0, 0.0, first)
                 elif self.coupled:
                     add(st.as_[0] - st.vs[0], 0.0, 0.0, first)  # no previous input: no slew at 0
