@@ -27,11 +27,12 @@
 # while the craft stays as close as it can to the pad's vertical.
 #
 # The optimal control problem is multiple shooting over pulses with the pulse map Φ as the
-# dynamics (one node per pulse), solved by IPOPT; the wind is ramped from calm in continuation
-# steps (12 for the climb, about 7 min on a 2-core machine). By default the notebook runs its
-# quick size: it solves the climb's launch second, `problems/crosswind_launch.toml` (30 pulses,
-# 3 wind steps, about 15 s): the same craft, wind, objective and constraints.
-# `LIGHTCRAFT_FULL=1` in the environment solves the whole climb.
+# dynamics (one node per pulse), solved by IPOPT from the nominal flight in calm air (the
+# nominal flight in the wind leaves the beam; docs/ocp.md#where-a-solve-starts), no wind ramp:
+# about 10 s for the climb on a 2-core machine. By default the notebook runs its quick size: it
+# solves the climb's launch second, `problems/crosswind_launch.toml` (30 pulses, under a
+# second): the same craft, wind, objective and constraints. `LIGHTCRAFT_FULL=1` in the
+# environment solves the whole climb.
 
 # %%
 import os
@@ -60,7 +61,7 @@ print(loaded.title)
 print(f"horizon {problem.horizon} pulses, {problem.horizon * problem.period:.2f} s")
 print("objective:", [type(t).__name__ for t in problem.objective])
 print("constraints:", [type(c).__name__ for c in problem.constraints])
-print("solver:", options.solver.value, "| wind ramp:", options.wind_ramp, "steps")
+print("solver:", options.solver.value, "| start:", options.start.value)
 
 # %% [markdown]
 # ## Solve

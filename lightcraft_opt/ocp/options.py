@@ -52,9 +52,11 @@ class LinearSolver(Enum):
 class OcpStart(Enum):
     """Where a cold solve starts without an initial guess (ocp/start.py).
 
-    ``FLOWN``: a closed-loop flight of the problem's own map and inputs, the director's
-    where it applies (the beam's pointing free, the waist beam), else the nominal rollout.
-    ``ROLLOUT``: the nominal rollout always (the beam under the craft, the flight's energy).
+    ``FLOWN``: a flight of the problem's own map and inputs, the director's where it
+    applies (the beam's pointing free, the waist beam), else the nominal rollout, in calm
+    air where the problem's wind blows it out of the beam.
+    ``ROLLOUT``: the nominal rollout in the problem's wind always (the beam under the
+    craft, the flight's energy).
     """
 
     FLOWN = "flown"
@@ -160,12 +162,13 @@ class OcpOptions:
         fallen by 10 % over the last W iterations, with status ``INFEASIBLE`` and the
         constraint that cannot be met in the message (ocp/result.py). fatrop calls no
         iteration callback: the rule never stops it.
-    convex_iterations : with IPOPT and the chain's exact Hessian, a cold solve from a start
-        that flew (``start``) first runs up to this many iterations with the convexified
-        Hessian (``CONVEX``) to a tolerance of 1e-3, then goes on with the exact Hessian
-        from there, warm, for up to ``max_iter`` more (0: none). From the nominal rollout
-        it does not help (problem (a) without a ramp fails either way; an infeasible
-        problem wanders further before the stall rule stops it), so none there.
+    convex_iterations : with IPOPT and the chain's exact Hessian, a cold solve from the
+        director's flight (``start``) first runs up to this many iterations with the
+        convexified Hessian (``CONVEX``) to a tolerance of 1e-3, then goes on with the exact
+        Hessian from there, warm, for up to ``max_iter`` more (0: none). From the nominal
+        rollout or the calm flight it does not help (problem (a) from the calm flight: 143
+        iterations, 12.7 s, against 97 and 8.2 s with the exact Hessian alone; an
+        infeasible problem wanders further before the stall rule stops it), so none there.
         Far from the optimum the exact Hessian is indefinite and IPOPT regularises it as a
         whole, crawling; near it the convexified one converges only linearly. Measured on
         problems/beam_tracking_focus.toml (docs/ocp.md): 595 iterations, 60 s, with the

@@ -7,10 +7,10 @@ start times, previous inputs and references: the parametric solve of MPC
 (docs/architecture.md#rule-2). Its :attr:`CompiledOcp.function` is the same solve as one
 casadi.Function.
 
-The initial guess, unless given, rolls Φ forward from x0 under a nominal policy: the
-flight's pulse energy, focus at the far end, the beam axis under the craft's mass centre,
-RCS and motor off, moved at most by the slew limits and clipped to the bounds (held
-inputs at their values).
+The cold start, unless given, is a flight of the problem's own map (ocp/start.py): the
+director's where it applies, else the nominal policy rolled forward from x0 (the beam
+under the craft, the flight's pulse energy), in calm air where the problem's wind blows it
+out of the beam.
 A failed or infeasible solve returns an :class:`~lightcraft_opt.ocp.result.OcpResult`
 with a readable status and the solver's last iterate; so does a solve stopped by its
 wall-clock limit (``OcpOptions.time_limit``, ocp/time_limit.py) or by the stall rule
@@ -51,7 +51,15 @@ from lightcraft_opt.ocp.options import (
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
-from lightcraft_opt.ocp.start import Start, StartKind, director_applies, director_start
+from lightcraft_opt.ocp.start import (
+    Start,
+    StartKind,
+    director_applies,
+    director_start,
+    nominal_start,
+    rollout,
+    wind_scaled,
+)
 from lightcraft_opt.ocp.time_limit import (
     Deadline,
     Progress,
@@ -70,55 +78,6 @@ __all__ = ["CompiledOcp", "rollout", "solve"]
 
 #: QP solver of each SQP choice.
 _QP = {OcpSolver.SQP_QRQP: "qrqp", OcpSolver.SQP_HPIPM: "hpipm", OcpSolver.SQP_OSQP: "osqp"}
-
-
-def rollout(
-    problem: OcpProblem,
-    phi: PulseMap,
-    u: np.ndarray | None = None,
-    *,
-    x0: np.ndarray | None = None,
-    p: np.ndarray | None = None,
-    t0: float | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """States at the nodes when Φ is rolled forward from x0.
-
-    Parameters
-    ----------
-    problem : gives the bounds, the nominal input and the defaults of x0, p, t0.
-    phi : the pulse map.
-    u : (N, map-input size) inputs; None for the nominal policy (module docstring).
-    x0, p, t0 : (STATE.size,) initial state, (PARAMETERS.size,) parameters, first pulse
-        time [s], if not the problem's.
-
-    Returns
-    -------
-    X : (N + 1, STATE.size) states at the nodes; once Φ returns a non-finite state (e.g.
-        a craft far outside its model) the last finite one is held.
-    U : (N, map-input size) the inputs applied.
-    """
-    N, lay = problem.horizon, problem.inputs
-    x_start = problem.x0 if x0 is None else x0
-    pv = problem.p if p is None else p
-    t_start = problem.t0 if t0 is None else t0
-    nominal = problem.nominal_input()
-    pointing = lay.index("pointing_L")
-    X, U = [np.asarray(x_start, dtype=float)], []
-    u_last = cast("np.ndarray | None", problem.u_previous)
-    for k in range(N):
-        if u is None:
-            uk = nominal.copy()
-            uk[pointing] = STATE.get("r_L", X[-1])[:2]
-            if u_last is not None:
-                uk = np.clip(uk, u_last - problem.slew, u_last + problem.slew)
-            uk = np.clip(uk, problem.lower, problem.upper)
-            u_last = uk
-        else:
-            uk = u[k]
-        x_next = np.asarray(phi.step(X[-1], uk, pv, t_start + k * phi.period)[0]).ravel()
-        X.append(x_next if np.all(np.isfinite(x_next)) else X[-1])
-        U.append(uk)
-    return np.array(X), np.array(U).reshape(N, lay.size)
 
 
 def _uses_chain(opts: OcpOptions) -> bool:
@@ -227,19 +186,6 @@ def _solver_options(
         },
         nlp,
     )
-
-
-#: Parameter slots that OcpOptions.wind_ramp scales (speeds; directions and profiles stay).
-_WIND_SPEEDS = ("wind_speed_ref", "gust_L")
-
-
-def _wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
-    """(PARAMETERS.size,) ``p`` with the wind's reference speed and gust scaled by
-    ``factor``."""
-    out = np.array(p, dtype=float)
-    for name in _WIND_SPEEDS:
-        out[PARAMETERS.index(name)] *= factor
-    return out
 
 
 #: IPOPT started at a given point as from a warm start: small barrier, bounds barely pushed.
@@ -505,7 +451,7 @@ class CompiledOcp:
         limit = self.options.time_limit
         until = math.inf if limit is None else time.perf_counter() + limit
         ramped = warm_start is None and initial_guess is None and self.options.wind_ramp
-        if ramped and not np.array_equal(_wind_scaled(pv, 0.0), pv):
+        if ramped and not np.array_equal(wind_scaled(pv, 0.0), pv):
             result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
         else:
             result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
@@ -546,7 +492,8 @@ class CompiledOcp:
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
         start = time.perf_counter()
-        convex = self._convex_phase() if warm_start is None and flown else None
+        director = cold is not None and cold.kind is StartKind.DIRECTOR
+        convex = self._convex_phase() if director else None
         phase, done = "", 0
         first = None
         if convex is not None:  # the convexified Hessian first, then the exact one, warm
@@ -605,7 +552,7 @@ class CompiledOcp:
         result: OcpResult | None = None
         iterations, seconds, steps = 0, 0.0, []
         for i in range(n + 1):
-            pi = _wind_scaled(p, i / n)
+            pi = wind_scaled(p, i / n)
             result = self._solve_once(x0, pi, t0, u_previous, reference, None, result, until)
             iterations += result.iterations
             seconds += result.solve_time
@@ -668,14 +615,18 @@ class CompiledOcp:
         t0: float,
         guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
     ) -> Start:
-        """The cold start (ocp/start.py): the caller's guess, else the director's flight
-        where it applies and ``OcpOptions.start`` is "flown", else the nominal rollout."""
+        """The cold start (ocp/start.py): the caller's guess, else with ``OcpOptions.start``
+        "flown" the director's flight where it applies, else the nominal rollout (in calm
+        air if the problem's wind blows it out of the beam); with "rollout" the nominal
+        rollout in the problem's wind."""
         if (
             guess is None
             and self.options.start is OcpStart.FLOWN
             and director_applies(self.problem)
         ):
             return director_start(self.problem, self._flight_map(), x0, p, t0)
+        if guess is None and self.options.start is OcpStart.FLOWN:
+            return nominal_start(self.problem, self.pulse_map, x0, p, t0)
         began = time.perf_counter()
         X, U = self._guess(x0, p, t0, guess)
         kind = StartKind.ROLLOUT if guess is None else StartKind.GIVEN

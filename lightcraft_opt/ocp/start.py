@@ -10,16 +10,22 @@ gaps, so the solver begins on the dynamics' manifold and only has to improve it:
   holds at its value, every free one clipped to its bounds and slew limits; the RCS off
   (held at the problem's values). Under the linear beam model the director loses Flight 5
   above 30 m (docs/director.md), so it does not apply there.
-- **the nominal rollout** otherwise (solve.rollout): the beam under the craft, the
-  flight's pulse energy, rolled forward through Φ.
+- **the nominal rollout** otherwise (:func:`rollout`): the beam under the craft, the
+  flight's pulse energy, rolled forward through Φ in the problem's wind.
+- **the nominal rollout in calm air**, where the problem's wind blows the nominal rollout
+  out of the beam (the optic catches no light, so Φ has no gradient to follow back). The
+  calm flight's gaps are closed in calm air; in the problem's wind each node's gap is what
+  the wind does over one pulse (in problem (a)'s 3 m/s crosswind, climbing: up to 1 cm
+  and 0.5 m/s, where the whole flight drifts metres), so it is near-feasible.
 
-Each comes back as a :class:`Start` that says which it is and how it flew (status, the
-highest altitude, the largest drift from the pad), for the result's message. A start that
-flew (``Start.flown``) is handed to IPOPT as a near-feasible point: its barrier parameter
-starts small and the bounds push it barely (CompiledOcp), since IPOPT's default first
-iterations (barrier 0.1, bounds pushed 1 %) throw such a start away (measured on
-problems/beam_tracking_focus.toml: the violation rose from 0.05 to 25 in one step and the
-solve never recovered; docs/ocp.md).
+Each comes back as a :class:`Start` that says which it is and how it flew (the highest
+altitude, the largest drift from the pad), for the result's message. A near-feasible start
+(``Start.flown``: the director's or the calm flight) is handed to IPOPT as a warm start:
+its barrier parameter starts small and the bounds push it barely (CompiledOcp), since
+IPOPT's default first iterations (barrier 0.1, bounds pushed 1 %) throw such a start away
+(measured on problems/beam_tracking_focus.toml: the violation rose from 0.05 to 25 in one
+step and the solve never recovered; on problems/crosswind_climb.toml from the calm flight:
+273 iterations, 23.5 s, against 97 and 8.2 s; docs/ocp.md).
 """
 
 from __future__ import annotations
@@ -27,15 +33,24 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from enum import Enum
+from typing import cast
 
 import numpy as np
 
-from lightcraft_opt.layout import STATE
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.params import BeamSizeModel
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 
-__all__ = ["Start", "StartKind", "director_applies", "director_start"]
+__all__ = [
+    "Start",
+    "StartKind",
+    "director_applies",
+    "director_start",
+    "nominal_start",
+    "rollout",
+    "wind_scaled",
+]
 
 
 class StartKind(Enum):
@@ -43,6 +58,7 @@ class StartKind(Enum):
 
     DIRECTOR = "director"  # the director's closed-loop flight through Φ
     ROLLOUT = "rollout"  # the nominal policy rolled through Φ
+    CALM = "calm"  # the nominal policy rolled through Φ in calm air
     GIVEN = "given"  # the caller's initial guess
 
 
@@ -65,17 +81,27 @@ class Start:
 
     @property
     def flown(self) -> bool:
-        """Whether the nodes are a closed-loop flight (gaps closed, inputs allowed)."""
-        return self.kind is StartKind.DIRECTOR
+        """Whether the nodes are a flight that stayed in the beam under inputs the problem
+        allows, near-feasible: the director's, or the nominal one in calm air (module
+        docstring)."""
+        return self.kind in (StartKind.DIRECTOR, StartKind.CALM)
 
     def describe(self) -> str:
         """One line: how it was made and how it flew (altitude, drift from the pad)."""
         r = self.X[:, STATE.index("r_L")]
         drift = float(np.max(np.hypot(r[:, 0], r[:, 1])))
         return (
-            f"started from the {self.kind.value}'s flight: highest {float(r[:, 2].max()):.1f} m, "
+            f"started from {_FLIGHT_NAMES[self.kind]}: highest {float(r[:, 2].max()):.1f} m, "
             f"drift at most {100 * drift:.1f} cm ({self.seconds:.1f} s)"
         )
+
+
+_FLIGHT_NAMES = {
+    StartKind.DIRECTOR: "the director's flight",
+    StartKind.ROLLOUT: "the nominal rollout",
+    StartKind.CALM: "the nominal flight in calm air",
+    StartKind.GIVEN: "the given guess",
+}
 
 
 def director_applies(problem: OcpProblem) -> bool:
@@ -137,3 +163,115 @@ def director_start(
         np.array(U).reshape(N, lay.size),
         time.perf_counter() - start,
     )
+
+
+def nominal_start(
+    problem: OcpProblem, phi: PulseMap, x0: np.ndarray, p: np.ndarray, t0: float
+) -> Start:
+    """The nominal rollout of ``problem`` through ``phi``, in the problem's wind if it stays
+    in the beam there, else in calm air (module docstring).
+
+    Parameters
+    ----------
+    problem, phi : as for :func:`director_start`.
+    x0 : (STATE.size,) state at the first pulse; p : (PARAMETERS.size,) parameters;
+        t0 : first pulse time [s].
+    """
+    began = time.perf_counter()
+    X, U, offsets = _rolled(problem, phi, None, x0, p, t0)
+    calm = wind_scaled(p, 0.0)
+    radius = problem.model.craft.engine.capture_radius
+    if np.array_equal(calm, p) or float(np.max(offsets, initial=0.0)) <= radius:
+        return Start(StartKind.ROLLOUT, X, U, time.perf_counter() - began)
+    X, U, _ = _rolled(problem, phi, None, x0, calm, t0)
+    return Start(StartKind.CALM, X, U, time.perf_counter() - began)
+
+
+def rollout(
+    problem: OcpProblem,
+    phi: PulseMap,
+    u: np.ndarray | None = None,
+    *,
+    x0: np.ndarray | None = None,
+    p: np.ndarray | None = None,
+    t0: float | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """States at the nodes when Φ is rolled forward from x0.
+
+    The nominal policy: the flight's pulse energy, focus at the far end, the beam axis under
+    the craft's mass centre (pointing_L = the craft's east and north position, L), RCS and
+    motor off, moved at most by the slew limits and clipped to the bounds (held inputs at
+    their values).
+
+    Parameters
+    ----------
+    problem : gives the bounds, the nominal input and the defaults of x0, p, t0.
+    phi : the pulse map.
+    u : (N, map-input size) inputs; None for the nominal policy.
+    x0, p, t0 : (STATE.size,) initial state, (PARAMETERS.size,) parameters, first pulse
+        time [s], if not the problem's.
+
+    Returns
+    -------
+    X : (N + 1, STATE.size) states at the nodes; once Φ returns a non-finite state (e.g.
+        a craft far outside its model) the last finite one is held.
+    U : (N, map-input size) the inputs applied.
+    """
+    x_start = problem.x0 if x0 is None else x0
+    X, U, _ = _rolled(
+        problem,
+        phi,
+        u,
+        np.asarray(x_start, dtype=float),
+        problem.p if p is None else p,
+        problem.t0 if t0 is None else t0,
+    )
+    return X, U
+
+
+def _rolled(
+    problem: OcpProblem,
+    phi: PulseMap,
+    u: np.ndarray | None,
+    x0: np.ndarray,
+    p: np.ndarray,
+    t0: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`rollout`'s X and U, and (N,) the beam axis's distance from the optic's
+    centre at each pulse [m] (inf where Φ returned a non-finite state)."""
+    N, lay = problem.horizon, problem.inputs
+    nominal = problem.nominal_input()
+    pointing = lay.index("pointing_L")
+    X, U, offsets = [np.asarray(x0, dtype=float)], [], []
+    u_last = cast("np.ndarray | None", problem.u_previous)
+    for k in range(N):
+        if u is None:
+            uk = nominal.copy()
+            uk[pointing] = STATE.get("r_L", X[-1])[:2]
+            if u_last is not None:
+                uk = np.clip(uk, u_last - problem.slew, u_last + problem.slew)
+            uk = np.clip(uk, problem.lower, problem.upper)
+            u_last = uk
+        else:
+            uk = u[k]
+        x_next, engine = (
+            np.asarray(v, dtype=float).ravel() for v in phi.step(X[-1], uk, p, t0 + k * phi.period)
+        )
+        finite = bool(np.all(np.isfinite(x_next)))
+        X.append(x_next if finite else X[-1])
+        U.append(uk)
+        offsets.append(float(np.hypot(*ENGINE.get("offset_L", engine))) if finite else np.inf)
+    return np.array(X), np.array(U).reshape(N, lay.size), np.array(offsets)
+
+
+#: Parameter slots that OcpOptions.wind_ramp scales (speeds; directions and profiles stay).
+_WIND_SPEEDS = ("wind_speed_ref", "gust_L")
+
+
+def wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
+    """(PARAMETERS.size,) ``p`` with the wind's reference speed and gust (L) scaled by
+    ``factor``."""
+    out = np.array(p, dtype=float)
+    for name in _WIND_SPEEDS:
+        out[PARAMETERS.index(name)] *= factor
+    return out

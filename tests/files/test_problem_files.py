@@ -405,7 +405,7 @@ def test_the_ready_problems_load_as_their_comments_say() -> None:
     each with the numbers its header states."""
     root = REPO_ROOT / "problems"
     a = load_problem(root / "crosswind_climb.toml")
-    assert a.problem.horizon == 130 and a.options.wind_ramp == 12
+    assert a.problem.horizon == 130 and a.options.wind_ramp == 0
     assert PARAMETERS.get("wind_speed_ref", a.problem.p) == pytest.approx(3.0)
     assert PARAMETERS.get("wind_direction_from", a.problem.p) == pytest.approx(math.pi / 2)
     b = load_problem(root / "least_energy_flight16.toml")

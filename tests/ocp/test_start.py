@@ -1,4 +1,5 @@
-"""Cold starts (ocp/start.py): the director's closed-loop flight where it applies.
+"""Cold starts (ocp/start.py): the director's closed-loop flight where it applies, the
+nominal flight in calm air where the problem's wind blows the nominal rollout out of the beam.
 
 References:
 
@@ -18,12 +19,23 @@ import numpy as np
 import pytest
 from ocp.test_chain_derivatives import _focus_free, _lateral
 from support.nlp_points import cost_of
+from support.paths import REPO_ROOT
 
+from lightcraft_opt.files.problem import load_problem
+from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.ocp.options import OcpOptions, OcpStart
 from lightcraft_opt.ocp.problem import ControlBound
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.ocp.start import StartKind, director_applies, director_start
+from lightcraft_opt.ocp.start import (
+    StartKind,
+    director_applies,
+    director_start,
+    nominal_start,
+    wind_scaled,
+)
+from lightcraft_opt.simulation.result import SimulationStatus
+from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map
 
 TOL = 1e-8
@@ -83,3 +95,50 @@ def test_a_solve_from_the_directors_flight_improves_on_it(waist):
     start_cost = cost_of(compiled.transcription, problem, start.X, start.U)
     assert flown.cost < start_cost
     assert flown.constraint_violation <= TOL and rolled.constraint_violation <= TOL
+
+
+@pytest.fixture(scope="module")
+def crosswind_launch():
+    loaded = load_problem(REPO_ROOT / "problems" / "crosswind_launch.toml")
+    problem = loaded.problem
+    return problem, build_pulse_map(
+        problem.model, problem.pulse_map_options(loaded.options.pulse_map)
+    )
+
+
+def test_a_wind_that_blows_the_rollout_out_of_the_beam_starts_from_calm_air(crosswind_launch):
+    """Problem (a)'s launch second: the nominal rollout in 3 m/s leaves the beam (its offset
+    passes the optic's capture radius), so the start is the nominal flight in calm air: the
+    same loop rolled with the wind's speeds zeroed, every gap closed in calm air, and a
+    near-feasible start (IPOPT started warm)."""
+    problem, phi = crosswind_launch
+    windy = simulate(
+        problem.model,
+        problem.horizon * phi.period,
+        inputs=rollout(problem, phi)[1],
+        p=problem.p,
+        pulse_map=phi,
+    )
+    assert windy.status is SimulationStatus.LEFT_BEAM
+    start = nominal_start(problem, phi, problem.x0, problem.p, problem.t0)
+    assert start.kind is StartKind.CALM and start.flown
+    calm = wind_scaled(problem.p, 0.0)
+    assert (
+        PARAMETERS.get("wind_speed_ref", calm) == 0.0 != PARAMETERS.get("wind_speed_ref", problem.p)
+    )
+    X, U = rollout(problem, phi, p=calm)
+    np.testing.assert_array_equal(start.X, X)
+    np.testing.assert_array_equal(start.U, U)
+    X_again, _ = rollout(problem, phi, start.U, p=calm)
+    np.testing.assert_allclose(start.X, X_again, rtol=0, atol=1e-12)
+    assert "nominal flight in calm air" in start.describe()
+
+
+def test_in_calm_air_the_start_is_the_nominal_rollout(crosswind_launch):
+    problem, phi = crosswind_launch
+    calm = wind_scaled(problem.p, 0.0)
+    start = nominal_start(problem, phi, problem.x0, calm, problem.t0)
+    assert start.kind is StartKind.ROLLOUT and not start.flown
+    X, U = rollout(problem, phi, p=calm)
+    np.testing.assert_array_equal(start.X, X)
+    np.testing.assert_array_equal(start.U, U)
