@@ -514,9 +514,7 @@ def nominal_inputs(model: Model, layout: VectorLayout | None = None) -> np.ndarr
     the laser's range, the flight's pulse energy, RCS and motor off. ``layout``: the map
     input layout (a pulse map's ``inputs``); default the model's with held RCS levels."""
     craft = model.craft
-    lay = layout or map_input_layout(
-        len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
-    )
+    lay = layout or map_input_layout(craft.thruster_count, craft.has_carrier)
     values: dict[str, object] = {
         "pointing_L": (0.0, 0.0),
         "focus": model.laser.focus_range[1],

@@ -97,7 +97,7 @@ def build_pulse_map_pieces(model: Model, options: PulseMapOptions) -> PulseMapPi
     """The sub-Functions of Φ for ``model`` and ``options`` (structure fixed here, numbers
     through p). The caller checks that the options suit the craft (pulse_map.py)."""
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     period = 1.0 / model.flight.pulse_rate
     h = period / options.substeps
     wlay = substep_input_layout(n_thr, craft.has_carrier, options.rcs_profile)

@@ -205,7 +205,7 @@ def build_reduced_map(model: Model, options: ReducedMapOptions | None = None) ->
     """Build Ψ for ``model`` (module docstring; structure fixed here, numbers through p)."""
     opts = options or ReducedMapOptions()
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     ulay = map_input_layout(n_thr, craft.has_carrier, RcsProfile.HOLD)
     wlay = input_layout(n_thr, craft.has_carrier)
     period = 1.0 / model.flight.pulse_rate
@@ -305,7 +305,7 @@ def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) ->
     psi = build_reduced_map(model, options)
     opts = psi.options
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     wlay = input_layout(n_thr, craft.has_carrier)
     x = ca.SX.sym("x", STATE.size)
     p = ca.SX.sym("p", PARAMETERS.size)
