@@ -37,19 +37,26 @@ from lightcraft_opt.options import RcsProfile
 __all__ = [
     "B123",
     "CONING",
+    "EAST_NORTH",
     "ENGINE",
     "ENU",
     "ERROR_STATE",
     "PARAMETERS",
     "PULSE_INPUT",
+    "REDUCED_STATE",
     "STATE",
     "input_layout",
     "map_input_layout",
     "rcs_levels",
+    "substep_input_layout",
 ]
 
+#: Components of an L vector (docs/frames.md): east, north, up.
 ENU = ("east", "north", "up")
+#: Components of a B vector: along the craft's axis b1, and across it, b2 and b3.
 B123 = ("b1", "b2", "b3")
+#: The horizontal components of an L vector.
+EAST_NORTH = ENU[:2]
 
 STATE = VectorLayout(
     "state",
@@ -82,6 +89,25 @@ ERROR_STATE = VectorLayout(
     ],
 )
 
+#: The state z of the coning-aware reduced map Ψ (14 entries; symbolic/reduced_map.py,
+#: docs/beam_riding.md#reduced-map): the mass centre's position and velocity, the system
+#: angular momentum H_L about the mass centre (its direction the cone's mean axis), the
+#: coning offset: b1's components across Ĥ along e1, e2 of the frame T_H = [e1 e2 Ĥ] (L's
+#: east and north turned by the smallest rotation that takes up onto Ĥ), and Φ's
+#: bookkeeping.
+REDUCED_STATE = VectorLayout(
+    "reduced state",
+    [
+        ("r_L", 3, "m", "L", ENU),
+        ("v_L", 3, "m/s", "L", ENU),
+        ("H_L", 3, "kg m^2/s", "L", ENU),
+        ("coning", 2, "-", "T_H", ("e1", "e2")),
+        ("liner_mass", 1, "kg", "", ()),
+        ("rcs_mass", 1, "kg", "", ()),
+        ("pulses", 1, "-", "", ()),
+    ],
+)
+
 #: Coning coordinates z of the nutation controllers (symbolic/coning_coordinates.py,
 #: docs/frames.md): lateral position and velocity and the tilt of H in the yaw-aligned
 #: frame Y, and the coning vector c_B (transverse over axial angular momentum, in B).
@@ -102,7 +128,7 @@ ENGINE = VectorLayout(
         ("energy_captured", 1, "J", "", ()),
         ("impulse_B", 3, "N s", "B", B123),
         ("angular_impulse_B", 3, "N m s", "B", B123),
-        ("offset_L", 2, "m", "L", ("east", "north")),
+        ("offset_L", 2, "m", "L", EAST_NORTH),
         ("liner_loss", 1, "kg", "", ()),
         ("health", 1, "-", "", ()),
     ],
@@ -112,7 +138,7 @@ ENGINE = VectorLayout(
 PULSE_INPUT = VectorLayout(
     "pulse input",
     [
-        ("pointing_L", 2, "m", "L", ("east", "north")),
+        ("pointing_L", 2, "m", "L", EAST_NORTH),
         ("focus", 1, "m", "L", ()),
         ("energy", 1, "J", "", ()),
     ],
@@ -202,6 +228,28 @@ def input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:
     if has_carrier:
         spec.append(("motor_torque", 1, "N m", "B", ()))
     return VectorLayout("input", spec)
+
+
+def substep_input_layout(n_thrusters: int, has_carrier: bool, profile: RcsProfile) -> VectorLayout:
+    """Inputs w of Φ's coast substep (symbolic/pulse_map_pieces.py) by RCS profile.
+
+    HOLD and SUBINTERVALS: the continuous inputs (:func:`input_layout`: the thrust levels of
+    the substep's sub-interval [N], the motor torque [N m]). PHASE_LOCKED: the mean, cosine
+    and sine amplitudes ``rcs_thrust``, ``rcs_cos``, ``rcs_sin`` (n each) [N], the motor
+    torque [N m], the coning rate ω [rad/s, B] and the pulse time t_k [s] (the phase is
+    ω (t - t_k)).
+    """
+    if profile is not RcsProfile.PHASE_LOCKED:
+        return input_layout(n_thrusters, has_carrier)
+    spec: list[tuple[str, int, str, str, tuple[str, ...]]] = [
+        ("rcs_thrust", n_thrusters, "N", "", ()),
+        ("rcs_cos", n_thrusters, "N", "", ()),
+        ("rcs_sin", n_thrusters, "N", "", ()),
+    ]
+    if has_carrier:
+        spec.append(("motor_torque", 1, "N m", "B", ()))
+    spec += [("coning_rate", 1, "rad/s", "B", ()), ("pulse_time", 1, "s", "", ())]
+    return VectorLayout("substep input", spec)
 
 
 PARAMETERS = VectorLayout(
