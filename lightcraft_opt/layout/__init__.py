@@ -13,7 +13,16 @@ Import from here: ``from lightcraft_opt.layout import STATE, initial_state``. La
 import defaults, and neither imports casadi (pyproject.toml, ``[tool.importlinter]``).
 """
 
-from lightcraft_opt.layout.controllers import CONING_ERROR_STATE, coning_input_layout
+from lightcraft_opt.layout.controllers import (
+    CONING_ERROR_STATE,
+    DIRECTOR_DISTURBANCE,
+    DIRECTOR_INPUT,
+    DIRECTOR_OUTPUT,
+    DIRECTOR_STAGE,
+    DIRECTOR_STATE,
+    DIRECTOR_TERMINAL_OUTPUT,
+    coning_input_layout,
+)
 from lightcraft_opt.layout.defaults import (
     initial_state,
     nominal_inputs,
@@ -43,6 +52,12 @@ __all__ = [
     "B123",
     "CONING",
     "CONING_ERROR_STATE",
+    "DIRECTOR_DISTURBANCE",
+    "DIRECTOR_INPUT",
+    "DIRECTOR_OUTPUT",
+    "DIRECTOR_STAGE",
+    "DIRECTOR_STATE",
+    "DIRECTOR_TERMINAL_OUTPUT",
     "EAST_NORTH",
     "ENGINE",
     "ENU",
