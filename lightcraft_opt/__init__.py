@@ -47,6 +47,7 @@ from lightcraft_opt.layout import (
     CONING,
     ENGINE,
     PARAMETERS,
+    REDUCED_STATE,
     STATE,
     initial_state,
     nominal_inputs,
@@ -67,12 +68,7 @@ from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOption
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.simulation import SimulationResult, SimulationStatus, simulate
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
-from lightcraft_opt.symbolic.reduced_map import (
-    REDUCED_STATE,
-    ReducedMap,
-    ReducedMapOptions,
-    build_reduced_map,
-)
+from lightcraft_opt.symbolic.reduced_map import ReducedMap, ReducedMapOptions, build_reduced_map
 
 if TYPE_CHECKING:
     from lightcraft_opt import linearize

@@ -179,8 +179,7 @@ _INITIAL_FLAGS = (
 
 def _input_layout(model: Model) -> VectorLayout:
     """The map-input layout of ``model``'s Φ with held RCS levels (the simulator's)."""
-    rcs = model.craft.rcs
-    return map_input_layout(len(rcs.thrusters) if rcs else 0, model.craft.has_carrier)
+    return map_input_layout(model.craft.thruster_count, model.craft.has_carrier)
 
 
 def _optimize(args: argparse.Namespace) -> int:

@@ -588,6 +588,11 @@ class Craft:
         """True for a gyrostat with a despun carrier; False for the spinning body flown."""
         return self.carrier is not None
 
+    @property
+    def thruster_count(self) -> int:
+        """RCS thrusters of the craft (0 without an RCS): the n of the RCS input slots."""
+        return len(self.rcs.thrusters) if self.rcs else 0
+
 
 # --------------------------------------------------------------------------- laser, site, world
 class BeamSizeModel(Enum):

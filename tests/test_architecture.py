@@ -76,6 +76,13 @@ def test_import_contracts_kept() -> None:
         ("ocp/problem.py", "import lightcraft_opt.ocp.transcription\n", "ocp/: the what"),
         ("control/result.py", "import lightcraft_opt.control.mpc\n", "control/: options and"),
         ("ocp/result.py", "import casadi\n", "numpy-only: no casadi"),
+        ("layout/defaults.py", "import casadi\n", "The vocabulary (errors, params"),
+        (
+            "layout/vectors.py",
+            "from lightcraft_opt.layout.defaults import initial_state\n",
+            "layout/: the layouts never import",
+        ),
+        ("layout/vector_layout.py", "import lightcraft_opt.params\n", "A layout knows no model"),
     ],
 )
 def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, broken: str) -> None:

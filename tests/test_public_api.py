@@ -19,6 +19,7 @@ PACKAGES = [
     "lightcraft_opt.calibration",
     "lightcraft_opt.campaign",
     "lightcraft_opt.files",
+    "lightcraft_opt.layout",
 ]
 #: Exported names that are packages on purpose.
 PACKAGE_NAMES = {"lightcraft_opt": {"control", "linearize"}}

@@ -52,13 +52,7 @@ if TYPE_CHECKING:
     from lightcraft_opt.control.director import DirectorController
     from lightcraft_opt.control.mpc import MpcController
     from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
-    from lightcraft_opt.control.prediction_model import (
-        CONING_INPUTS,
-        CONING_STATES,
-        ConingModel,
-        coning_model,
-        turn,
-    )
+    from lightcraft_opt.control.prediction_model import ConingModel, coning_model, turn
 
 #: The controllers and the MPC load on first use: their prediction model linearises Φ
 #: through linearize/, which imports python-control (~2 s); a file reader that needs only
@@ -82,7 +76,7 @@ _LAZY = {
     "NutationQp": "mpc_qp",
     "QpStatus": "mpc_qp",
     **dict.fromkeys(
-        ("CONING_INPUTS", "CONING_STATES", "ConingModel", "coning_model", "turn"),
+        ("ConingModel", "coning_model", "turn"),
         "prediction_model",
     ),
 }
@@ -98,8 +92,6 @@ def __getattr__(name: str) -> Any:
 
 
 __all__ = [
-    "CONING_INPUTS",
-    "CONING_STATES",
     "ClosedLoopOptions",
     "ClosedLoopResult",
     "ConingModel",

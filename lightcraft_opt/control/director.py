@@ -57,12 +57,25 @@ from lightcraft_opt.compiled import reduced_derivatives_for
 from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.director_qp import DirectorQp, DirectorSolution
 from lightcraft_opt.control.mpc_qp import QpStatus
-from lightcraft_opt.control.options import ControllerFault, DirectorOptions, MpcSolver
+from lightcraft_opt.control.options import (
+    ControllerFault,
+    DirectorOptions,
+    DirectorWeights,
+    MpcSolver,
+)
 from lightcraft_opt.control.rcs_allocation import TorqueAllocation
 from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
+    B123,
+    DIRECTOR_DISTURBANCE,
+    DIRECTOR_INPUT,
+    DIRECTOR_OUTPUT,
+    DIRECTOR_STAGE,
+    DIRECTOR_STATE,
+    DIRECTOR_TERMINAL_OUTPUT,
     PULSE_INPUT,
+    REDUCED_STATE,
     STATE,
     VectorLayout,
     initial_state,
@@ -71,22 +84,42 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.linearize.beam_riding import FocusSchedule, scheduled_focus
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.reduced_map import REDUCED_STATE, build_reduced_map
+from lightcraft_opt.symbolic.reduced_map import build_reduced_map
 
 __all__ = ["DirectorController", "director_model"]
 
-_R = REDUCED_STATE.index("r_L")
-_V = REDUCED_STATE.index("v_L")
+
+def _east_north(layout: VectorLayout, name: str) -> slice:
+    """The east and north entries of the L-frame slot ``name`` of ``layout``."""
+    s = layout.slot(name)
+    return slice(s.start + s.components.index("east"), s.start + s.components.index("north") + 1)
+
+
+def _up(layout: VectorLayout, name: str) -> int:
+    """The up entry of the L-frame slot ``name`` of ``layout``."""
+    s = layout.slot(name)
+    return s.start + s.components.index("up")
+
+
+# Ψ's state z (REDUCED_STATE): where the craft is [m], how fast [m/s], its angular momentum
+# [kg m²/s], L frame.
+_R_EN, _V_EN, _H_EN = (_east_north(REDUCED_STATE, n) for n in ("r_L", "v_L", "H_L"))
+_R_UP, _V_UP = _up(REDUCED_STATE, "r_L"), _up(REDUCED_STATE, "v_L")
 _H = REDUCED_STATE.index("H_L")
-_C = REDUCED_STATE.index("coning")
-#: The QP's inputs: pointing_L east, north [m], vergence κ [1/m], energy [J], the RCS's held
-#: transverse torque along b2, b3 [N m] (bounded to zero without ``rcs = "tilt"``).
-NU = 6
-#: The QP's states: r_L, v_L, H_L and the coning offset (the first 11 of Ψ's 14). The mass
-#: bookkeeping (liner, RCS propellant, pulse count) is no decision: it follows Ψ's own
-#: prediction, and leaving it out of the QP makes each Riccati step (cubic in the states)
-#: about half as dear.
-NQ = 11
+# z holds the QP's states (DIRECTOR_STATE, its head: tests/control/test_director.py) and
+# then the bookkeeping, which follows Ψ's own prediction.
+_QP_STATE = slice(0, DIRECTOR_STATE.size)
+_BOOKKEEPING = slice(DIRECTOR_STATE.size, REDUCED_STATE.size)
+# the QP's input v (DIRECTOR_INPUT)
+_POINTING = DIRECTOR_INPUT.index("pointing_L")
+_VERGENCE = DIRECTOR_INPUT.slot("vergence").start
+_ENERGY = DIRECTOR_INPUT.slot("energy").start
+_TORQUE = DIRECTOR_INPUT.index("torque_B")
+_TORQUE_SLOT = DIRECTOR_INPUT.slot("torque_B")
+# the B axes the torque is about (b2, b3): columns of R_LB
+_TORQUE_AXES = slice(
+    B123.index(_TORQUE_SLOT.components[0]), B123.index(_TORQUE_SLOT.components[-1]) + 1
+)
 
 
 def director_model(model: Model, options: DirectorOptions) -> Model:
@@ -98,29 +131,93 @@ def director_model(model: Model, options: DirectorOptions) -> Model:
     return replace(model, craft=replace(model.craft, engine=coarse))
 
 
-def _outputs(nominal_h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(C_z (16, nz), C_u (16, NU), C_terminal (8, nz)): the objective's outputs, linear in
-    z and the QP's inputs (rows: offset 2, drift 2, velocity 2, coning 2, tilt 2, pointing 2,
-    vergence, energy, torque 2)."""
-    nz = REDUCED_STATE.size
-    Cz, Cu = np.zeros((16, nz)), np.zeros((16, NU))
-    for k in range(2):
-        Cz[k, _R.start + k], Cu[k, k] = 1.0, -1.0  # offset r - pointing
-        Cz[2 + k, _R.start + k] = 1.0  # drift
-        Cz[4 + k, _V.start + k] = 1.0  # lateral velocity
-        Cz[6 + k, _C.start + k] = 1.0  # coning
-        Cz[8 + k, _H.start + k] = 1.0 / nominal_h  # tilt of H
-        Cu[10 + k, k] = 1.0  # pointing
-    Cu[12, 2] = 1.0
-    Cu[13, 3] = 1.0
-    Cu[14, 4] = Cu[15, 5] = 1.0
-    Ct = np.zeros((8, nz))
-    for k in range(2):
-        Ct[k, _R.start + k] = 1.0  # offset and drift at the end: the craft's position
-        Ct[2 + k, _V.start + k] = 1.0
-        Ct[4 + k, _C.start + k] = 1.0
-        Ct[6 + k, _H.start + k] = 1.0 / nominal_h
-    return Cz, Cu, Ct
+def _read(C: np.ndarray, rows: slice, columns: slice, gain: float = 1.0) -> None:
+    """Output rows ``rows`` of C read the entries ``columns``, one each, times ``gain``."""
+    for row, column in zip(
+        range(rows.start, rows.stop), range(columns.start, columns.stop), strict=True
+    ):
+        C[row, column] = gain
+
+
+def _outputs(nominal_h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(C (DIRECTOR_OUTPUT.size, DIRECTOR_STAGE.size), C_terminal
+    (DIRECTOR_TERMINAL_OUTPUT.size, DIRECTOR_STATE.size)): the objective's outputs, linear
+    in a stage's variables [z; v] and in the last state; ``nominal_h`` [kg m²/s] the
+    launch's |H|, which turns H_L into the tilt."""
+    out, stage = DIRECTOR_OUTPUT, DIRECTOR_STAGE
+    C = np.zeros((out.size, stage.size))
+    _read(C, out.index("offset_L"), _east_north(stage, "r_L"))  # r - pointing
+    _read(C, out.index("offset_L"), stage.index("pointing_L"), -1.0)
+    _read(C, out.index("drift_L"), _east_north(stage, "r_L"))
+    _read(C, out.index("velocity_L"), _east_north(stage, "v_L"))
+    _read(C, out.index("coning"), stage.index("coning"))
+    _read(C, out.index("tilt_L"), _east_north(stage, "H_L"), 1.0 / nominal_h)
+    for name in DIRECTOR_INPUT.names:
+        _read(C, out.index(name), stage.index(name))
+    end, state = DIRECTOR_TERMINAL_OUTPUT, DIRECTOR_STATE
+    Ct = np.zeros((end.size, state.size))
+    _read(Ct, end.index("drift_L"), _east_north(state, "r_L"))  # the craft's position
+    _read(Ct, end.index("velocity_L"), _east_north(state, "v_L"))
+    _read(Ct, end.index("coning"), state.index("coning"))
+    _read(Ct, end.index("tilt_L"), _east_north(state, "H_L"), 1.0 / nominal_h)
+    return C, Ct
+
+
+def _per_entry(layout: VectorLayout, values: dict[str, float]) -> np.ndarray:
+    """(layout.size,) each slot's value in ``values`` on each of its entries."""
+    return np.concatenate([np.full(s.size, values[s.name], dtype=float) for s in layout.slots])
+
+
+def _weights(w: DirectorWeights) -> tuple[np.ndarray, np.ndarray]:
+    """(W (DIRECTOR_OUTPUT.size,), W_terminal (DIRECTOR_TERMINAL_OUTPUT.size,)): the weight
+    of each output (:class:`DirectorWeights`); at the end the drift carries the offset's
+    weight too (no pointing there)."""
+    stage = {
+        "offset_L": w.offset,
+        "drift_L": w.drift,
+        "velocity_L": w.velocity,
+        "coning": w.coning,
+        "tilt_L": w.tilt,
+        "pointing_L": w.pointing,
+        "vergence": w.vergence,
+        "energy": w.energy,
+        "torque_B": w.torque,
+    }
+    end = {
+        "drift_L": w.offset + w.drift,
+        "velocity_L": w.velocity,
+        "coning": w.coning,
+        "tilt_L": w.tilt,
+    }
+    return _per_entry(DIRECTOR_OUTPUT, stage), w.terminal * _per_entry(
+        DIRECTOR_TERMINAL_OUTPUT, end
+    )
+
+
+def _qp_input(
+    pointing_L: np.ndarray | float,
+    vergence: np.ndarray | float,
+    energy: np.ndarray | float,
+    torque_B: np.ndarray | float,
+) -> np.ndarray:
+    """A QP input v (DIRECTOR_INPUT) from its parts: pointing_L [m] (L east, north), the
+    vergence κ [1/m], the energy [J], the torque [N m] (B: b2, b3). Unchecked: a measured
+    state may be non-finite."""
+    v = np.empty(DIRECTOR_INPUT.size)
+    v[_POINTING] = pointing_L
+    v[_VERGENCE] = vergence
+    v[_ENERGY] = energy
+    v[_TORQUE] = torque_B
+    return v
+
+
+def _with_pulse(u: np.ndarray, layout: VectorLayout, v: np.ndarray) -> np.ndarray:
+    """``u``, a map input laid out as ``layout``, with its pulse set from the QP input v: the
+    pointing, the focus 1/κ, the energy."""
+    u[layout.index("pointing_L")] = v[_POINTING]
+    u[layout.slot("focus").start] = 1.0 / v[_VERGENCE]
+    u[layout.slot("energy").start] = v[_ENERGY]
+    return u
 
 
 class DirectorController:
@@ -139,10 +236,10 @@ class DirectorController:
     Attributes
     ----------
     last : :class:`StepStats` of the latest step.
-    plan : (z (N + 1, 14), u (N, 6)) the latest plan (QP inputs: pointing, κ, energy,
-        torque).
-    disturbance : (4,) the learnt increments a pulse of the lateral velocity [m/s] and of
-        the lateral angular momentum [kg m²/s], L east/north.
+    plan : (z (N + 1, REDUCED_STATE.size), v (N, DIRECTOR_INPUT.size)) the latest plan
+        (QP inputs: pointing, κ, energy, torque).
+    disturbance : (DIRECTOR_DISTURBANCE.size,) the learnt increments a pulse of the lateral
+        velocity [m/s] and of the lateral angular momentum [kg m²/s], L east/north.
     build_time : [s].
     """
 
@@ -167,6 +264,7 @@ class DirectorController:
         self.p = parameter_values(self.model) if p is None else np.asarray(p, dtype=float)
         self.nutation = nutation
         psi = build_reduced_map(self.model)
+        self._psi_inputs = psi.inputs
         self._project = psi.project
         self.period = psi.period
         d = reduced_derivatives_for(self.model, psi.options, compiled=compiled)
@@ -184,35 +282,23 @@ class DirectorController:
             TorqueAllocation(model) if model.craft.rcs is not None and opts.rcs == "tilt" else None
         )
         # the torque in B (b2, b3), inside the thrusters' box along the two axes
-        tau = np.zeros(2) if self.allocation is None else self.allocation.axis_limit
+        tau = np.zeros(_TORQUE_SLOT.size) if self.allocation is None else self.allocation.axis_limit
         lim = laser.pointing_limit
         e_high = min(high * self.energy, laser.pulse_energy_max)
-        self.u_lower = np.array([-lim, -lim, 1 / laser.focus_range[1], low * self.energy, *-tau])
-        self.u_upper = np.array([lim, lim, 1 / laser.focus_range[0], e_high, *tau])
+        self.u_lower = _qp_input(-lim, 1 / laser.focus_range[1], low * self.energy, -tau)
+        self.u_upper = _qp_input(lim, 1 / laser.focus_range[0], e_high, tau)
         self._B_torque = self._torque_columns(np.eye(3))
         z_nom = np.asarray(self._project(initial_state(model), self.p)).ravel()
         self._h_nominal = float(np.linalg.norm(z_nom[_H]))
         w = opts.weights
-        Cz, Cu, Ct = _outputs(self._h_nominal)
-        W = np.array(
-            [w.offset] * 2
-            + [w.drift] * 2
-            + [w.velocity] * 2
-            + [w.coning] * 2
-            + [w.tilt] * 2
-            + [w.pointing] * 2
-            + [w.vergence, w.energy]
-            + [w.torque] * 2
-        )
-        Wt = w.terminal * np.array(
-            [w.offset + w.drift] * 2 + [w.velocity] * 2 + [w.coning] * 2 + [w.tilt] * 2
-        )
-        C = np.hstack([Cz[:, :NQ], Cu])
-        Ct = Ct[:, :NQ]
+        C, Ct = _outputs(self._h_nominal)
+        W, Wt = _weights(w)
         self._C, self._W, self._Ct, self._Wt = C, W, Ct, Wt
         H_stage = 2 * C.T @ (W[:, None] * C)
-        H_stage[NQ : NQ + 2, NQ : NQ + 2] += 2 * w.move * np.eye(2)  # proximal, no gradient
-        H_stage[NQ + 2, NQ + 2] += 2 * w.move_vergence
+        move = DIRECTOR_STAGE.slot("pointing_L")  # proximal terms, no gradient
+        H_stage[move.start : move.stop, move.start : move.stop] += 2 * w.move * np.eye(move.size)
+        move_vergence = DIRECTOR_STAGE.slot("vergence").start
+        H_stage[move_vergence, move_vergence] += 2 * w.move_vergence
         self.qp = DirectorQp(
             H_stage,
             2 * Ct.T @ (Wt[:, None] * Ct),
@@ -224,7 +310,7 @@ class DirectorController:
         self._u_full = nominal_inputs(self.model, psi.inputs)
         self._u_plant = nominal_inputs(model, inputs)
         n_pulse = PULSE_INPUT.size
-        if inputs.names[:3] != ("pointing_L", "focus", "energy") or inputs.size < n_pulse:
+        if inputs.names[: len(PULSE_INPUT.names)] != PULSE_INPUT.names or inputs.size < n_pulse:
             raise ParameterError(
                 "inputs", "must start with the pulse input (pointing, focus, energy)"
             )
@@ -240,7 +326,7 @@ class DirectorController:
         self._start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self._age = 0
         self._turn = 0
-        self.disturbance = np.zeros(4)
+        self.disturbance = np.zeros(DIRECTOR_DISTURBANCE.size)
         self.last = StepStats(ControllerStatus.SOLVED)
         if self.nutation is not None:
             self.nutation.reset()
@@ -265,8 +351,8 @@ class DirectorController:
         )
         if sol.status is QpStatus.SOLVED and not late:
             planned = Z.copy()
-            planned[:, :NQ] += sol.dz
-            planned[1:, NQ:] = bookkeeping  # Ψ's own prediction of the masses
+            planned[:, _QP_STATE] += sol.dz
+            planned[1:, _BOOKKEEPING] = bookkeeping  # Ψ's own prediction of the masses
             self.plan = (planned, U + sol.du)
             self._start = self.qp.shifted(sol) if opts.warm_start else None
             self._age = 0
@@ -290,16 +376,17 @@ class DirectorController:
 
     # ----------------------------------------------------------------- the iteration
     def _trajectory(self, z0: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """(Z (N + 1, nz), U (N, NU)): the previous plan shifted, z̄_0 the measurement; or,
-        without a plan, the rollout of the schedule's input with the beam on the craft."""
+        """(Z (N + 1, REDUCED_STATE.size), U (N, DIRECTOR_INPUT.size)): the previous plan
+        shifted, z̄_0 the measurement; or, without a plan, the rollout of the schedule's input
+        with the beam on the craft."""
         N = self.options.horizon
         if self.plan is None or self._A is None:
             Z, U = np.zeros((N + 1, z0.size)), np.tile(self._beam_on_craft(z0), (N, 1))
             Z[0] = z0
             self._A = np.zeros((N, z0.size, z0.size))
-            self._B = np.zeros((N, z0.size, NU))
+            self._B = np.zeros((N, z0.size, DIRECTOR_INPUT.size))
             for j in range(N):
-                U[j, 2] = self._vergence(Z[j, _R][2])
+                U[j, _VERGENCE] = self._vergence(Z[j, _R_UP])
                 z_next, _, A, B = self._stage(Z[j], self._full(U[j]), self.p, t + j * self.period)
                 Z[j + 1] = np.asarray(z_next).ravel()
                 self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
@@ -310,11 +397,12 @@ class DirectorController:
         gain = self.options.disturbance_gain
         # a pulse the laser dropped shows as a climb short by a pulse's kick: it is no
         # disturbance to learn (the prediction assumed the pulse fired)
-        dropped = z0[_V][2] - zp[1, _V][2] < -0.5 * self._kick
+        dropped = z0[_V_UP] - zp[1, _V_UP] < -0.5 * self._kick
         if gain and self._age == 0 and not dropped:
-            miss_v = z0[_V][:2] - zp[1, _V][:2]
-            miss_h = z0[_H][:2] - zp[1, _H][:2]
-            self.disturbance = self.disturbance + gain * np.r_[miss_v, miss_h]
+            miss = np.empty(DIRECTOR_DISTURBANCE.size)
+            miss[DIRECTOR_DISTURBANCE.index("v_L")] = z0[_V_EN] - zp[1, _V_EN]
+            miss[DIRECTOR_DISTURBANCE.index("H_L")] = z0[_H_EN] - zp[1, _H_EN]
+            self.disturbance = self.disturbance + gain * miss
         Z = np.vstack([z0, zp[2:], 2 * zp[-1] - zp[-2]])
         self._shift_jacobians()
         return Z, _shifted(up)
@@ -323,13 +411,13 @@ class DirectorController:
         self, Z: np.ndarray, U: np.ndarray, t: float, fault: ControllerFault | None
     ) -> tuple[DirectorSolution, np.ndarray]:
         """One QP about the trajectory (Z, U) from pulse time ``t`` [s]; also Ψ's prediction
-        (N, 3) of the mass bookkeeping along it, which the QP does not carry."""
+        (N, bookkeeping) of the mass bookkeeping along it, which the QP does not carry."""
         N = self.options.horizon
         assert self._A is not None and self._B is not None
         times = t + self.period * np.arange(N)
         full = np.array([self._full(u) for u in U])
         Zn, _ = self._values(Z[:N].T, full.T, self.p, times)
-        Zn = np.asarray(Zn).T + U[:, 4:] @ self._B_torque.T
+        Zn = np.asarray(Zn).T + U[:, _TORQUE] @ self._B_torque.T
         refresh = {0, N - 1}
         others = N - 2
         for _ in range(max(0, min(self.options.relinearize, N) - len(refresh))):
@@ -339,30 +427,31 @@ class DirectorController:
             _, _, A, B = self._stage(Z[j], full[j], self.p, times[j])
             self._A[j], self._B[j] = np.asarray(A), self._qp_columns(np.asarray(B), U[j])
         d = Zn - Z[1:]
-        d[:, _V.start : _V.start + 2] += self.disturbance[:2]
-        d[:, _R.start : _R.start + 2] += 0.5 * self.period * self.disturbance[:2]
-        d[:, _H.start : _H.start + 2] += self.disturbance[2:]
+        dv = DIRECTOR_DISTURBANCE.get("v_L", self.disturbance)
+        d[:, _V_EN] += dv
+        d[:, _R_EN] += 0.5 * self.period * dv
+        d[:, _H_EN] += DIRECTOR_DISTURBANCE.get("H_L", self.disturbance)
         # Gauss-Newton gradients: 2 C'W (C x̄ - y_ref)
-        X = np.hstack([Z[:N, :NQ], U])
-        ref = np.zeros((N, 16))
-        ref[:, 12] = self._vergence(Z[:N, _R.start + 2])
-        ref[:, 13] = self.energy
+        X = np.hstack([Z[:N, _QP_STATE], U])
+        ref = np.zeros((N, DIRECTOR_OUTPUT.size))
+        ref[:, DIRECTOR_OUTPUT.slot("vergence").start] = self._vergence(Z[:N, _R_UP])
+        ref[:, DIRECTOR_OUTPUT.slot("energy").start] = self.energy
         res = X @ self._C.T - ref
         g_stage = 2 * (res * self._W) @ self._C
-        g_term = 2 * ((self._Ct @ Z[N, :NQ]) * self._Wt) @ self._Ct
+        g_term = 2 * ((self._Ct @ Z[N, _QP_STATE]) * self._Wt) @ self._Ct
         g = np.concatenate([g_stage.ravel(), g_term])
         sol = self.qp.solve(
-            self._A[:, :NQ, :NQ],
-            self._B[:, :NQ],
-            d[:, :NQ],
+            self._A[:, _QP_STATE, _QP_STATE],
+            self._B[:, _QP_STATE],
+            d[:, _QP_STATE],
             g,
-            np.zeros(NQ),
+            np.zeros(DIRECTOR_STATE.size),
             self.u_lower - U,
             self.u_upper - U,
             self._start,
             fault,
         )
-        return sol, Zn[:, NQ:]
+        return sol, Zn[:, _BOOKKEEPING]
 
     # ----------------------------------------------------------------- helpers
     def _vergence(self, altitude: float | np.ndarray) -> float | np.ndarray:
@@ -391,36 +480,37 @@ class DirectorController:
 
     def _full(self, v: np.ndarray) -> np.ndarray:
         """Ψ's map input of the QP's input v (pointing, κ, energy): focus 1/κ, RCS off."""
-        u = self._u_full.copy()
-        u[0:2] = v[0:2]
-        u[2] = 1.0 / v[2]
-        u[3] = v[3]
-        return u
+        return _with_pulse(self._u_full.copy(), self._psi_inputs, v)
 
     def _qp_columns(self, B: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Ψ's input Jacobian in the QP's inputs: ∂/∂κ = -f² ∂/∂f at f = 1/κ."""
-        f = 1.0 / v[2]
-        return np.column_stack([B[:, 0], B[:, 1], -(f**2) * B[:, 2], B[:, 3], self._B_torque])
+        """(nz, DIRECTOR_INPUT.size) Ψ's input Jacobian ``B`` (columns: Ψ's map input) in the
+        QP's inputs v: ∂/∂κ = -f² ∂/∂f at f = 1/κ; the torque's columns
+        :meth:`_torque_columns`."""
+        lay = self._psi_inputs
+        f = 1.0 / v[_VERGENCE]
+        out = np.empty((B.shape[0], DIRECTOR_INPUT.size))
+        out[:, _POINTING] = B[:, lay.index("pointing_L")]
+        out[:, _VERGENCE] = -(f**2) * B[:, lay.slot("focus").start]
+        out[:, _ENERGY] = B[:, lay.slot("energy").start]
+        out[:, _TORQUE] = self._B_torque
+        return out
 
     def _torque_columns(self, R_LB: np.ndarray) -> np.ndarray:
-        """(nz, 2) Ψ's response to the QP's torque (b2, b3) [N m] held over a pulse, with B at
+        """(nz, 2) Ψ's response to the QP's torque_B (b2, b3) [N m] held over a pulse, with B at
         R_LB: H_L gains T (b2, b3 in L) τ (first order: the torque tips H within the
         interval, the thrust's direction follows from the next pulse on). B's slow twist
         about b1 over the horizon is neglected: it is measured again every pulse."""
-        out = np.zeros((REDUCED_STATE.size, 2))
-        out[_H] = self.period * R_LB[:, 1:3]
+        out = np.zeros((REDUCED_STATE.size, _TORQUE_SLOT.size))
+        out[_H] = self.period * R_LB[:, _TORQUE_AXES]
         return out
 
     def _map_input(self, v: np.ndarray) -> np.ndarray:
         """The plant's map input of the QP input v, inside the laser's ranges; the torque
         (B frame) allocated to held thrusts."""
         v = np.clip(v, self.u_lower, self.u_upper)
-        u = self._u_plant.copy()
-        u[0:2] = v[0:2]
-        u[2] = 1.0 / v[2]
-        u[3] = v[3]
+        u = _with_pulse(self._u_plant.copy(), self.inputs, v)
         if self.allocation is not None:
-            u[self.inputs.index("rcs_thrust")] = self.allocation.thrusts(v[4:6])
+            u[self.inputs.index("rcs_thrust")] = self.allocation.thrusts(v[_TORQUE])
         return u
 
     def _fallback(self, z0: np.ndarray) -> np.ndarray:
@@ -439,16 +529,12 @@ class DirectorController:
     def _beam_on_craft(self, z: np.ndarray) -> np.ndarray:
         """The QP input with no plan: the beam on the craft at ``z`` (inside the reach), the
         schedule's focus at its height, the flight's energy, no torque."""
-        r = z[_R]
-        energy = np.clip(self.energy, self.u_lower[3], self.u_upper[3])
-        return np.array(
-            [
-                *np.clip(r[:2], self.u_lower[:2], self.u_upper[:2]),
-                self._vergence(r[2]),
-                energy,
-                0,
-                0,
-            ]
+        lower, upper = self.u_lower, self.u_upper
+        return _qp_input(
+            pointing_L=np.clip(z[_R_EN], lower[_POINTING], upper[_POINTING]),
+            vergence=self._vergence(z[_R_UP]),
+            energy=np.clip(self.energy, lower[_ENERGY], upper[_ENERGY]),
+            torque_B=0.0,
         )
 
     def _shift_jacobians(self) -> None:

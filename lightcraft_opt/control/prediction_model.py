@@ -2,15 +2,18 @@
 model of the nutation MPC and of its LQR baseline.
 
 Coordinates: z = (r_Y, v_Y, h_Y, c_B) of :mod:`lightcraft_opt.symbolic.coning_coordinates`
-(lateral position and velocity in the yaw-aligned frame Y, tilt of the angular momentum,
-coning vector), 8 entries; inputs: the beam pointing and the phase-locked RCS slots of the
-map input (``pointing_L``, ``rcs_thrust``, ``rcs_cos``, ``rcs_sin``: 2 + 3 n).
+(layout :data:`~lightcraft_opt.layout.CONING`: lateral position and velocity in the
+yaw-aligned frame Y, tilt of the angular momentum, coning vector), 8 entries; inputs: the
+beam pointing and the phase-locked RCS slots of the map input
+(:func:`~lightcraft_opt.layout.coning_input_layout`: ``pointing_L``, ``rcs_thrust``,
+``rcs_cos``, ``rcs_sin``: 2 + 3 n).
 
 Each grid point is a climb point (:func:`~.operating_points.climb_point`: upright, centred,
 climbing at the nominal climb's speed at that altitude, spinning at that spin) and its
-linear model (:func:`~.state_space.linearize`, reduced error state r, v, theta_B[b2, b3],
-w_B[b2, b3]) mapped into z by the exact Jacobians of the coordinates before and after the
-pulse: A_z = T1 A T0^-1, B_z = T1 B.
+linear model (:func:`~.state_space.linearize` in the error-state entries of
+:data:`~lightcraft_opt.layout.CONING_ERROR_STATE`: r, v, theta_B[b2, b3], w_B[b2, b3])
+mapped into z by the exact Jacobians of the coordinates before and after the pulse:
+A_z = T1 A T0^-1, B_z = T1 B.
 
 Yaw. A coning craft's despun frame turns about its axis by the holonomy of the cone,
 2π (1 - cos θ) a coning turn, i.e. ω T (1 - cos θ) a pulse (0.196 rad at 5 degrees,
@@ -47,8 +50,11 @@ from lightcraft_opt.compiled import cache_dir
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     CONING,
+    CONING_ERROR_STATE,
+    ERROR_STATE,
     STATE,
     VectorLayout,
+    coning_input_layout,
     initial_state,
     nominal_inputs,
     parameter_values,
@@ -62,16 +68,11 @@ from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.coning_coordinates import (
-    CONING_COORDINATES,
-    build_coning_coordinates,
-)
-from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
+from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
+from lightcraft_opt.symbolic.error_state import build_error_state
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 
 __all__ = [
-    "CONING_INPUTS",
-    "CONING_STATES",
     "DEFAULT_ALTITUDES",
     "DEFAULT_SPINS",
     "ConingModel",
@@ -79,19 +80,6 @@ __all__ = [
     "turn",
 ]
 
-#: Error-state entries linearised (their z counterparts, in order: r, v, h, c).
-CONING_STATES = (
-    "r_L[east]",
-    "r_L[north]",
-    "v_L[east]",
-    "v_L[north]",
-    "theta_B[b2]",
-    "theta_B[b3]",
-    "w_B[b2]",
-    "w_B[b3]",
-)
-#: Map-input slots the model takes: beam pointing and the phase-locked RCS.
-CONING_INPUTS = ("pointing_L", "rcs_thrust", "rcs_cos", "rcs_sin")
 #: Spins of the default grid, as fractions of the craft's: 1 % apart, so that the
 #: parts of the model that ripple with the fraction of a coning turn in an interval (the
 #: held torque's effect on c, the amplitudes' on h: ω T moves 0.5 rad for 1 % of spin)
@@ -101,7 +89,9 @@ DEFAULT_SPINS = tuple(round(0.80 + 0.01 * k, 2) for k in range(26))
 #: change fastest (17.5 -> 10.6 m/s of lateral velocity per m of offset from 0 to 10 m).
 DEFAULT_ALTITUDES = (0.0, 0.5, 1.0, 2.0, 4.0, 7.0, 11.0, 16.0, 22.0, 30.0)
 _C = CONING.index("c_B")  # the coning rows of z
-_L_ROWS = (slice(0, 2), slice(2, 4), slice(4, 6))  # rows of L vectors read in Y: r, v, h
+_L_ROWS = tuple(CONING.index(name) for name in ("r_Y", "v_Y", "h_Y"))  # L vectors read in Y
+#: The error-state entries linearised, as signal names (``r_L[east]`` ...).
+_LINEARISED = tuple(entry_names(CONING_ERROR_STATE))
 
 
 def turn(angle: np.ndarray | float) -> np.ndarray:
@@ -163,7 +153,7 @@ class ConingModel:
     @property
     def states(self) -> tuple[str, ...]:
         """Names of the 8 entries of z."""
-        return tuple(name for name, _ in CONING_COORDINATES)
+        return tuple(entry_names(CONING))
 
     def _weights(self, spin: np.ndarray, altitude: np.ndarray) -> tuple[np.ndarray, ...]:
         """Bilinear cell indices and weights of (spin, altitude) points, clamped to the grid."""
@@ -246,6 +236,12 @@ class ConingModel:
         altitude [m], the coning turn corrected by ``phase`` [rad] (:meth:`horizon`)."""
         A, B = self.horizon(spin, omega, altitude, 0.0, 1, phase=phase)
         return A[0], B[0]
+
+
+def _model_inputs(lay: VectorLayout) -> tuple[str, ...]:
+    """The map-input slots of :func:`~lightcraft_opt.layout.coning_input_layout` for the
+    phase-locked map input ``lay``."""
+    return coning_input_layout(lay.slot("rcs_thrust").size).names
 
 
 def _nominal_climb_speeds(
@@ -355,11 +351,12 @@ def _linearise_grid(
     phi = jac.pulse_map
     lay = phi.inputs
     assert lay is not None
-    keep = select_entries(ERROR_STATE, CONING_STATES, "states")
+    keep = select_entries(ERROR_STATE, _LINEARISED, "states")
     coords = build_coning_coordinates()
     tjac = _coordinate_jacobian()
     ns, na = s_grid.size, a_grid.size
-    index = np.asarray(select_entries(lay, CONING_INPUTS, "inputs"))
+    inputs = _model_inputs(lay)
+    index = np.asarray(select_entries(lay, inputs, "inputs"))
     A = np.empty((ns, na, CONING.size, CONING.size))
     B = np.empty((ns, na, CONING.size, index.size))
     ratio = np.empty((ns, na))
@@ -368,7 +365,7 @@ def _linearise_grid(
     for i, s in enumerate(s_grid):
         for j, (alt, speed) in enumerate(zip(a_grid, v_grid, strict=True)):
             pt = climb_point(model, float(alt), float(speed), spin=float(s), pulse_map=jac)
-            sys = linearize(model, pt, states=CONING_STATES, inputs=CONING_INPUTS, pulse_map=jac)
+            sys = linearize(model, pt, states=_LINEARISED, inputs=inputs, pulse_map=jac)
             T0 = np.asarray(tjac(pt.x, pt.p))[:, keep]
             T1 = np.asarray(tjac(pt.x_next, pt.p))[:, keep]
             Az = T1 @ np.asarray(sys.A) @ np.linalg.inv(T0)
@@ -433,7 +430,7 @@ def _load(path: Path, lay: VectorLayout, u_op: np.ndarray, name: str) -> ConingM
     with np.load(path) as data:
         arrays = {k: np.array(data[k]) for k in _ARRAYS}
         period = float(data["period"])
-    index = np.asarray(select_entries(lay, CONING_INPUTS, "inputs"))
+    index = np.asarray(select_entries(lay, _model_inputs(lay), "inputs"))
     assert {f.name for f in fields(ConingModel)} >= set(_ARRAYS)
     return ConingModel(
         **arrays,

@@ -175,7 +175,7 @@ class OperatingPoint:
         if self.inputs is not None:
             return self.inputs
         craft = model.craft
-        return map_input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+        return map_input_layout(craft.thruster_count, craft.has_carrier)
 
     @property
     def success(self) -> bool:

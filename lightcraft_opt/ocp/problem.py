@@ -501,8 +501,7 @@ class OcpProblem:
     @property
     def n_thrusters(self) -> int:
         """RCS thrusters of the craft (0 without an RCS)."""
-        rcs = self.model.craft.rcs
-        return len(rcs.thrusters) if rcs else 0
+        return self.model.craft.thruster_count
 
     def max_thrust(self) -> np.ndarray:
         """(n_thrusters,) each thruster's max_thrust [N]."""

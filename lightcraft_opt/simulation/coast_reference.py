@@ -125,7 +125,7 @@ def simulate_coast(
     opts = options or SimulationOptions()
     duration = checked_duration(duration)
     craft = model.craft
-    ulay = input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    ulay = input_layout(craft.thruster_count, craft.has_carrier)
     xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     uk = checked_vector("u", np.zeros(ulay.size) if u is None else u, ulay.size)
     pk = checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)

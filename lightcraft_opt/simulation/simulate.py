@@ -114,9 +114,7 @@ def simulate(
     else:
         phi = compile_pulse_map(pulse_map) if compiled else pulse_map
     craft = model.craft
-    lay = phi.inputs or map_input_layout(
-        len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier
-    )
+    lay = phi.inputs or map_input_layout(craft.thruster_count, craft.has_carrier)
     xk = checked_vector("x0", initial_state(model) if x0 is None else x0, STATE.size)
     pk = checked_vector("p", parameter_values(model) if p is None else p, PARAMETERS.size)
     t0 = float(checked_vector("t0", [t0], 1)[0])

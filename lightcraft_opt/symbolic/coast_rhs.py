@@ -45,7 +45,7 @@ def coast_terms(t: ca.SX, x: ca.SX, u: ca.SX, p: ca.SX, model: Model) -> dict[st
     """
     craft = model.craft
     env = model.environment
-    ulay = input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    ulay = input_layout(craft.thruster_count, craft.has_carrier)
 
     r_L = STATE.get("r_L", x)
     v_L = STATE.get("v_L", x)
@@ -119,7 +119,7 @@ def build_coast_rhs(model: Model) -> ca.Function:
     p : parameters, :data:`lightcraft_opt.layout.PARAMETERS`.
     """
     craft = model.craft
-    ulay = input_layout(len(craft.rcs.thrusters) if craft.rcs else 0, craft.has_carrier)
+    ulay = input_layout(craft.thruster_count, craft.has_carrier)
     t = ca.SX.sym("t")
     x = ca.SX.sym("x", STATE.size)
     u = ca.SX.sym("u", ulay.size)

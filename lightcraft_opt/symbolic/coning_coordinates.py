@@ -42,19 +42,7 @@ from lightcraft_opt.symbolic.gyrostat import angular_momentum
 from lightcraft_opt.symbolic.mass_properties import mass_properties
 from lightcraft_opt.symbolic.rotation import conjugate, dcm, quat_multiply
 
-__all__ = ["CONING_COORDINATES", "build_coning_coordinates"]
-
-#: The entries of z, in order, with units: the state of the MPC's prediction model.
-CONING_COORDINATES = (
-    ("r_Y[y1]", "m"),
-    ("r_Y[y2]", "m"),
-    ("v_Y[y1]", "m/s"),
-    ("v_Y[y2]", "m/s"),
-    ("h_Y[y1]", "rad"),
-    ("h_Y[y2]", "rad"),
-    ("c_B[b2]", "rad"),
-    ("c_B[b3]", "rad"),
-)
+__all__ = ["build_coning_coordinates"]
 
 
 def build_coning_coordinates() -> ca.Function:
@@ -65,7 +53,7 @@ def build_coning_coordinates() -> ca.Function:
     Outputs
     -------
     z : (8,) r_Y (2) [m], v_Y (2) [m/s], h_Y (2) [rad], c_B (2) [rad]
-        (:data:`CONING_COORDINATES`, module docstring).
+        (layout :data:`~lightcraft_opt.layout.CONING`, module docstring).
     yaw : ψ, the twist of B about b1 from the upright attitude [rad], in (-π, π].
     omega : the coning rate in B, ``coast.coning_rate_B`` [rad/s].
     """

@@ -45,7 +45,7 @@ def build_flat_pulse_map(model: Model, options: PulseMapOptions | None = None) -
     """
     opts = options or PulseMapOptions()
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     ulay = check_pulse_map_options(model, opts)
     period = 1.0 / model.flight.pulse_rate
 

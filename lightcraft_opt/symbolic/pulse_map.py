@@ -91,7 +91,7 @@ def check_pulse_map_options(model: Model, options: PulseMapOptions) -> VectorLay
     """The layout of u for ``model`` under ``options``; OptionError when a profile other
     than HOLD is asked of a craft without an RCS."""
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     if options.rcs_profile is not RcsProfile.HOLD and not n_thr:
         raise OptionError(
             f"PulseMapOptions.rcs_profile {options.rcs_profile.value!r} needs a craft with an "

@@ -14,7 +14,8 @@ compiles in seconds) and its derivatives can be chained over the pieces
   :func:`~lightcraft_opt.symbolic.coast.coning_rate_B`), which the PHASE_LOCKED profile
   fixes right after the jump.
 
-The substep's inputs w by RCS profile (layout :func:`substep_input_layout`):
+The substep's inputs w by RCS profile
+(:func:`~lightcraft_opt.layout.substep_input_layout`):
 
 - HOLD and SUBINTERVALS: the coast inputs (:func:`~lightcraft_opt.layout.input_layout`:
   the thrust levels of the substep's sub-interval [N], the motor torque [N m]);
@@ -37,7 +38,7 @@ from lightcraft_opt.layout import (
     PULSE_INPUT,
     STATE,
     VectorLayout,
-    input_layout,
+    substep_input_layout,
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
@@ -47,7 +48,7 @@ from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.rcs import phase_locked_thrust
 
-__all__ = ["PulseMapPieces", "build_pulse_map_pieces", "substep_input_layout"]
+__all__ = ["PulseMapPieces", "build_pulse_map_pieces"]
 
 _SX_OPTIONS = {"cse": True}
 
@@ -77,27 +78,11 @@ class PulseMapPieces:
     has_carrier: bool
 
 
-def substep_input_layout(n_thrusters: int, has_carrier: bool, profile: RcsProfile) -> VectorLayout:
-    """Layout of the coast substep's inputs w (module docstring)."""
-    coast = input_layout(n_thrusters, has_carrier)
-    if profile is not RcsProfile.PHASE_LOCKED:
-        return coast
-    spec: list[tuple[str, int, str, str, tuple[str, ...]]] = [
-        ("rcs_thrust", n_thrusters, "N", "", ()),
-        ("rcs_cos", n_thrusters, "N", "", ()),
-        ("rcs_sin", n_thrusters, "N", "", ()),
-    ]
-    if has_carrier:
-        spec.append(("motor_torque", 1, "N m", "B", ()))
-    spec += [("coning_rate", 1, "rad/s", "B", ()), ("pulse_time", 1, "s", "", ())]
-    return VectorLayout("substep input", spec)
-
-
 def build_pulse_map_pieces(model: Model, options: PulseMapOptions) -> PulseMapPieces:
     """The sub-Functions of Φ for ``model`` and ``options`` (structure fixed here, numbers
     through p). The caller checks that the options suit the craft (pulse_map.py)."""
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     period = 1.0 / model.flight.pulse_rate
     h = period / options.substeps
     wlay = substep_input_layout(n_thr, craft.has_carrier, options.rcs_profile)

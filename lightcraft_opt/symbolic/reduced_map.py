@@ -4,7 +4,8 @@
 momentum H at |H| / A (216 Hz for Flight 5, 8 turns a pulse interval), which its coast must
 resolve with many substeps. A planner needs less: where the craft is, where H points, how
 fast it spins, and where b1 sits on its cone *at the next pulse*, since each pulse thrusts
-along b1. Ψ keeps exactly that (layout :data:`REDUCED_STATE`, frames in docs/frames.md):
+along b1. Ψ keeps exactly that (:data:`lightcraft_opt.layout.REDUCED_STATE`, frames in
+docs/frames.md):
 
 - r_L, v_L (3 each) [m, m/s], L frame;
 - H_L (3) [kg m²/s]: the system angular momentum about the mass centre, L frame (its
@@ -46,6 +47,7 @@ from lightcraft_opt.layout import (
     ENGINE,
     PARAMETERS,
     PULSE_INPUT,
+    REDUCED_STATE,
     STATE,
     VectorLayout,
     input_layout,
@@ -64,29 +66,13 @@ from lightcraft_opt.symbolic.pulse_map import PulseMap, compose_pulse_map
 from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
 from lightcraft_opt.symbolic.rotation import cross, dcm, quat_multiply
 
-__all__ = [
+__all__ = [  # REDUCED_STATE re-exported from layout, its owner
     "REDUCED_STATE",
     "ReducedMap",
     "ReducedMapOptions",
     "build_reduced_map",
     "reduced_pulse_map",
 ]
-
-ENU = ("east", "north", "up")
-
-#: The state of the reduced map Ψ (module docstring).
-REDUCED_STATE = VectorLayout(
-    "reduced state",
-    [
-        ("r_L", 3, "m", "L", ENU),
-        ("v_L", 3, "m/s", "L", ENU),
-        ("H_L", 3, "kg m^2/s", "L", ENU),
-        ("coning", 2, "-", "T_H", ("e1", "e2")),
-        ("liner_mass", 1, "kg", "", ()),
-        ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
-    ],
-)
 
 _SX_OPTIONS = {"cse": True}
 _UPRIGHT = ca.DM([0.5, -0.5, -0.5, -0.5])  # b1 up, b2 east, b3 north (layout.quaternion_from_tilt)
@@ -205,7 +191,7 @@ def build_reduced_map(model: Model, options: ReducedMapOptions | None = None) ->
     """Build Ψ for ``model`` (module docstring; structure fixed here, numbers through p)."""
     opts = options or ReducedMapOptions()
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     ulay = map_input_layout(n_thr, craft.has_carrier, RcsProfile.HOLD)
     wlay = input_layout(n_thr, craft.has_carrier)
     period = 1.0 / model.flight.pulse_rate
@@ -305,7 +291,7 @@ def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) ->
     psi = build_reduced_map(model, options)
     opts = psi.options
     craft = model.craft
-    n_thr = len(craft.rcs.thrusters) if craft.rcs else 0
+    n_thr = craft.thruster_count
     wlay = input_layout(n_thr, craft.has_carrier)
     x = ca.SX.sym("x", STATE.size)
     p = ca.SX.sym("p", PARAMETERS.size)
