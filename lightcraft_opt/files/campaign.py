@@ -57,7 +57,8 @@ from lightcraft_opt.campaign.dispersions import (
     Uniform,
     support,
 )
-from lightcraft_opt.campaign.spec import DISPERSED_PARAMETER, Campaign, CampaignController
+from lightcraft_opt.campaign.spec import DISPERSED_PARAMETER, Campaign
+from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables
@@ -68,7 +69,7 @@ from lightcraft_opt.layout import PARAMETERS, parameter_values
 
 __all__ = ["load_campaign"]
 
-_CAMPAIGN: dict[str, Spec] = {"controller": choice(CampaignController), "compiled": Spec("switch")}
+_CAMPAIGN: dict[str, Spec] = {"controller": choice(ControllerKind), "compiled": Spec("switch")}
 #: Quantity of each dispersed value's keys (None: bare numbers).
 _KIND: dict[str, str | None] = {
     "mass": "mass",
@@ -122,7 +123,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
         return Campaign(
             model=problem.model,
             duration=problem.duration,
-            controller=table.values.get("controller", CampaignController.NONE),
+            controller=table.values.get("controller", ControllerKind.NONE),
             x0=problem.x0,
             mpc=problem.mpc,
             director=problem.director,

@@ -104,6 +104,7 @@ from lightcraft_opt.control.options import (
     ControllerFault,
     ControlWeights,
     DirectorOptions,
+    DirectorRcs,
     DirectorWeights,
     MeasurementNoise,
     MpcOptions,
@@ -123,6 +124,7 @@ from lightcraft_opt.files.problem import (
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.options import FocusSchedule
 
 __all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
@@ -163,11 +165,11 @@ _DIRECTOR: dict[str, Spec] = {
     "tol": NUMBER,
     "time_budget": quantity("time"),
     "relinearize": INTEGER,
-    "focus_schedule": TEXT,
+    "focus_schedule": choice(FocusSchedule),
     "matched_side": quantity("length"),
     "energy_range": quantity("dimensionless", "list", 2),
     "disturbance_gain": NUMBER,
-    "rcs": TEXT,
+    "rcs": choice(DirectorRcs),
     "warm_start": _SWITCH,
 }
 #: ``[director.tolerances]``: DirectorWeights field -> quantity of its tolerance.

@@ -22,7 +22,7 @@ from lightcraft_opt.campaign.dispersions import (
     draw_many,
     loop_seed,
 )
-from lightcraft_opt.campaign.spec import CampaignController
+from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.files.campaign import load_campaign
 
@@ -88,7 +88,7 @@ def test_bad_distributions_raise_option_errors(make, match):
 def test_campaign_files_read_units_and_nominals():
     c = load_campaign(ROOT / "problems" / "montecarlo_open_loop.toml")
     items = dict(c.dispersions.items)
-    assert c.controller is CampaignController.NONE and c.duration == 3.0
+    assert c.controller is ControllerKind.NONE and c.duration == 3.0
     assert items["mass"] == Normal(0.0325, 0.02 * 0.0325, 3.0)
     assert items["launch_offset_x"] == Normal(0.0, 0.003, 3.0)  # sigma_mm = 3
     assert items["launch_offset_y"] == Normal(0.0, 0.003, 3.0)
@@ -98,7 +98,7 @@ def test_campaign_files_read_units_and_nominals():
     assert c.columns[: len(DISPERSED) + 2] == ("run", *(col for col, _ in DISPERSED.values()),
                                                 "loop_seed")  # fmt: skip
     mpc = load_campaign(ROOT / "problems" / "montecarlo_gust_mpc.toml")
-    assert mpc.controller is CampaignController.MPC
+    assert mpc.controller is ControllerKind.MPC
     assert mpc.plant_parameters["gust_L"] == (2.0, 0.0, 0.0)
     assert mpc.loop.faults == (20, 21)
 

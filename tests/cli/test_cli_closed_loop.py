@@ -18,7 +18,7 @@ import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.control.options import ControllerFault, MpcSolver
+from lightcraft_opt.control.options import ControllerFault, DirectorRcs, FocusSchedule, MpcSolver
 from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
@@ -225,6 +225,8 @@ def test_the_offset_bound_reaches_the_mpc_and_its_old_name_says_renamed(tmp_path
         ("[initial]\nconing = 5.0\n", "initial.coning"),
         ('[controller]\ntime_budget_ms = "off"\n', "controller.time_budget_ms"),
         ("[director]\ntime_budget_s = 0.0\n", "director.time_budget_s"),
+        ('[director]\nfocus_schedule = "near"\n', "director.focus_schedule"),
+        ('[director]\nrcs = "both"\n', "director.rcs"),
     ],
 )
 def test_bad_files_name_the_key_and_exit_2(tmp_path, capsys, text, key):
@@ -281,3 +283,24 @@ def test_a_bad_controller_list_is_a_usage_error(tmp_path, capsys, value, said):
     argv = ["closed-loop", str(NUTATION), "--controller", value, "--out", str(tmp_path)]
     assert main(argv) == 2
     assert said in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "allowed", "member"),
+    [
+        ("focus_schedule", "at_craft", ["far", "at_craft", "matched"], FocusSchedule.AT_CRAFT),
+        ("rcs", "nutation", ["tilt", "nutation", "off"], DirectorRcs.NUTATION),
+    ],
+)
+def test_the_director_choices_are_read_as_enums(tmp_path, key, value, allowed, member):
+    """[director] focus_schedule and rcs: the file's strings become the Enums
+    DirectorOptions holds; another string is refused naming the key and the values."""
+    src = tmp_path / "director.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    head = f'model = "{model}"\nduration_s = 1.0\n[director]\n'
+    src.write_text(head + f'{key} = "{value}"\n')
+    assert getattr(load_closed_loop(src).director, key) is member
+    src.write_text(head + f'{key} = "sideways"\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_closed_loop(src)
+    assert str(err.value) == f"{src}: director.{key}: must be one of {allowed}, got 'sideways'"
