@@ -299,8 +299,8 @@ def controller_list(text: str) -> tuple[ControllerKind, ...]:
 
 
 def _closed_loop(args: argparse.Namespace) -> int:
-    """Fly each listed controller; one folder each, plus an overlay (compare.png) in the
-    parent --out when there are several."""
+    """Fly the controller the file names, or each one --controller lists instead; one folder
+    each, plus an overlay (compare.png) in the parent --out when there are several."""
     _check_kind(args.problem, "closed-loop")
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
@@ -311,7 +311,7 @@ def _closed_loop(args: argparse.Namespace) -> int:
             mpc=dataclasses.replace(problem.mpc, time_budget=budget),
             director=dataclasses.replace(problem.director, time_budget=budget),
         )
-    kinds: tuple[ControllerKind, ...] = args.controller
+    kinds: tuple[ControllerKind, ...] = args.controller or (problem.controller,)
     names = [k.value for k in kinds]
     model = problem.model
     single = len(kinds) == 1
@@ -687,8 +687,9 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     loop = sub.add_parser(
         "closed-loop",
         help="fly a closed-loop problem file under a controller",
-        description="Fly the closed-loop file's craft under the MPC, the LQR or no "
-        "controller (u = controller.step(x); x = plant(x, u)) and write trajectory.csv, "
+        description="Fly the closed-loop file's craft under the controller it names (its "
+        "controller key: mpc, lqr, director or none; --controller overrides it), u = "
+        "controller.step(x); x = plant(x, u), and write trajectory.csv, "
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
@@ -701,10 +702,12 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     loop.add_argument(
         "--controller",
         type=controller_list,
-        default=(ControllerKind.MPC,),
+        default=None,
         metavar="{" + ",".join(CONTROLLERS) + "}[,...]",
-        help="which controller (default mpc); several, comma-separated (mpc,lqr,none), fly "
-        "one after the other into <out>/<controller>/ and are overlaid in <out>/compare.png",
+        help="which controller instead of the file's (its controller key; without one, the "
+        "director of a file with [director], else the MPC); several, comma-separated "
+        "(mpc,lqr,none), fly one after the other into <out>/<controller>/ and are overlaid in "
+        "<out>/compare.png",
     )
     loop.add_argument(
         "--out",

@@ -127,7 +127,9 @@ duration_s = 0.3
          "dispersions.launch_offset_x.relative_sigma"),
         ('[dispersions.mass]\ndistribution = "normal"\n', "dispersions.mass.sigma"),
         ('[plant]\nseed = 3\n', "plant.seed"),
-        ('[campaign]\ncontroller = "pid"\n', "campaign.controller"),
+        ('controller = "pid"\n', "controller"),
+        ('[campaign]\ncontroller = "mpc"\n', "campaign.controller"),  # moved to the top
+        ("[mpc]\n[director]\n", "controller"),  # both tables: name the one
     ],
 )  # fmt: skip
 def test_bad_campaign_files_name_the_key(tmp_path, text, key):
@@ -216,3 +218,38 @@ def test_distributions_inside_their_domains_are_taken(tmp_path):
 def test_dispersions_refuse_a_support_outside_the_domain(name, dist, match):
     with pytest.raises(OptionError, match=rf"Dispersions\.{name}: .*{match}"):
         Dispersions(((name, dist),))
+
+
+@pytest.mark.parametrize(
+    ("text", "kind"),
+    [
+        ('controller = "lqr"\n[mpc]\n', ControllerKind.LQR),
+        ("[director]\n", ControllerKind.DIRECTOR),
+        ("[mpc]\n", ControllerKind.MPC),
+        ("[campaign]\ncompiled = false\n", ControllerKind.NONE),  # neither: the open loop
+    ],
+)
+def test_a_campaign_names_its_controller_as_a_closed_loop_file_does(tmp_path, text, kind):
+    """The closed-loop file's rule (files/closed_loop.py), with the open loop for a file
+    without controller tables; the shipped campaign files name theirs."""
+    path = tmp_path / "c.toml"
+    path.write_text(BASE + text)
+    assert load_campaign(path).controller is kind
+    for name, shipped in [
+        ("montecarlo_open_loop", ControllerKind.NONE),
+        ("montecarlo_gust_mpc", ControllerKind.MPC),
+        ("montecarlo_director", ControllerKind.DIRECTOR),
+    ]:
+        assert load_campaign(ROOT / "problems" / f"{name}.toml").controller is shipped
+
+
+def test_the_former_campaign_controller_says_where_it_went(tmp_path):
+    path = tmp_path / "old.toml"
+    path.write_text(BASE + '[campaign]\ncontroller = "director"\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_campaign(path)
+    assert str(err.value) == (
+        f"{path}: campaign.controller: 'campaign.controller' was renamed 'controller': write "
+        'controller = "director" at the top of the file, before the first table (as in a '
+        "closed-loop file)"
+    )
