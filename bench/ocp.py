@@ -271,7 +271,7 @@ def director_guess(problem: OcpProblem) -> tuple[np.ndarray, np.ndarray]:
     from lightcraft_opt.control import closed_loop
     from lightcraft_opt.control.closed_loop import plant_options
     from lightcraft_opt.control.director import DirectorController
-    from lightcraft_opt.control.options import DirectorOptions
+    from lightcraft_opt.control.options import DirectorOptions, DirectorRcs
     from lightcraft_opt.params import BeamSizeModel
 
     model = problem.model
@@ -279,7 +279,9 @@ def director_guess(problem: OcpProblem) -> tuple[np.ndarray, np.ndarray]:
     plant = pulse_map_for(waist, plant_options(waist))
     assert plant.inputs is not None
     energy = bool(problem.free[problem.inputs.index("energy")].any())
-    options = DirectorOptions(energy_range=(0.5, 1.0) if energy else (1.0, 1.0), rcs="off")
+    options = DirectorOptions(
+        energy_range=(0.5, 1.0) if energy else (1.0, 1.0), rcs=DirectorRcs.OFF
+    )
     director = DirectorController(waist, plant.inputs, options, p=problem.p)
     N = problem.horizon
     start = time.perf_counter()

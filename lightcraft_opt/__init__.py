@@ -25,7 +25,14 @@ from lightcraft_opt.calibration import (
     calibrate,
 )
 from lightcraft_opt.campaign import Campaign, CampaignResult, campaign_summary, run_campaign
-from lightcraft_opt.control import ClosedLoopOptions, ClosedLoopResult, MpcOptions, closed_loop
+from lightcraft_opt.control import (
+    ClosedLoopOptions,
+    ClosedLoopResult,
+    ControllerKind,
+    MpcOptions,
+    build_controller,
+    closed_loop,
+)
 from lightcraft_opt.errors import (
     LightcraftError,
     ModelFileError,
@@ -108,6 +115,7 @@ __all__ = [
     "ClosedLoopProblem",
     "ClosedLoopResult",
     "CompiledOcp",
+    "ControllerKind",
     "Craft",
     "Environment",
     "Flight",
@@ -140,6 +148,7 @@ __all__ = [
     "Site",
     "Track",
     "Wind",
+    "build_controller",
     "build_pulse_map",
     "build_reduced_map",
     "calibrate",

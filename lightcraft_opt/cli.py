@@ -26,6 +26,8 @@ from lightcraft_opt.calibration.parameters import FORMER_NAMES
 from lightcraft_opt.campaign.runner import run_campaign
 from lightcraft_opt.cli_args import finite, integer, name_value, output_folder, real, substeps
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
+from lightcraft_opt.control.factory import build_controller
+from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.errors import LightcraftError, ProblemFileError, renamed
 from lightcraft_opt.files.campaign import load_campaign
@@ -276,10 +278,11 @@ def _progress_line(stream: TextIO) -> Callable[[int, float, float], None]:
     return show
 
 
-CONTROLLERS = ("mpc", "lqr", "director", "none")
+#: The values of ``--controller``, one per :class:`ControllerKind`.
+CONTROLLERS = tuple(k.value for k in ControllerKind)
 
 
-def controller_list(text: str) -> tuple[str, ...]:
+def controller_list(text: str) -> tuple[ControllerKind, ...]:
     """``--controller``: one of :data:`CONTROLLERS` or several, comma-separated
     (``mpc,lqr,none``), each once."""
     names = tuple(n.strip() for n in text.split(","))
@@ -291,12 +294,12 @@ def controller_list(text: str) -> tuple[str, ...]:
         )
     if len(set(names)) != len(names):
         raise argparse.ArgumentTypeError(f"a controller is listed twice in {text!r}")
-    return names
+    return tuple(ControllerKind(n) for n in names)
 
 
 def _closed_loop(args: argparse.Namespace) -> int:
-    """Fly each listed controller; one folder each, plus an overlay (compare.png) in the
-    parent --out when there are several."""
+    """Fly the controller the file names, or each one --controller lists instead; one folder
+    each, plus an overlay (compare.png) in the parent --out when there are several."""
     _check_kind(args.problem, "closed-loop")
     source = Path(args.problem)
     problem = load_closed_loop(source, duration=args.duration)
@@ -307,9 +310,10 @@ def _closed_loop(args: argparse.Namespace) -> int:
             mpc=dataclasses.replace(problem.mpc, time_budget=budget),
             director=dataclasses.replace(problem.director, time_budget=budget),
         )
-    names: tuple[str, ...] = args.controller
+    kinds: tuple[ControllerKind, ...] = args.controller or (problem.controller,)
+    names = [k.value for k in kinds]
     model = problem.model
-    single = len(names) == 1
+    single = len(kinds) == 1
     default = f"{source.stem}-{names[0]}" if single else f"{source.stem}-compare"
     out = output_folder(args.out or Path("runs") / default)
     print(f"{problem.title!r}: building the plant's pulse map ...", flush=True)
@@ -317,9 +321,9 @@ def _closed_loop(args: argparse.Namespace) -> int:
     plant = build_pulse_map(model, plant_options(model))
     print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
     results = []
-    for name in names:
-        where = out if single else output_folder(out / name)
-        results.append(_fly(problem, plant, name, where))
+    for kind in kinds:
+        where = out if single else output_folder(out / kind.value)
+        results.append(_fly(problem, plant, kind, where))
     if not single:
         fig = compare_closed_loops(
             results, title=problem.title, capture_radius=model.craft.engine.capture_radius
@@ -330,41 +334,21 @@ def _closed_loop(args: argparse.Namespace) -> int:
     return 1 if ended else 0
 
 
-def _fly(problem: ClosedLoopProblem, plant: PulseMap, name: str, out: Path) -> ClosedLoopResult:
-    """Fly ``problem`` under controller ``name`` and save its files into ``out``."""
-    # here, not at the top: they import python-control (~1 s) that other commands never need
-    from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
-    from lightcraft_opt.control.mpc import MpcController
-    from lightcraft_opt.control.prediction_model import coning_model
-
+def _fly(
+    problem: ClosedLoopProblem, plant: PulseMap, kind: ControllerKind, out: Path
+) -> ClosedLoopResult:
+    """Fly ``problem`` under the controller ``kind`` and save its files into ``out``."""
     model = problem.model
-    if name != "none":
+    name = kind.value
+    if kind is not ControllerKind.NONE:
         print(
             f"building the {name} controller (its linear prediction model: ~25 s the first "
             "time for a model, then read from the disk cache) ...",
             flush=True,
         )
     start = time.perf_counter()
-    assert plant.inputs is not None  # build_pulse_map always records it
-    controller: Controller
-    if name == "none":
-        controller = OpenLoopController(model, plant.inputs)
-    elif name == "director":
-        from lightcraft_opt.control.director import DirectorController
-
-        nutation = None
-        if model.craft.rcs is not None and problem.director.rcs == "nutation":
-            prediction = coning_model(model, pulse_map=plant, cache=True)
-            nutation = MpcController(model, problem.mpc, prediction=prediction)
-        controller = DirectorController(model, plant.inputs, problem.director, nutation=nutation)
-    else:
-        # linearised once per model structure and numbers, then read from the disk cache
-        prediction = coning_model(model, pulse_map=plant, cache=True)
-        if name == "mpc":
-            controller = MpcController(model, problem.mpc, prediction=prediction)
-        else:
-            controller = LqrController(model, prediction, problem.mpc.weights)
-    if name != "none":
+    controller = build_controller(kind, model, plant, mpc=problem.mpc, director=problem.director)
+    if kind is not ControllerKind.NONE:
         print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
     print(f"flying {problem.duration:g} s ...", flush=True)
     result = closed_loop(
@@ -702,8 +686,9 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     loop = sub.add_parser(
         "closed-loop",
         help="fly a closed-loop problem file under a controller",
-        description="Fly the closed-loop file's craft under the MPC, the LQR or no "
-        "controller (u = controller.step(x); x = plant(x, u)) and write trajectory.csv, "
+        description="Fly the closed-loop file's craft under the controller it names (its "
+        "controller key: mpc, lqr, director or none; --controller overrides it), u = "
+        "controller.step(x); x = plant(x, u), and write trajectory.csv, "
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
@@ -716,10 +701,12 @@ def add_closed_loop(sub: argparse._SubParsersAction) -> None:
     loop.add_argument(
         "--controller",
         type=controller_list,
-        default=("mpc",),
+        default=None,
         metavar="{" + ",".join(CONTROLLERS) + "}[,...]",
-        help="which controller (default mpc); several, comma-separated (mpc,lqr,none), fly "
-        "one after the other into <out>/<controller>/ and are overlaid in <out>/compare.png",
+        help="which controller instead of the file's (its controller key; without one, the "
+        "director of a file with [director], else the MPC); several, comma-separated "
+        "(mpc,lqr,none), fly one after the other into <out>/<controller>/ and are overlaid in "
+        "<out>/compare.png",
     )
     loop.add_argument(
         "--out",

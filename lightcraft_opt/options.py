@@ -11,9 +11,11 @@ from lightcraft_opt.errors import OptionError, ParameterError
 __all__ = [
     "MAX_DURATION",
     "CoastScheme",
+    "FocusSchedule",
     "PulseMapOptions",
     "RcsProfile",
     "SimulationOptions",
+    "checked_choice",
     "checked_duration",
     "checked_int",
     "checked_nonnegative",
@@ -64,6 +66,21 @@ class RcsProfile(Enum):
     HOLD = "hold"
     SUBINTERVALS = "subintervals"
     PHASE_LOCKED = "phase_locked"
+
+
+class FocusSchedule(Enum):
+    """Where the director focuses the beam for a craft at height h (shared by the
+    beam-riding study, linearize/beam_riding.py, and the director, control/director.py;
+    docs/beam_riding.md).
+
+    ``FAR``: the far end of the laser's focus range (nearly collimated). ``AT_CRAFT``:
+    f = h, the smallest beam the director can put there. ``MATCHED``: a chosen side at the
+    craft, by default the launch side a0.
+    """
+
+    FAR = "far"
+    AT_CRAFT = "at_craft"
+    MATCHED = "matched"
 
 
 @dataclass(frozen=True)
@@ -178,6 +195,14 @@ def checked_number(
     ):
         span = f"> {low:g}" if math.isinf(high) else f"in ({low:g}, {high:g})"
         raise OptionError(f"{owner}.{name} must be {span}, got {value!r}")
+
+
+def checked_choice(owner: str, name: str, value: object, choices: type[Enum]) -> None:
+    """Raise OptionError listing the allowed values unless ``value`` is a member of the
+    Enum ``choices`` (its value, the string a file writes, is not: files convert)."""
+    if not isinstance(value, choices):
+        allowed = [c.value for c in choices]
+        raise OptionError(f"{owner}.{name} must be one of {allowed}, got {value!r}")
 
 
 def checked_nonnegative(owner: str, name: str, value: object) -> None:

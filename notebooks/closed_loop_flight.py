@@ -65,7 +65,7 @@ print("drop-outs:", problem.loop.dropout_rate)
 # ## The controllers
 #
 # The MPC and the LQR share the scheduled linear model (built once, ~25 s, then cached) and
-# the objective of the file's `[controller.tolerances]`; "none" flies the nominal input.
+# the objective of the file's `[mpc.tolerances]`; "none" flies the nominal input.
 # The MPC flies without the file's wall-clock budget (the deterministic mode, as
 # `lightcraft closed-loop --deterministic`): the flight, and the figures below, are then the
 # same on any machine, however loaded; the injected late answers still come late. The

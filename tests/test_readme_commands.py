@@ -130,12 +130,13 @@ def test_the_optimize_line_solves_within_its_constraints(workspace, capsys):
 
 @pytest.mark.slow
 def test_the_closed_loop_line_flies_the_mpc_and_reports_each_step(workspace, capsys):
-    """The line flies under the MPC's wall-clock budget, as a user's would: how often a
-    late solve falls back depends on the machine (the damping itself is checked without
-    the clock in tests/control/test_mpc.py), so this checks the line runs and its files
-    agree with one another."""
+    """The line flies the file's controller, the MPC, under its wall-clock budget, as a
+    user's would: how often a late solve falls back depends on the machine (the damping
+    itself is checked without the clock in tests/control/test_mpc.py), so this checks the
+    line runs and its files agree with one another."""
     _, out = run_line("closed-loop", capsys)
     summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller"] == "mpc"  # named by the file, no --controller on the line
     with open(out / "steps.csv", newline="") as handle:
         steps = list(csv.DictReader(handle))
     assert len(steps) == summary["pulses"] > 0

@@ -14,13 +14,12 @@ from lightcraft_opt.campaign.engines import dask_cluster, local_processes, seria
 from lightcraft_opt.campaign.run import RunOutcome, run_one
 from lightcraft_opt.campaign.run_table import RunTable, read_table
 from lightcraft_opt.campaign.runner import CampaignResult, run_campaign
-from lightcraft_opt.campaign.spec import Campaign, CampaignController
+from lightcraft_opt.campaign.spec import Campaign
 from lightcraft_opt.campaign.summary import campaign_summary
 
 __all__ = [
     "DISPERSED",
     "Campaign",
-    "CampaignController",
     "CampaignResult",
     "Dispersions",
     "Normal",

@@ -5,7 +5,8 @@ table row out.
 in worker processes, on Dask workers). It draws the run's values
 (:func:`~lightcraft_opt.campaign.dispersions.draw`), applies them to the plant's parameters, the
 initial state and the drop-out rate, flies :func:`~lightcraft_opt.control.closed_loop.closed_loop`
-under the campaign's controller ("none" is the open loop: the nominal input every pulse)
+under the campaign's controller (built by control/factory.py; "none" is the open loop: the
+nominal input every pulse)
 and returns the row of the run table (inputs and outputs, SI, unit in the column name) and
 a row of wall-clock timings, kept apart so that tables can be compared bit for bit.
 :func:`row_problem` checks a row read back from a resumed table against what run_one
@@ -39,10 +40,10 @@ from lightcraft_opt.campaign.spec import (
     OUTPUT_COLUMNS,
     TEXT_OUTPUTS,
     Campaign,
-    CampaignController,
 )
 from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
+from lightcraft_opt.control.factory import build_controller
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import (
     STATE,
@@ -191,7 +192,15 @@ class _Flyer:
         options = plant_options(c.model)
         interpreted = pulse_map_for(c.model, options, compiled=False)
         assert interpreted.inputs is not None  # build_pulse_map always records it
-        self.controller = _controller(c, interpreted)
+        # the deterministic mode: no wall-clock budget (module docstring)
+        self.controller: Controller = build_controller(
+            c.controller,
+            c.model,
+            interpreted,
+            mpc=dataclasses.replace(c.mpc, time_budget=None),
+            director=dataclasses.replace(c.director, time_budget=None),
+            compiled=c.compiled,
+        )
         self.plant: PulseMap = pulse_map_for(c.model, options, compiled=c.compiled)
 
     def fly(self, draws: Mapping[str, float], seed: int) -> ClosedLoopResult:
@@ -220,35 +229,6 @@ class _Flyer:
             pulse_map=self.plant,
             options=loop,
         )
-
-
-def _controller(c: Campaign, plant: PulseMap) -> Controller:
-    # here, not at the top: they import python-control (~1 s) that an open loop never needs
-    from lightcraft_opt.control.controllers import LqrController, OpenLoopController
-
-    assert plant.inputs is not None
-    if c.controller is CampaignController.NONE:
-        return OpenLoopController(c.model, plant.inputs)
-    from lightcraft_opt.control.mpc import MpcController
-    from lightcraft_opt.control.prediction_model import coning_model
-
-    if c.controller is CampaignController.DIRECTOR:
-        from lightcraft_opt.control.director import DirectorController
-
-        nutation = None
-        if c.model.craft.rcs is not None and c.director.rcs == "nutation":
-            prediction = coning_model(c.model, pulse_map=plant, cache=True)
-            mpc = dataclasses.replace(c.mpc, time_budget=None)
-            nutation = MpcController(c.model, mpc, prediction=prediction)
-        director = dataclasses.replace(c.director, time_budget=None)
-        return DirectorController(
-            c.model, plant.inputs, director, nutation=nutation, compiled=c.compiled
-        )
-    prediction = coning_model(c.model, pulse_map=plant, cache=True)
-    if c.controller is CampaignController.MPC:
-        options = dataclasses.replace(c.mpc, time_budget=None)
-        return MpcController(c.model, options, prediction=prediction)
-    return LqrController(c.model, prediction, c.mpc.weights)
 
 
 _BUILT = threading.local()

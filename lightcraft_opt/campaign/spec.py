@@ -6,14 +6,18 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import Enum
 from functools import cached_property
 from typing import Any
 
 import numpy as np
 
 from lightcraft_opt.campaign.dispersions import Dispersions
-from lightcraft_opt.control.options import ClosedLoopOptions, DirectorOptions, MpcOptions
+from lightcraft_opt.control.options import (
+    ClosedLoopOptions,
+    ControllerKind,
+    DirectorOptions,
+    MpcOptions,
+)
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import STATE, checked_vector, initial_state
 from lightcraft_opt.options import checked_duration
@@ -26,7 +30,6 @@ __all__ = [
     "TEXT_OUTPUTS",
     "TIMING_COLUMNS",
     "Campaign",
-    "CampaignController",
 ]
 
 #: Outputs of a run, after its index and drawn inputs (SI; angles in rad).
@@ -79,15 +82,6 @@ DISPERSED_PARAMETER = {
 }
 
 
-class CampaignController(Enum):
-    """Who flies the runs: the MPC, the LQR, the director, or nobody (the open loop)."""
-
-    MPC = "mpc"
-    LQR = "lqr"
-    DIRECTOR = "director"
-    NONE = "none"
-
-
 @dataclass(frozen=True, eq=False)
 class Campaign:
     """What every run of a campaign flies, before its draws (SI).
@@ -96,7 +90,8 @@ class Campaign:
     ----------
     model : the controller's model; the plant's before the campaign's draws.
     duration : of each flight [s].
-    controller : :class:`CampaignController`.
+    controller : who flies the runs (:class:`~lightcraft_opt.control.options.ControllerKind`;
+        ``NONE``, the default, the open loop).
     x0 : (STATE.size,) state at the first pulse (default: on the pad, upright).
     mpc : the MPC's options (the LQR takes their weights); runs fly them without a
         wall-clock budget (``time_budget=None``, the deterministic mode).
@@ -114,7 +109,7 @@ class Campaign:
 
     model: Model
     duration: float
-    controller: CampaignController = CampaignController.NONE
+    controller: ControllerKind = ControllerKind.NONE
     x0: np.ndarray | None = None
     mpc: MpcOptions = field(default_factory=MpcOptions)
     director: DirectorOptions = field(default_factory=DirectorOptions)
@@ -126,8 +121,8 @@ class Campaign:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration", checked_duration(self.duration))
-        if not isinstance(self.controller, CampaignController):
-            allowed = [c.value for c in CampaignController]
+        if not isinstance(self.controller, ControllerKind):
+            allowed = [c.value for c in ControllerKind]
             raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")
         if not isinstance(self.dispersions, Dispersions):
             raise ParameterError("dispersions", f"must be Dispersions, got {self.dispersions!r}")

@@ -1,8 +1,11 @@
 """Control at pulse rate: controllers, the nutation MPC and its QP, their prediction model,
 and the closed loop that flies them on the full pulse map Φ.
 
-- :mod:`.options`: :class:`MpcOptions`, :class:`ControlWeights`, :class:`ClosedLoopOptions`
-  (noise, plant dispersion, drop-outs, injected faults);
+- :mod:`.options`: :class:`ControllerKind` (which controller), :class:`MpcOptions`,
+  :class:`ControlWeights`, :class:`DirectorOptions` (with :class:`FocusSchedule`,
+  :class:`DirectorRcs`), :class:`ClosedLoopOptions` (noise, plant dispersion, drop-outs,
+  injected faults);
+- :mod:`.factory`: :func:`build_controller`, every controller from a :class:`ControllerKind`;
 - :mod:`.prediction_model`: linear models in coning coordinates scheduled on spin and
   altitude (:func:`coning_model`), the MPC's and the LQR controller's prediction;
 - :mod:`.controllers`: the ``step(x)`` interface, :class:`OpenLoopController`,
@@ -22,12 +25,16 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
+from lightcraft_opt.control.factory import build_controller
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
+    ControllerKind,
     ControlWeights,
     DirectorOptions,
+    DirectorRcs,
     DirectorWeights,
+    FocusSchedule,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
@@ -98,11 +105,14 @@ __all__ = [
     "ControlWeights",
     "Controller",
     "ControllerFault",
+    "ControllerKind",
     "ControllerLog",
     "ControllerStatus",
     "DirectorController",
     "DirectorOptions",
+    "DirectorRcs",
     "DirectorWeights",
+    "FocusSchedule",
     "LqrController",
     "Measurement",
     "MeasurementNoise",
@@ -115,6 +125,7 @@ __all__ = [
     "QpStatus",
     "StageWeights",
     "StepStats",
+    "build_controller",
     "closed_loop",
     "coning_model",
     "disperse",

@@ -60,6 +60,7 @@ from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.control.options import (
     ControllerFault,
     DirectorOptions,
+    DirectorRcs,
     DirectorWeights,
     MpcSolver,
 )
@@ -82,7 +83,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.linearize.beam_riding import FocusSchedule, scheduled_focus
+from lightcraft_opt.linearize.beam_riding import scheduled_focus
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.reduced_map import build_reduced_map
 
@@ -273,13 +274,15 @@ class DirectorController:
         self._values = d.value.map(N)
         laser = self.model.laser
         self.laser = laser
-        self.schedule = FocusSchedule(opts.focus_schedule)
+        self.schedule = opts.focus_schedule
         self._vergence_table()
         self.energy = model.flight.pulse_energy
         self._kick = model.flight.impulse_per_pulse / model.craft.mass  # m/s, a pulse's Δv
         low, high = opts.energy_range
         self.allocation = (
-            TorqueAllocation(model) if model.craft.rcs is not None and opts.rcs == "tilt" else None
+            TorqueAllocation(model)
+            if model.craft.rcs is not None and opts.rcs is DirectorRcs.TILT
+            else None
         )
         # the torque in B (b2, b3), inside the thrusters' box along the two axes
         tau = np.zeros(_TORQUE_SLOT.size) if self.allocation is None else self.allocation.axis_limit
@@ -366,7 +369,7 @@ class DirectorController:
             else:
                 status, message = ControllerStatus.FALLBACK_FAILED, sol.message
         u = self._map_input(v)
-        if self.nutation is not None and self.options.rcs == "nutation":
+        if self.nutation is not None and self.options.rcs is DirectorRcs.NUTATION:
             u_rcs = self.nutation.step(x, t, fault=fault)
             u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]
         self.last = StepStats(

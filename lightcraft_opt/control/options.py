@@ -1,4 +1,5 @@
-"""Options of the controllers and the closed loop: the MPC, its weights, what goes wrong."""
+"""Options of the controllers and the closed loop: which controller, the MPC, the director,
+their weights, what goes wrong."""
 
 from __future__ import annotations
 
@@ -7,17 +8,24 @@ from dataclasses import dataclass
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.options import checked_int, checked_nonnegative, checked_number
+from lightcraft_opt.options import (
+    FocusSchedule,
+    checked_choice,
+    checked_int,
+    checked_nonnegative,
+    checked_number,
+)
 
 __all__ = [
-    "DIRECTOR_RCS",
-    "FOCUS_SCHEDULES",
     "MAX_CONTROL_HORIZON",
     "ClosedLoopOptions",
     "ControlWeights",
     "ControllerFault",
+    "ControllerKind",
     "DirectorOptions",
+    "DirectorRcs",
     "DirectorWeights",
+    "FocusSchedule",
     "MeasurementNoise",
     "MpcOptions",
     "MpcSolver",
@@ -27,6 +35,21 @@ __all__ = [
 #: Longest horizon of the pulse-by-pulse controllers [pulses]: 10 s ahead at 26 Hz.
 MAX_CONTROL_HORIZON = 260
 _WHY_HORIZON = "10 s ahead; the QP grows with the horizon and a pulse leaves 38 ms to solve it"
+
+
+class ControllerKind(Enum):
+    """Which controller flies a closed loop (control/factory.py builds each one).
+
+    ``MPC``: the nutation MPC (mpc.py). ``LQR``: a discrete LQR on the MPC's prediction
+    model and weights (controllers.py). ``DIRECTOR``: beam tracking by a real-time
+    iteration on the reduced map Ψ (director.py). ``NONE``: the open loop, the nominal
+    input every pulse.
+    """
+
+    MPC = "mpc"
+    LQR = "lqr"
+    DIRECTOR = "director"
+    NONE = "none"
 
 
 class MpcSolver(Enum):
@@ -148,15 +171,17 @@ class MpcOptions:
             )
 
 
-#: The director's focus references (linearize.beam_riding.FocusSchedule's values): "far" the
-#: far end of the focus range, "at_craft" the craft's height, "matched" the launch side at
-#: the craft (docs/beam_riding.md).
-FOCUS_SCHEDULES = ("far", "at_craft", "matched")
+class DirectorRcs(Enum):
+    """Who fires the RCS of a craft that has one while the director flies.
 
-#: Who fires the RCS of a craft that has one while the director flies: "tilt" the director
-#: itself, held torques against the tilt of H (control/rcs_allocation.py); "nutation" the
-#: nutation MPC alongside (mpc.py); "off" nobody.
-DIRECTOR_RCS = ("tilt", "nutation", "off")
+    ``TILT``: the director itself, held torques against the tilt of H
+    (control/rcs_allocation.py). ``NUTATION``: the nutation MPC alongside (mpc.py), its
+    beam pointing replaced by the director's. ``OFF``: nobody.
+    """
+
+    TILT = "tilt"
+    NUTATION = "nutation"
+    OFF = "off"
 
 
 @dataclass(frozen=True)
@@ -240,7 +265,7 @@ class DirectorOptions:
         the first (at the measured state), the new last one and the others in turn; the
         rest are the previous pulses' Jacobians, shifted (a multi-level real-time
         iteration). ``horizon``: all, the plain real-time iteration.
-    focus_schedule : the focus reference, one of :data:`FOCUS_SCHEDULES`.
+    focus_schedule : the focus reference (:class:`~lightcraft_opt.options.FocusSchedule`).
     matched_side : the beam's side the "matched" schedule puts at the craft [m], > 0; None
         (default) the launch side a0 (docs/beam_riding.md: 8.5 cm for the record craft).
     energy_range : (lowest, highest) pulse energy as fractions of the flight's, 0 <= low
@@ -250,9 +275,9 @@ class DirectorOptions:
     disturbance_gain : in [0, 1): how fast the lateral velocity and the lateral angular
         momentum the prediction misses each pulse (gusts, model error) are learnt and added
         to the prediction; 0 never.
-    rcs : on a craft with RCS, who fires it, one of :data:`DIRECTOR_RCS`: "tilt" (default)
-        the director, held torques in its QP against the tilt of H; "nutation" the nutation
-        MPC alongside (its beam pointing replaced by the director's); "off".
+    rcs : on a craft with RCS, who fires it (:class:`DirectorRcs`): ``TILT`` (default) the
+        director, held torques in its QP against the tilt of H; ``NUTATION`` the nutation
+        MPC alongside (its beam pointing replaced by the director's); ``OFF``.
     warm_start : start each QP from the previous one shifted by a pulse.
     """
 
@@ -263,12 +288,12 @@ class DirectorOptions:
     tol: float = 1e-6
     time_budget: float | None = 20e-3
     relinearize: int = 3
-    focus_schedule: str = "matched"
+    focus_schedule: FocusSchedule = FocusSchedule.MATCHED
     matched_side: float | None = None
     energy_range: tuple[float, float] = (0.5, 1.0)
     quadrature: tuple[int, int] = (4, 16)
     disturbance_gain: float = 0.05
-    rcs: str = "tilt"
+    rcs: DirectorRcs = DirectorRcs.TILT
     warm_start: bool = True
 
     def __post_init__(self) -> None:
@@ -282,11 +307,7 @@ class DirectorOptions:
                 f"DirectorOptions.relinearize must be <= horizon ({self.horizon}), "
                 f"got {self.relinearize}"
             )
-        if self.focus_schedule not in FOCUS_SCHEDULES:
-            raise OptionError(
-                f"DirectorOptions.focus_schedule must be one of {list(FOCUS_SCHEDULES)}, "
-                f"got {self.focus_schedule!r}"
-            )
+        checked_choice("DirectorOptions", "focus_schedule", self.focus_schedule, FocusSchedule)
         if self.matched_side is not None:
             checked_number("DirectorOptions", "matched_side", self.matched_side, 0.0)
         e = self.energy_range
@@ -314,10 +335,7 @@ class DirectorOptions:
             raise OptionError(
                 f"DirectorOptions.disturbance_gain must be in [0, 1), got {self.disturbance_gain!r}"
             )
-        if self.rcs not in DIRECTOR_RCS:
-            raise OptionError(
-                f"DirectorOptions.rcs must be one of {list(DIRECTOR_RCS)}, got {self.rcs!r}"
-            )
+        checked_choice("DirectorOptions", "rcs", self.rcs, DirectorRcs)
         if not isinstance(self.warm_start, bool):
             raise OptionError(
                 f"DirectorOptions.warm_start must be true or false, got {self.warm_start!r}"
@@ -330,9 +348,7 @@ def _checked_qp_options(owner: str, options: MpcOptions | DirectorOptions, weigh
     a tolerance in (0, 1) and a positive time budget or None."""
     if not isinstance(options.weights, weights):
         raise OptionError(f"{owner}.weights must be a {weights.__name__}, got {options.weights!r}")
-    if not isinstance(options.solver, MpcSolver):
-        allowed = [s.value for s in MpcSolver]
-        raise OptionError(f"{owner}.solver must be one of {allowed}, got {options.solver!r}")
+    checked_choice(owner, "solver", options.solver, MpcSolver)
     checked_int(owner, "max_iter", options.max_iter, 1)
     checked_number(owner, "tol", options.tol, 0.0, 1.0)
     if options.time_budget is not None:
@@ -450,9 +466,5 @@ class ClosedLoopOptions:
                 "ClosedLoopOptions.faults must be a tuple of pulse numbers (integers >= 0), "
                 f"got {self.faults!r}"
             )
-        if not isinstance(self.fault, ControllerFault):
-            allowed = [f.value for f in ControllerFault]
-            raise OptionError(
-                f"ClosedLoopOptions.fault must be one of {allowed}, got {self.fault!r}"
-            )
+        checked_choice("ClosedLoopOptions", "fault", self.fault, ControllerFault)
         checked_int("ClosedLoopOptions", "seed", self.seed, 0)

@@ -1,13 +1,16 @@
 """Campaign files: a closed-loop file with the distributions of a Monte Carlo campaign.
 
-A campaign file is a closed-loop file (files/closed_loop.py: the model, ``[initial]``,
-``[controller]``, ``[plant]`` with its noise, relative dispersion, drop-outs, faults and
-wind) with two more tables::
+A campaign file is a closed-loop file (files/closed_loop.py: the model, the
+``controller`` it flies, ``[initial]``, ``[mpc]``, ``[director]``, ``[plant]`` with its
+noise, relative dispersion, drop-outs, faults and wind) with two more tables::
 
-    [campaign]
-    controller = "mpc"                     # "lqr", "director", or "none": the open loop (default)
-    compiled = false                       # optional: Φ interpreted (default: compiled to C
-                                           # where gcc works, compiled.py)
+    controller = "mpc"                     # top level, before the tables: "lqr", "director",
+                                           #   or "none", the open loop
+    ...
+
+    [campaign]                             # optional
+    compiled = false                       # Φ interpreted (default: compiled to C where gcc
+                                           #   works, compiled.py)
 
     [dispersions.mass]                     # one table per dispersed quantity
     distribution = "normal"
@@ -19,6 +22,11 @@ wind) with two more tables::
     distribution = "uniform"
     low_mps = 0.0
     high_mps = 3.0
+
+The controller is chosen as in a closed-loop file: ``controller``, else the one whose
+table (``[mpc]`` or ``[director]``) the file has, both tables without ``controller`` an
+error naming it; a file with neither flies the open loop ("none"). ``[campaign]
+controller``, where the name was before issue 28, is refused with the new place.
 
 Quantities (:data:`~lightcraft_opt.campaign.dispersions.DISPERSED`, in drawing order), their
 units, and their nominal value (the normal's default mean, what a relative sigma is
@@ -44,6 +52,7 @@ comes from the campaign seed and the run index (dispersions.py). Problems raise
 from __future__ import annotations
 
 import difflib
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -57,18 +66,19 @@ from lightcraft_opt.campaign.dispersions import (
     Uniform,
     support,
 )
-from lightcraft_opt.campaign.spec import DISPERSED_PARAMETER, Campaign, CampaignController
+from lightcraft_opt.campaign.spec import DISPERSED_PARAMETER, Campaign
+from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables
 from lightcraft_opt.files.problem import as_problem_file_errors
 from lightcraft_opt.files.problem_tables import Table, read_table
-from lightcraft_opt.files.schema import NUMBER, QUANTITIES, TEXT, Spec, choice, quantity
+from lightcraft_opt.files.schema import NUMBER, QUANTITIES, TEXT, Spec, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 
 __all__ = ["load_campaign"]
 
-_CAMPAIGN: dict[str, Spec] = {"controller": choice(CampaignController), "compiled": Spec("switch")}
+_CAMPAIGN: dict[str, Spec] = {"compiled": Spec("switch")}
 #: Quantity of each dispersed value's keys (None: bare numbers).
 _KIND: dict[str, str | None] = {
     "mass": "mass",
@@ -116,13 +126,22 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
                 "a campaign seeds each run from its seed (--seed) and the run index: "
                 "remove plant.seed",
             )
-        problem = closed_loop_from_tables(src, file, data, duration)
+        if isinstance(raw_campaign, dict) and "controller" in raw_campaign:
+            value = raw_campaign["controller"]
+            raise ProblemFileError(
+                src,
+                "campaign.controller",
+                f"{schema.renamed('campaign.controller', 'controller')}: write controller = "
+                f"{json.dumps(value)} at the top of the file, before the first table (as in "
+                "a closed-loop file)",
+            )
+        problem = closed_loop_from_tables(src, file, data, duration, absent=ControllerKind.NONE)
         table = read_table(src, raw_campaign, "campaign", _CAMPAIGN)
         dispersions = _dispersions(src, raw_dispersions, _nominal(problem))
         return Campaign(
             model=problem.model,
             duration=problem.duration,
-            controller=table.values.get("controller", CampaignController.NONE),
+            controller=problem.controller,
             x0=problem.x0,
             mpc=problem.mpc,
             director=problem.director,

@@ -11,6 +11,8 @@ A closed-loop file::
     title = "nutation suppression after a launch kick"
     model = "../models/flight5-rcs.toml"   # relative to this file; the controller's model
     duration_s = 1.0
+    controller = "mpc"                     # who flies: "lqr", "director", "none" (the open
+                                           #   loop); --controller overrides it
 
     [model_overrides]                      # as in problem files: merged over the model file
 
@@ -18,7 +20,7 @@ A closed-loop file::
     coning_deg = 5.0                       # angle b1 to H, made by the transverse rate
     coning_azimuth_deg = 17.0              # direction of H_⊥ in B, from b2 toward b3
 
-    [controller]                           # MpcOptions; the LQR reads the tolerances
+    [mpc]                                  # MpcOptions; the LQR reads the tolerances
     horizon_pulses = 10
     solver = "hpipm"                       # qrqp, osqp, ipopt
     max_iter = 30
@@ -29,7 +31,7 @@ A closed-loop file::
     warm_start = true
     propellant_weight = 1.0                # [1/N] on the summed mean thrust, linear
 
-    [controller.tolerances]                # the objective, weight = 1 / tolerance^2
+    [mpc.tolerances]                       # the objective, weight = 1 / tolerance^2
     coning_deg = 0.5
     tilt_deg = 2.0
     offset_cm = 1.0
@@ -38,8 +40,8 @@ A closed-loop file::
     pointing_cm = 20.0
     rcs_n = 0.5
 
-    [director]                             # DirectorOptions (lightcraft closed-loop
-    horizon_pulses = 10                    #   --controller director); all optional
+    [director]                             # DirectorOptions; all optional
+    horizon_pulses = 10
     relinearize = 3                        # stages linearised afresh a pulse
     focus_schedule = "matched"             # "far", "at_craft"
     matched_side_cm = 7.2                  # the side "matched" keeps (default: the launch side)
@@ -82,10 +84,19 @@ A closed-loop file::
     gust_start_s = 0.4
     gust_duration_s = 0.8
 
-Every table but the top is optional. ``[plant.wind]`` replaces the model's wind for the
-plant (keys not given take params.Wind's defaults: calm); the controller keeps the
-model's. Wind tables (``table_height`` ...) are structure of Φ and belong in
-``[model_overrides]``. Any problem raises one
+Every table but the top is optional. The file names the controller it flies with
+``controller``, a top-level key (so before the first table); ``lightcraft closed-loop
+--controller`` overrides it. Without it, a file with a ``[director]`` table flies the
+director, one with an ``[mpc]`` table the MPC, one with neither the MPC with MpcOptions'
+defaults (a campaign file, files/campaign.py, the open loop instead), and one with both is
+an error naming ``controller``: say which. The other controller's table may stay: a
+``--controller`` flies it, and the director with ``rcs = "nutation"`` flies the MPC of
+``[mpc]`` alongside. ``[mpc]`` was ``[controller]`` before issue 28 made that name the
+choice; a ``[controller]`` table is refused with the new name.
+
+``[plant.wind]`` replaces the model's wind for the plant (keys not given take params.Wind's
+defaults: calm); the controller keeps the model's. Wind tables (``table_height`` ...) are
+structure of Φ and belong in ``[model_overrides]``. Any problem raises one
 :class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
 """
 
@@ -102,15 +113,17 @@ from lightcraft_opt import params
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
+    ControllerKind,
     ControlWeights,
     DirectorOptions,
+    DirectorRcs,
     DirectorWeights,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
     PlantDispersion,
 )
-from lightcraft_opt.errors import ModelFileError, OptionError, ProblemFileError
+from lightcraft_opt.errors import ModelFileError, OptionError, ProblemFileError, renamed
 from lightcraft_opt.files import model as mf
 from lightcraft_opt.files import schema
 
@@ -123,14 +136,26 @@ from lightcraft_opt.files.problem import (
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.options import FocusSchedule
 
 __all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
-_TABLES = ("model_overrides", "initial", "controller", "director", "plant")
-_TOP: dict[str, Spec] = {"title": TEXT, "model": TEXT, "duration": quantity("time")}
+_TABLES = ("model_overrides", "initial", "mpc", "director", "plant")
+_TOP: dict[str, Spec] = {
+    "title": TEXT,
+    "model": TEXT,
+    "duration": quantity("time"),
+    "controller": choice(ControllerKind),
+}
+#: The controller each options table configures: a file without ``controller`` flies the
+#: one whose table it has.
+_TABLE_OF: dict[str, ControllerKind] = {
+    "mpc": ControllerKind.MPC,
+    "director": ControllerKind.DIRECTOR,
+}
 _CONING: dict[str, Spec] = {"coning": quantity("angle"), "coning_azimuth": quantity("angle")}
 _SWITCH = Spec("switch")
-_CONTROLLER: dict[str, Spec] = {
+_MPC: dict[str, Spec] = {
     "horizon_pulses": INTEGER,
     "solver": choice(MpcSolver),
     "max_iter": INTEGER,
@@ -141,12 +166,12 @@ _CONTROLLER: dict[str, Spec] = {
     "warm_start": _SWITCH,
     "propellant_weight": NUMBER,
 }
-#: Keys of ``[controller]`` and ``[director]`` renamed: old -> new, refused with the new.
+#: Keys of ``[mpc]`` and ``[director]`` renamed: old -> new, refused with the new.
 _FORMER: dict[str, dict[str, str]] = {
-    "controller": {"capture_fraction": "max_offset_over_capture_radius"},
+    "mpc": {"capture_fraction": "max_offset_over_capture_radius"},
     "director": {},
 }
-#: ``[controller.tolerances]``: ControlWeights field -> quantity of its tolerance.
+#: ``[mpc.tolerances]``: ControlWeights field -> quantity of its tolerance.
 _TOLERANCES: dict[str, Spec] = {
     "coning": quantity("angle"),
     "tilt": quantity("angle"),
@@ -163,11 +188,11 @@ _DIRECTOR: dict[str, Spec] = {
     "tol": NUMBER,
     "time_budget": quantity("time"),
     "relinearize": INTEGER,
-    "focus_schedule": TEXT,
+    "focus_schedule": choice(FocusSchedule),
     "matched_side": quantity("length"),
     "energy_range": quantity("dimensionless", "list", 2),
     "disturbance_gain": NUMBER,
-    "rcs": TEXT,
+    "rcs": choice(DirectorRcs),
     "warm_start": _SWITCH,
 }
 #: ``[director.tolerances]``: DirectorWeights field -> quantity of its tolerance.
@@ -220,6 +245,7 @@ class ClosedLoopProblem:
     model : the controller's model (and the plant's, before its wind and dispersion).
     x0 : (STATE.size,) state at the first pulse.
     duration : [s].
+    controller : who flies (``controller``, else by the tables: module docstring).
     mpc : the MPC's options (the LQR takes their weights).
     director : the director's options (``[director]``).
     loop : noise, dispersion, drop-outs, injected faults, seed.
@@ -232,6 +258,7 @@ class ClosedLoopProblem:
     model: params.Model
     x0: np.ndarray
     duration: float
+    controller: ControllerKind
     mpc: MpcOptions
     director: DirectorOptions
     loop: ClosedLoopOptions
@@ -260,30 +287,65 @@ def load_closed_loop(path: str | Path, *, duration: float | None = None) -> Clos
 
 
 def closed_loop_from_tables(
-    src: str, file: Path, data: dict[str, Any], duration: float | None
+    src: str,
+    file: Path,
+    data: dict[str, Any],
+    duration: float | None,
+    absent: ControllerKind = ControllerKind.MPC,
 ) -> ClosedLoopProblem:
     """The closed-loop problem of the parsed file ``data`` (``src`` its path as text,
     ``file`` its path, relative model paths resolved from it); ``duration`` [s] overrides
-    the file's. Shared with campaign files, which are closed-loop files with more tables."""
+    the file's; ``absent`` is the controller of a file that names none and has neither
+    controller table. Shared with campaign files, which are closed-loop files with more
+    tables."""
+    if isinstance(data.get("controller"), dict):
+        raise ProblemFileError(
+            src,
+            "controller",
+            f"{renamed('[controller]', '[mpc]')}: write [mpc] and [mpc.tolerances], their "
+            'keys unchanged; controller = "mpc" (a top-level key, before the first table) '
+            "names the controller the file flies",
+        )
     top = read_table(src, data, "", _TOP, required=("model", "duration"), tables=_TABLES)
     model = model_with_overrides(src, file, top.values["model"], data.get("model_overrides"))
     t_end = top.values["duration"] if duration is None else duration
     if not (math.isfinite(t_end) and t_end > 0):
         raise ProblemFileError(src, top.key("duration"), f"must be positive, got {t_end} s")
     x0 = _initial(src, model, data.get("initial"))
-    controller = data.get("controller", {})
     plant = data.get("plant", {})
     return ClosedLoopProblem(
         model=model,
         x0=x0,
         duration=float(t_end),
-        mpc=_mpc_options(src, controller),
+        controller=_controller(src, top, data, absent),
+        mpc=_mpc_options(src, data.get("mpc", {})),
         director=_director_options(src, data.get("director", {})),
         loop=_loop_options(src, plant),
         plant_parameters=_plant_wind(src, plant),
         title=top.values.get("title", file.stem),
         source=file,
     )
+
+
+def _controller(
+    src: str, top: Table, data: dict[str, Any], absent: ControllerKind
+) -> ControllerKind:
+    """The controller the file names (``controller``), else the one whose options table it
+    has, else ``absent``; with both tables and no name, an error naming ``controller``."""
+    named = top.values.get("controller")
+    if named is not None:
+        return named
+    tables = [name for name in _TABLE_OF if name in data]
+    if len(tables) > 1:
+        allowed = ", ".join(f'"{k.value}"' for k in ControllerKind)
+        raise ProblemFileError(
+            src,
+            "controller",
+            "missing: the file has both [mpc] and [director], so name the one it flies, "
+            f'e.g. controller = "director" (one of {allowed}; a top-level key, before the '
+            "first table)",
+        )
+    return _TABLE_OF[tables[0]] if tables else absent
 
 
 def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
@@ -320,8 +382,8 @@ def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
 
 
 def _mpc_options(src: str, raw: Any) -> MpcOptions:
-    raw, unlimited = _without_budget(src, raw, "controller")
-    table, tol, weights = _weighted_tables(src, raw, "controller", _CONTROLLER, _TOLERANCES)
+    raw, unlimited = _without_budget(src, raw, "mpc")
+    table, tol, weights = _weighted_tables(src, raw, "mpc", _MPC, _TOLERANCES)
     values = dict(table.values)
     if unlimited:
         values["time_budget"] = None
@@ -334,7 +396,7 @@ def _mpc_options(src: str, raw: Any) -> MpcOptions:
         key = (
             table.key("propellant_weight")
             if "ControlWeights.propellant" in message
-            else _option_key(message, (table, _CONTROLLER), (tol, _TOLERANCES), "MpcOptions")
+            else _option_key(message, (table, _MPC), (tol, _TOLERANCES), "MpcOptions")
         )
         raise ProblemFileError(src, key, message) from err
 

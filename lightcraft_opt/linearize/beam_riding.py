@@ -36,7 +36,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from enum import Enum
 
 import casadi as ca
 import numpy as np
@@ -45,7 +44,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.linearize.operating_points import PulseMapJacobian, jacobian_for
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.options import FocusSchedule, PulseMapOptions
 from lightcraft_opt.params import BeamSizeModel, Laser, Model
 from lightcraft_opt.symbolic.beam import beam_side
 from lightcraft_opt.symbolic.pulse_map import PulseMap
@@ -60,14 +59,6 @@ __all__ = [
     "scheduled_focus",
     "side_stability",
 ]
-
-
-class FocusSchedule(Enum):
-    """Where the director focuses for a craft at height h (module docstring)."""
-
-    FAR = "far"
-    AT_CRAFT = "at_craft"
-    MATCHED = "matched"
 
 
 def scheduled_focus(

@@ -129,7 +129,7 @@ def director_start(
     # imported here: the director's QP and Ψ load python-control's neighbours, which
     # `import lightcraft_opt` must not (tests/test_public_api.py)
     from lightcraft_opt.control.director import DirectorController
-    from lightcraft_opt.control.options import DirectorOptions
+    from lightcraft_opt.control.options import DirectorOptions, DirectorRcs
 
     start = time.perf_counter()
     lay, N = problem.inputs, problem.horizon
@@ -138,7 +138,7 @@ def director_start(
     low = float(np.min(problem.lower[e])) / energy
     high = float(np.max(problem.upper[e])) / energy
     options = DirectorOptions(
-        energy_range=(max(low, 0.0), max(high, low, 0.0)), rcs="off", time_budget=None
+        energy_range=(max(low, 0.0), max(high, low, 0.0)), rcs=DirectorRcs.OFF, time_budget=None
     )
     director = DirectorController(problem.model, lay, options, p=p)
     held = ~problem.free

@@ -22,7 +22,7 @@ from lightcraft_opt.campaign.dispersions import (
     draw_many,
     loop_seed,
 )
-from lightcraft_opt.campaign.spec import CampaignController
+from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.files.campaign import load_campaign
 
@@ -88,7 +88,7 @@ def test_bad_distributions_raise_option_errors(make, match):
 def test_campaign_files_read_units_and_nominals():
     c = load_campaign(ROOT / "problems" / "montecarlo_open_loop.toml")
     items = dict(c.dispersions.items)
-    assert c.controller is CampaignController.NONE and c.duration == 3.0
+    assert c.controller is ControllerKind.NONE and c.duration == 3.0
     assert items["mass"] == Normal(0.0325, 0.02 * 0.0325, 3.0)
     assert items["launch_offset_x"] == Normal(0.0, 0.003, 3.0)  # sigma_mm = 3
     assert items["launch_offset_y"] == Normal(0.0, 0.003, 3.0)
@@ -98,7 +98,7 @@ def test_campaign_files_read_units_and_nominals():
     assert c.columns[: len(DISPERSED) + 2] == ("run", *(col for col, _ in DISPERSED.values()),
                                                 "loop_seed")  # fmt: skip
     mpc = load_campaign(ROOT / "problems" / "montecarlo_gust_mpc.toml")
-    assert mpc.controller is CampaignController.MPC
+    assert mpc.controller is ControllerKind.MPC
     assert mpc.plant_parameters["gust_L"] == (2.0, 0.0, 0.0)
     assert mpc.loop.faults == (20, 21)
 
@@ -127,7 +127,9 @@ duration_s = 0.3
          "dispersions.launch_offset_x.relative_sigma"),
         ('[dispersions.mass]\ndistribution = "normal"\n', "dispersions.mass.sigma"),
         ('[plant]\nseed = 3\n', "plant.seed"),
-        ('[campaign]\ncontroller = "pid"\n', "campaign.controller"),
+        ('controller = "pid"\n', "controller"),
+        ('[campaign]\ncontroller = "mpc"\n', "campaign.controller"),  # moved to the top
+        ("[mpc]\n[director]\n", "controller"),  # both tables: name the one
     ],
 )  # fmt: skip
 def test_bad_campaign_files_name_the_key(tmp_path, text, key):
@@ -216,3 +218,38 @@ def test_distributions_inside_their_domains_are_taken(tmp_path):
 def test_dispersions_refuse_a_support_outside_the_domain(name, dist, match):
     with pytest.raises(OptionError, match=rf"Dispersions\.{name}: .*{match}"):
         Dispersions(((name, dist),))
+
+
+@pytest.mark.parametrize(
+    ("text", "kind"),
+    [
+        ('controller = "lqr"\n[mpc]\n', ControllerKind.LQR),
+        ("[director]\n", ControllerKind.DIRECTOR),
+        ("[mpc]\n", ControllerKind.MPC),
+        ("[campaign]\ncompiled = false\n", ControllerKind.NONE),  # neither: the open loop
+    ],
+)
+def test_a_campaign_names_its_controller_as_a_closed_loop_file_does(tmp_path, text, kind):
+    """The closed-loop file's rule (files/closed_loop.py), with the open loop for a file
+    without controller tables; the shipped campaign files name theirs."""
+    path = tmp_path / "c.toml"
+    path.write_text(BASE + text)
+    assert load_campaign(path).controller is kind
+    for name, shipped in [
+        ("montecarlo_open_loop", ControllerKind.NONE),
+        ("montecarlo_gust_mpc", ControllerKind.MPC),
+        ("montecarlo_director", ControllerKind.DIRECTOR),
+    ]:
+        assert load_campaign(ROOT / "problems" / f"{name}.toml").controller is shipped
+
+
+def test_the_former_campaign_controller_says_where_it_went(tmp_path):
+    path = tmp_path / "old.toml"
+    path.write_text(BASE + '[campaign]\ncontroller = "director"\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_campaign(path)
+    assert str(err.value) == (
+        f"{path}: campaign.controller: 'campaign.controller' was renamed 'controller': write "
+        'controller = "director" at the top of the file, before the first table (as in a '
+        "closed-loop file)"
+    )

@@ -18,7 +18,13 @@ import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.control.options import ControllerFault, MpcSolver
+from lightcraft_opt.control.options import (
+    ControllerFault,
+    ControllerKind,
+    DirectorRcs,
+    FocusSchedule,
+    MpcSolver,
+)
 from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
@@ -51,6 +57,7 @@ def test_problem_files_read_what_they_say():
         craft.inertia_axial * nut.x0[STATE.index("spin")][0]))  # fmt: skip
     assert math.degrees(coning) == pytest.approx(5.0, rel=1e-12)
     assert math.degrees(math.atan2(w[2], w[1])) == pytest.approx(17.2, rel=1e-12)
+    assert nut.controller is ControllerKind.MPC
     assert nut.duration == 1.0 and nut.mpc.horizon == 10 and nut.mpc.solver is MpcSolver.HPIPM
     assert nut.mpc.time_budget == pytest.approx(5e-3)
     assert nut.mpc.weights.coning == pytest.approx(1 / math.radians(0.5) ** 2)
@@ -67,7 +74,7 @@ def test_problem_files_read_what_they_say():
 
 
 def test_the_time_budget_comes_from_the_file_or_the_flags(tmp_path, monkeypatch):
-    """time_budget_ms = "none" in [controller] or [director] is the deterministic mode
+    """time_budget_ms = "none" in [mpc] or [director] is the deterministic mode
     (time_budget None); --deterministic sets it for both controllers, --time-budget-ms
     replaces both budgets (in ms); the two flags exclude each other. The controllers the
     command builds are stand-ins that record their options (nothing is flown)."""
@@ -75,7 +82,7 @@ def test_the_time_budget_comes_from_the_file_or_the_flags(tmp_path, monkeypatch)
     model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
     src.write_text(
         f'model = "{model}"\nduration_s = 0.1\n'
-        '[controller]\ntime_budget_ms = "none"\n[director]\ntime_budget_ms = 7\n'
+        'controller = "mpc"\n[mpc]\ntime_budget_ms = "none"\n[director]\ntime_budget_ms = 7\n'
     )
     problem = load_closed_loop(src)
     assert problem.mpc.time_budget is None and problem.director.time_budget == 7e-3
@@ -198,18 +205,18 @@ def test_director_flies_its_crosswind_problem(tmp_path):
 
 
 def test_the_offset_bound_reaches_the_mpc_and_its_old_name_says_renamed(tmp_path):
-    """[controller] max_offset_over_capture_radius is MpcOptions' field of that name;
+    """[mpc] max_offset_over_capture_radius is MpcOptions' field of that name;
     capture_fraction, its name before issue 19, is refused with the new one."""
     src = tmp_path / "offset.toml"
     model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
-    head = f'model = "{model}"\nduration_s = 1.0\n[controller]\n'
+    head = f'model = "{model}"\nduration_s = 1.0\n[mpc]\n'
     src.write_text(head + "max_offset_over_capture_radius = 0.3\n")
     assert load_closed_loop(src).mpc.max_offset_over_capture_radius == 0.3
     src.write_text(head + "capture_fraction = 0.3\n")
     with pytest.raises(ProblemFileError) as err:
         load_closed_loop(src)
     assert str(err.value) == (
-        f"{src}: controller.capture_fraction: 'capture_fraction' was renamed "
+        f"{src}: mpc.capture_fraction: 'capture_fraction' was renamed "
         "'max_offset_over_capture_radius'; write max_offset_over_capture_radius instead"
     )
 
@@ -219,12 +226,16 @@ def test_the_offset_bound_reaches_the_mpc_and_its_old_name_says_renamed(tmp_path
     [
         ('[plant]\nfault = "explode"\n', "plant.fault"),
         ("[plant.dispersion]\nrotor_inertia = 0.01\n", "plant.dispersion.rotor_inertia"),
-        ("[controller.tolerances]\nconing_rad_per_s = 1.0\n", "controller.tolerances.coning"),
-        ("[controller]\nhorizon_pulses = 0\n", "controller.horizon_pulses"),
+        ("[mpc.tolerances]\nconing_rad_per_s = 1.0\n", "mpc.tolerances.coning"),
+        ("[mpc]\nhorizon_pulses = 0\n", "mpc.horizon_pulses"),
         ("[plant.wind]\ntable_height_m = [0.0, 10.0]\n", "plant.wind.table_height_m"),
         ("[initial]\nconing = 5.0\n", "initial.coning"),
-        ('[controller]\ntime_budget_ms = "off"\n', "controller.time_budget_ms"),
+        ('[mpc]\ntime_budget_ms = "off"\n', "mpc.time_budget_ms"),
+        ('controller = "pid"\n', "controller"),
+        ("[controller]\nhorizon_pulses = 10\n", "controller"),
         ("[director]\ntime_budget_s = 0.0\n", "director.time_budget_s"),
+        ('[director]\nfocus_schedule = "near"\n', "director.focus_schedule"),
+        ('[director]\nrcs = "both"\n', "director.rcs"),
     ],
 )
 def test_bad_files_name_the_key_and_exit_2(tmp_path, capsys, text, key):
@@ -281,3 +292,119 @@ def test_a_bad_controller_list_is_a_usage_error(tmp_path, capsys, value, said):
     argv = ["closed-loop", str(NUTATION), "--controller", value, "--out", str(tmp_path)]
     assert main(argv) == 2
     assert said in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "allowed", "member"),
+    [
+        ("focus_schedule", "at_craft", ["far", "at_craft", "matched"], FocusSchedule.AT_CRAFT),
+        ("rcs", "nutation", ["tilt", "nutation", "off"], DirectorRcs.NUTATION),
+    ],
+)
+def test_the_director_choices_are_read_as_enums(tmp_path, key, value, allowed, member):
+    """[director] focus_schedule and rcs: the file's strings become the Enums
+    DirectorOptions holds; another string is refused naming the key and the values."""
+    src = tmp_path / "director.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    head = f'model = "{model}"\nduration_s = 1.0\n[director]\n'
+    src.write_text(head + f'{key} = "{value}"\n')
+    assert getattr(load_closed_loop(src).director, key) is member
+    src.write_text(head + f'{key} = "sideways"\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_closed_loop(src)
+    assert str(err.value) == f"{src}: director.{key}: must be one of {allowed}, got 'sideways'"
+
+
+DIRECTOR_CROSSWIND = PROBLEMS / "director_crosswind.toml"
+
+
+@pytest.mark.parametrize(
+    ("text", "kind"),
+    [
+        ('controller = "lqr"\n[mpc]\nhorizon_pulses = 8\n', ControllerKind.LQR),
+        ('controller = "none"\n[director]\n', ControllerKind.NONE),
+        ('controller = "director"\n[mpc]\n[director]\n', ControllerKind.DIRECTOR),
+        ("[director]\nhorizon_pulses = 8\n", ControllerKind.DIRECTOR),
+        ("[mpc]\nhorizon_pulses = 8\n", ControllerKind.MPC),
+        ("[plant]\nseed = 3\n", ControllerKind.MPC),
+    ],
+)
+def test_a_file_names_its_controller_else_its_table_does(tmp_path, text, kind):
+    """The closed-loop file's rule (files/closed_loop.py): the controller key when given;
+    without it, the director for a [director] table, the MPC for an [mpc] table or for
+    neither."""
+    src = tmp_path / "loop.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    src.write_text(f'model = "{model}"\nduration_s = 1.0\n' + text)
+    assert load_closed_loop(src).controller is kind
+
+
+def test_the_shipped_closed_loop_files_name_their_controller():
+    for name, kind in [
+        ("nutation_suppression", ControllerKind.MPC),
+        ("closed_loop_gust", ControllerKind.MPC),
+        ("director_crosswind", ControllerKind.DIRECTOR),
+        ("director_record", ControllerKind.DIRECTOR),
+    ]:
+        path = PROBLEMS / f"{name}.toml"
+        assert load_closed_loop(path).controller is kind, name
+        assert f'\ncontroller = "{kind.value}"' in path.read_text(), name
+
+
+def test_both_controller_tables_and_no_name_is_an_error_naming_the_key(tmp_path, capsys):
+    """A file with [mpc] and [director] and no controller key could mean either: exit 2,
+    the message names the key and the values it takes, no traceback, nothing flown."""
+    src = tmp_path / "both.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    src.write_text(f'model = "{model}"\nduration_s = 1.0\n[mpc]\n[director]\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_closed_loop(src)
+    assert err.value.field == "controller"
+    out = tmp_path / "o"
+    assert main(["closed-loop", str(src), "--out", str(out)]) == 2
+    said = capsys.readouterr().err
+    assert said.startswith(f"lightcraft: error: {src}: controller: missing: the file has both")
+    assert '"mpc", "lqr", "director", "none"' in said and "Traceback" not in said
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_the_former_controller_table_is_refused_with_its_new_name(tmp_path):
+    src = tmp_path / "old.toml"
+    model = (PROBLEMS.parent / "models" / "flight5-rcs.toml").as_posix()
+    src.write_text(f'model = "{model}"\nduration_s = 1.0\n[controller.tolerances]\ntilt_deg = 2\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_closed_loop(src)
+    assert str(err.value).startswith(
+        f"{src}: controller: '[controller]' was renamed '[mpc]': write [mpc] and "
+        "[mpc.tolerances], their keys unchanged"
+    )
+
+
+def test_director_crosswind_without_a_flag_flies_the_director(tmp_path, monkeypatch, capsys):
+    """The file's controller = "director": with no --controller the director flies (its
+    steps are solves, the summary names it) into runs/<file>-director; three pulses."""
+    monkeypatch.chdir(tmp_path)
+    argv = ["closed-loop", str(DIRECTOR_CROSSWIND), "--duration", "0.1", "--deterministic"]
+    assert main(argv) == 0
+    out = tmp_path / "runs" / "director_crosswind-director"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller"] == "director" and summary["pulses"] == 3
+    assert summary["steps_by_status"] == {"solved": 3}
+    assert "building the director controller" in capsys.readouterr().out
+
+
+def test_the_flag_overrides_the_files_controller(tmp_path, monkeypatch):
+    """--controller none on the director's file flies the fixed beam instead, into
+    runs/<file>-none; nothing of the director is built."""
+    import lightcraft_opt.control.director as director
+
+    def refuse(*args, **kw):  # type: ignore[no-untyped-def]
+        raise AssertionError("the director was built")
+
+    monkeypatch.setattr(director, "DirectorController", refuse)
+    monkeypatch.chdir(tmp_path)
+    argv = ["closed-loop", str(DIRECTOR_CROSSWIND), "--controller", "none", "--duration", "0.1"]
+    assert main(argv) == 0
+    out = tmp_path / "runs" / "director_crosswind-none"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controller"] == "none" and summary["steps_by_status"] == {"open_loop": 3}

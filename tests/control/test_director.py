@@ -26,7 +26,6 @@ import numpy as np
 import pytest
 from support.paths import REPO_ROOT
 
-from lightcraft_opt.campaign.spec import CampaignController
 from lightcraft_opt.compiled import reduced_derivatives_for
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.controllers import OpenLoopController
@@ -36,7 +35,9 @@ from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
+    ControllerKind,
     DirectorOptions,
+    DirectorRcs,
     DirectorWeights,
     MpcSolver,
 )
@@ -163,6 +164,8 @@ def test_director_falls_back_on_an_injected_failure(model, plant):
         ({"horizon": 1}, "horizon"),
         ({"horizon": 4, "relinearize": 5}, "relinearize"),
         ({"focus_schedule": "near"}, "focus_schedule"),
+        ({"focus_schedule": "matched"}, "focus_schedule"),  # the value, not the Enum
+        ({"rcs": "tilt"}, "rcs"),
         ({"energy_range": (0.9, 0.5)}, "energy_range"),
         ({"quadrature": (1, 16)}, "quadrature"),
         ({"disturbance_gain": 1.0}, "disturbance_gain"),
@@ -183,7 +186,7 @@ def test_bad_weight_names_its_field():
 def test_director_table_of_a_closed_loop_file(tmp_path):
     problem = load_closed_loop(REPO_ROOT / "problems" / "director_crosswind.toml")
     assert problem.director.horizon == 10
-    assert problem.director.rcs == "tilt"
+    assert problem.director.rcs is DirectorRcs.TILT
     assert problem.model.laser.size_model is BeamSizeModel.WAIST
     text = (REPO_ROOT / "problems" / "director_crosswind.toml").read_text()
     bad = tmp_path / "bad.toml"
@@ -218,8 +221,8 @@ def test_director_problem_files_load():
     assert record.model.laser.size_model is BeamSizeModel.WAIST
     assert record.model.craft.rcs is None
     campaign = load_campaign(REPO_ROOT / "problems" / "montecarlo_director.toml")
-    assert campaign.controller is CampaignController.DIRECTOR
-    assert campaign.director.rcs == "tilt"
+    assert campaign.controller is ControllerKind.DIRECTOR
+    assert campaign.director.rcs is DirectorRcs.TILT
 
 
 def test_a_dropped_pulse_teaches_the_disturbance_estimate_nothing(model, plant):

@@ -1,0 +1,100 @@
+"""The one factory of the closed loop's controllers: one function builds them from an Enum
+(docs/architecture.md#rule-7).
+
+``lightcraft closed-loop``, the campaign runner and Python build every controller with
+:func:`build_controller` from a :class:`~lightcraft_opt.control.options.ControllerKind`;
+the callers choose the kind and the options (a campaign passes them without a wall-clock
+budget), the factory how each kind is put together:
+
+- ``NONE``: :class:`~.controllers.OpenLoopController`, the nominal input every pulse;
+- ``MPC``: :class:`~.mpc.MpcController` on the linear prediction model in coning
+  coordinates (:func:`~.prediction_model.coning_model`, linearised from ``plant`` once
+  per model and cached on disk: ~25 s the first time);
+- ``LQR``: :class:`~.controllers.LqrController` on the same model, with the MPC's weights;
+- ``DIRECTOR``: :class:`~.director.DirectorController`; on a craft with RCS whose
+  ``DirectorOptions.rcs`` is ``NUTATION``, with the nutation MPC alongside.
+
+The controllers are imported when built: they load python-control (~2 s) through
+linearize/, which an open loop never needs.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from lightcraft_opt.control.options import ControllerKind, DirectorOptions, DirectorRcs, MpcOptions
+from lightcraft_opt.errors import OptionError
+from lightcraft_opt.params import Model
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+
+if TYPE_CHECKING:
+    from lightcraft_opt.control.controllers import Controller
+
+__all__ = ["build_controller", "controller_kind"]
+
+
+def controller_kind(kind: ControllerKind | str, name: str = "kind") -> ControllerKind:
+    """``kind`` as a :class:`ControllerKind` (a member, or its value: "mpc", "lqr",
+    "director", "none"); else an OptionError naming ``name`` and the allowed values."""
+    if isinstance(kind, ControllerKind):
+        return kind
+    try:
+        return ControllerKind(kind)
+    except ValueError:
+        allowed = [k.value for k in ControllerKind]
+        raise OptionError(f"{name} must be one of {allowed}, got {kind!r}") from None
+
+
+def build_controller(
+    kind: ControllerKind | str,
+    model: Model,
+    plant: PulseMap,
+    *,
+    mpc: MpcOptions | None = None,
+    director: DirectorOptions | None = None,
+    compiled: bool | None = None,
+) -> Controller:
+    """The controller ``kind`` of ``model`` for the plant Φ ``plant`` (module docstring).
+
+    Parameters
+    ----------
+    kind : which controller (:class:`ControllerKind`, or its value).
+    model : the controller's model (what it believes; the plant may differ).
+    plant : the closed loop's Φ: its input layout is the controller's output, and the MPC's
+        and LQR's prediction model is linearised from it.
+    mpc : the MPC's options (default :class:`MpcOptions`); the LQR takes their weights, the
+        director its nutation MPC's.
+    director : the director's options (default :class:`DirectorOptions`).
+    compiled : compile the director's Ψ pieces (None: ``compiled.compile_by_default``).
+
+    Raises
+    ------
+    OptionError naming ``build_controller.kind`` when ``kind`` is not a controller.
+    """
+    kind = controller_kind(kind, "build_controller.kind")
+    mpc = MpcOptions() if mpc is None else mpc
+    director = DirectorOptions() if director is None else director
+    assert plant.inputs is not None  # build_pulse_map always records it
+    # here, not at the top: python-control (~2 s) loads with the controllers
+    from lightcraft_opt.control.controllers import LqrController, OpenLoopController
+
+    if kind is ControllerKind.NONE:
+        return OpenLoopController(model, plant.inputs)
+    from lightcraft_opt.control.mpc import MpcController
+    from lightcraft_opt.control.prediction_model import coning_model
+
+    if kind is ControllerKind.DIRECTOR:
+        from lightcraft_opt.control.director import DirectorController
+
+        nutation = None
+        if model.craft.rcs is not None and director.rcs is DirectorRcs.NUTATION:
+            prediction = coning_model(model, pulse_map=plant, cache=True)
+            nutation = MpcController(model, mpc, prediction=prediction)
+        return DirectorController(
+            model, plant.inputs, director, nutation=nutation, compiled=compiled
+        )
+    # linearised once per model structure and numbers, then read from the disk cache
+    prediction = coning_model(model, pulse_map=plant, cache=True)
+    if kind is ControllerKind.MPC:
+        return MpcController(model, mpc, prediction=prediction)
+    return LqrController(model, prediction, mpc.weights)
