@@ -1,51 +1,8 @@
 """Campaign files: a closed-loop file with the distributions of a Monte Carlo campaign.
 
-A campaign file is a closed-loop file (files/closed_loop.py: the model, the
-``controller`` it flies, ``[initial]``, ``[mpc]``, ``[director]``, ``[plant]`` with its
-noise, relative dispersion, drop-outs, faults and wind) with two more tables::
-
-    controller = "mpc"                     # top level, before the tables: "lqr", "director",
-                                           #   or "none", the open loop
-    ...
-
-    [campaign]                             # optional
-    compiled = false                       # Φ interpreted (default: compiled to C where gcc
-                                           #   works, compiled.py)
-
-    [dispersions.mass]                     # one table per dispersed quantity
-    distribution = "normal"
-    relative_sigma = 0.02                  # or sigma_g = 2.0 (absolute, unit in the key)
-    truncate_sigmas = 3.0                  # optional: redraw beyond 3 sigma
-    # mean_g = ...                         # optional: default the nominal value
-
-    [dispersions.wind_speed]
-    distribution = "uniform"
-    low_mps = 0.0
-    high_mps = 3.0
-
-The controller is chosen as in a closed-loop file: ``controller``, else the one whose
-table (``[mpc]`` or ``[director]``) the file has, both tables without ``controller`` an
-error naming it; a file with neither flies the open loop ("none"). ``[campaign]
-controller``, where the name was before issue 28, is refused with the new place.
-
-Quantities (:data:`~lightcraft_opt.campaign.dispersions.DISPERSED`, in drawing order), their
-units, and their nominal value (the normal's default mean, what a relative sigma is
-relative to): ``mass`` (mass: the dry mass), ``inertia_axial``, ``inertia_transverse``
-(inertia: the dry rotor's), ``coupling`` (impulse: impulse_per_pulse), ``dropout_rate``
-(bare: [plant] dropout_rate; clipped to [0, 0.99] when drawn), ``launch_offset_x``,
-``launch_offset_y`` (length, added to [initial]'s position, x east and y north in L:
-nominal 0; formerly ``offset_east``, ``offset_north``, refused with the new name), ``tilt``,
-``tilt_azimuth`` (angle: a tilt composed on top of [initial]'s attitude, leaning toward
-the azimuth clockwise from north; nominal 0; a ``tilt`` without ``tilt_azimuth`` gets a
-uniform azimuth over 0-360°), ``wind_speed`` (speed) and ``wind_direction_from`` (angle),
-the plant's reference wind ([plant.wind], else the model's).
-
-A distribution must stay in its quantity's physical domain
-(:data:`~lightcraft_opt.campaign.dispersions.DOMAINS`): a mass, inertia or coupling is
-positive, a wind speed is not negative, a drop-out rate is in [0, 1]. A uniform's ``low`` and
-``high``, and a normal's mean ± ``truncate_sigmas``·sigma, must lie inside; a normal on a
-bounded quantity must be truncated. ``[plant] seed`` is refused: each run's closed-loop seed
-comes from the campaign seed and the run index (dispersions.py). Problems raise
+A closed-loop file (files/closed_loop.py) with ``[campaign]`` and one ``[dispersions.<name>]``
+table per dispersed quantity; every key, the quantities, their units, nominal values and
+physical domains: docs/files.md#campaign. Problems raise
 :class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
 """
 
@@ -102,7 +59,7 @@ _SHOWN = {"mps": "m/s", "kmh": "km/h", "kg_m2": "kg m^2", "g_cm2": "g cm^2",
 
 
 def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:
-    """Read a campaign file (module docstring) and the model file it names.
+    """Read a campaign file (docs/files.md#campaign) and the model file it names.
 
     Parameters
     ----------

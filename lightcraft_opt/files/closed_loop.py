@@ -1,103 +1,11 @@
 """Closed-loop problem files: TOML in ``problems/`` read into a closed-loop flight to run.
 
-The sibling of :mod:`lightcraft_opt.files.problem` (the optimal control problems): the same
-conventions, and its machinery (the model file with ``[model_overrides]``, the
-``[initial]`` table, model_files' units in the keys, errors naming the key as written), for
-what a closed loop needs instead of an objective: the controller's options, and what
-happens to the plant.
-
-A closed-loop file::
-
-    title = "nutation suppression after a launch kick"
-    model = "../models/flight5-rcs.toml"   # relative to this file; the controller's model
-    duration_s = 1.0
-    controller = "mpc"                     # who flies: "lqr", "director", "none" (the open
-                                           #   loop); --controller overrides it
-
-    [model_overrides]                      # as in problem files: merged over the model file
-
-    [initial]                              # problem files' keys, and the coning:
-    coning_deg = 5.0                       # angle b1 to H, made by the transverse rate
-    coning_azimuth_deg = 17.0              # direction of H_⊥ in B, from b2 toward b3
-
-    [mpc]                                  # MpcOptions; the LQR reads the tolerances
-    horizon_pulses = 10
-    solver = "hpipm"                       # qrqp, osqp, ipopt
-    max_iter = 30
-    tol = 1e-6
-    time_budget_ms = 5.0                   # "none": no wall-clock check, the deterministic
-    envelope_directions = 4                #   mode (the flight depends on its inputs only)
-    max_offset_over_capture_radius = 0.4   # soft bound on |beam offset| / capture radius
-    warm_start = true
-    propellant_weight = 1.0                # [1/N] on the summed mean thrust, linear
-
-    [mpc.tolerances]                       # the objective, weight = 1 / tolerance^2
-    coning_deg = 0.5
-    tilt_deg = 2.0
-    offset_cm = 1.0
-    drift_cm = 20.0
-    velocity_mps = 0.2
-    pointing_cm = 20.0
-    rcs_n = 0.5
-
-    [director]                             # DirectorOptions; all optional
-    horizon_pulses = 10
-    relinearize = 3                        # stages linearised afresh a pulse
-    focus_schedule = "matched"             # "far", "at_craft"
-    matched_side_cm = 7.2                  # the side "matched" keeps (default: the launch side)
-    energy_range = [0.5, 1.0]              # fractions of the flight's pulse energy
-    disturbance_gain = 0.05
-    rcs = "tilt"                           # the director's torques; "nutation": the MPC's
-    time_budget_ms = 20.0                  # or "none"; also solver, max_iter, tol, warm_start
-
-    [director.tolerances]                  # weight = 1 / tolerance^2
-    offset_cm = 1.0
-    drift_cm = 5.0
-    velocity_mps = 0.05
-    coning_deg = 2.0
-    tilt_deg = 10.0
-    pointing_cm = 10.0
-    move_cm = 2.0
-    move_vergence = 0.001                  # [1/m]
-    vergence = 0.002                       # [1/m] on the focus's 1/f against the schedule
-    energy_j = 100.0
-    torque_nm = 0.01                       # the RCS's held transverse torque
-
-    [plant]                                # what the controller does not know
-    dropout_rate = 0.05
-    seed = 0
-    fault_pulses = [4, 12]                 # solver failures injected at these pulses
-    fault = "raise"                        # or "non_finite", "late"
-
-    [plant.noise]                          # 1-sigma of what the controller is told
-    position_mm = 1.0
-    velocity_mps = 0.005
-    attitude_deg = 0.1
-    rate_rad_s = 0.5
-    spin_rpm = 10.0
-
-    [plant.dispersion]                     # relative 1-sigma of parameter-vector entries
-    rotor_axial_inertia_dry = 0.01         # (layout.PARAMETERS names)
-
-    [plant.wind]                           # the wind the plant alone feels:
-    gust_L_mps = [2.0, 0.0, 0.0]           # model files' [environment.wind] keys
-    gust_start_s = 0.4
-    gust_duration_s = 0.8
-
-Every table but the top is optional. The file names the controller it flies with
-``controller``, a top-level key (so before the first table); ``lightcraft closed-loop
---controller`` overrides it. Without it, a file with a ``[director]`` table flies the
-director, one with an ``[mpc]`` table the MPC, one with neither the MPC with MpcOptions'
-defaults (a campaign file, files/campaign.py, the open loop instead), and one with both is
-an error naming ``controller``: say which. The other controller's table may stay: a
-``--controller`` flies it, and the director with ``rcs = "nutation"`` flies the MPC of
-``[mpc]`` alongside. ``[mpc]`` was ``[controller]`` before issue 28 made that name the
-choice; a ``[controller]`` table is refused with the new name.
-
-``[plant.wind]`` replaces the model's wind for the plant (keys not given take params.Wind's
-defaults: calm); the controller keeps the model's. Wind tables (``table_height`` ...) are
-structure of Φ and belong in ``[model_overrides]``. Any problem raises one
-:class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
+The sibling of :mod:`lightcraft_opt.files.problem`: the same conventions and machinery (the
+model file with ``[model_overrides]``, ``[initial]``, model_files' units in the keys, errors
+naming the key as written) for what a closed loop needs instead of an objective: the
+controller it flies (``controller``) and its options (``[mpc]``, ``[director]``), and what
+happens to the plant (``[plant]``). Every table and key, with an example, and the rule that
+picks the controller: docs/files.md#closed-loop.
 """
 
 from __future__ import annotations
@@ -268,7 +176,7 @@ class ClosedLoopProblem:
 
 
 def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
-    """Read a closed-loop file (module docstring) and the model file it names.
+    """Read a closed-loop file (docs/files.md#closed-loop) and the model file it names.
 
     Parameters
     ----------

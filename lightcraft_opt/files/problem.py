@@ -3,113 +3,10 @@
 The edge of :mod:`lightcraft_opt.ocp.problem` (what to solve) and
 :class:`~lightcraft_opt.ocp.options.OcpOptions` (how), as :mod:`lightcraft_opt.files.model` is
 the edge of the model: the same units and spellings (its :data:`QUANTITIES`), converted to
-SI here and nowhere else. A quantity carries its unit in the key (``tilt_deg``,
-``clearance_cm``, ``total_kj``); numbers, text and choices are bare. One exception: a
-table that names a slot (``input = "pointing_L"``, ``state = "r_L"``) takes its bounds,
-reference and path bare, in the slot's SI unit (pointing_L, focus [m], energy [J],
-rcs_thrust [N], motor_torque [N m]; the states of docs/frames.md), or, where the slot is a
-length, speed, angular rate, mass, energy or force, with a unit in the key
-(``lower_cm``, ``upper_kj``) and a rate with ``_per_s`` (``slew_rate_cm_per_s``).
-
-A problem file::
-
-    title = "hold Flight 5 over the pad in a crosswind"
-    model = "../models/flight5.toml"      # relative to this file
-    horizon_pulses = 260
-    t0_s = 0.0                             # optional: time of the first pulse
-    rcs_profile = "hold"                   # optional: RCS thrust over an interval: "hold",
-    rcs_subintervals = 1                   # "subintervals" (this many levels), "phase_locked"
-
-    [model_overrides]                      # optional: tables and keys of a model file,
-    [model_overrides.environment.wind]     # merged over it before it is read
-    speed_ref_mps = 3.0
-    direction_from_deg = 90.0
-    [model_overrides.craft.engine]
-    quadrature_radial = 4                  # a cheaper optic quadrature
-    quadrature_azimuthal = 16
-
-    [initial]                              # optional; defaults: on the pad, upright,
-    position_L_m = [0.01, 0.0, 2.0]        # at rest, the model's spin
-    velocity_L_mps = [0.0, 0.0, 4.0]
-    tilt_deg = 0.0
-    tilt_azimuth_deg = 90.0                # clockwise from north
-    w_B_rad_s = [0.0, 0.0, 0.0]
-    spin_rpm = 10000
-
-    [initial_guess]                        # optional: inputs held over the horizon in the
-    energy = 75.0                          # rollout that starts the solver (SI of the slot)
-
-    [[objective]]
-    term = "lateral_offset"
-    weight = 1e4
-    relative_to = "beam"                   # or "pad" (the default)
-    [[objective]]
-    term = "control_effort"
-    input = "pointing_L"
-    weight = 1e3
-
-    [[constraint]]
-    kind = "offset_limit"                  # |beam offset| / capture radius R_c at most 0.5
-    max_offset_over_capture_radius = 0.5
-    [[constraint]]
-    kind = "tilt_limit"
-    max_tilt_deg = 10
-
-    [[control]]
-    input = "pointing_L"
-    lower_cm = -5.0                        # or lower = -0.05 (the slot's unit, m)
-    upper_cm = 5.0
-    slew_rate = 1.0                        # m/s; or slew_rate_cm_per_s = 100
-    [[control]]
-    input = "energy"
-    lower = 420.0                          # J: held at 420 J (lower = upper)
-    upper = 420.0
-
-    [solver]                               # optional: OcpOptions
-    name = "ipopt"                         # fatrop, sqp_qrqp, sqp_hpipm, sqp_osqp
-    hessian = "exact"                      # or "limited_memory"
-    max_iter = 200
-    tol = 1e-8
-    move_blocking = 1                      # or block lengths [4, 4, 2, ...]
-    threads = 2                            # Φ over the horizon on 2 threads (default: every core)
-    print_level = 0
-    wind_ramp = 0                          # continuation steps from calm air (OcpOptions)
-    prediction = "full"                    # or "reduced": the coning-aware reduced map
-    start = "flown"                        # the director's flight where it applies, or "rollout"
-    convex_iterations = 80                 # first iterations with the convexified Hessian
-    linear_solver = "mumps"                # IPOPT's; or "spral"
-    time_limit_s = 1800.0                  # wall-clock limit of a solve (OcpOptions)
-    stall_iterations = 30                  # stop when the constraint violation has not
-                                           # fallen 10 % in this many iterations; 0: never
-
-    [pulse_map]                            # optional: PulseMapOptions; keys not given
-    scheme = "split4"                      # keep OCP_PULSE_MAP's (split4, 8 substeps,
-    substeps = 8                           # dense 8)
-    dense = 8
-
-Objective terms (``term``, the snake_case name of the dataclass, then its fields):
-``laser_energy`` (weight [1/J]), ``final_altitude`` (weight [1/m]), ``track_reference``
-(state = "r_L", weight: one or one per component, ``path``: N + 1 rows in the slot's unit,
-or ``path_csv``: a CSV file relative to this one with a header, first column ``t_s``,
-then one column per component of the slot in its SI unit, e.g. ``t_s,x_m,y_m,z_m``,
-linearly interpolated at the node times), ``lateral_offset`` (weight [1/m^2],
-relative_to), ``control_effort`` (input, weight, reference), ``control_rate`` (input,
-weight). Constraints (``kind``): ``offset_limit`` (max_offset_over_capture_radius:
-the bound on |beam offset| / R_c at every pulse; formerly ``capture_fraction`` with
-``fraction``, names now refused with their new ones), ``tilt_limit`` (max_tilt),
-``no_ground_contact`` (clearance), ``terminal_altitude`` (minimum, maximum),
-``terminal_state`` (state, lower, upper), ``energy_budget`` (total), ``rcs_envelope`` (no
-keys: phase-locked thrust within [0, max] at every phase).
-``[[control]]``: input, lower, upper, slew_rate (``inf`` for none). A quantity's keys
-take any unit of model_files' QUANTITIES (``clearance_m``, ``clearance_cm`` ...); an
-unknown key gets a did-you-mean hint. :mod:`lightcraft_opt.files.problem_tables` reads the
-tables.
-
-``[model_overrides]`` is merged key by key (a key given in another unit replaces the
-model's, arrays such as ``[[craft.rcs.thrusters]]`` are replaced whole; ``site`` and
-``laser`` paths stay relative to the model file). Any problem raises one
-:class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written in
-it; an error inside the model file names the ``model`` key and quotes the model file's.
+SI here and nowhere else. Every table and key, with an example: docs/files.md#problem;
+:mod:`lightcraft_opt.files.problem_tables` reads the objective, constraint and control
+tables. Any problem raises one :class:`~lightcraft_opt.errors.ProblemFileError` naming the
+file and the key as written in it.
 """
 
 from __future__ import annotations
@@ -296,7 +193,7 @@ def load_problem(
     max_iter: int | None = None,
     time_limit: float | None = None,
 ) -> ProblemFile:
-    """Read a problem file (module docstring) and the model file it names.
+    """Read a problem file (docs/files.md#problem) and the model file it names.
 
     Parameters
     ----------
