@@ -1,74 +1,63 @@
-"""Compile a casadi.Function to C, cached on disk, for faster evaluation.
+"""Φ, its derivative chains and Ψ's, compiled for a model and built once per process.
 
-The generated C of a Function is compiled by the system C compiler into a shared library
-and loaded back with ``casadi.external``; the result evaluates the same expression graph
-to round-off (IEEE arithmetic, no ``-ffast-math``) and has the same name, inputs and
-outputs. A compiled Function has no derivatives of its own: Φ's derivatives are compiled
-as Functions in their own right (:func:`compile_pulse_map_derivatives`, the explicit chain
-of symbolic/pulse_map_derivatives.py over compiled pieces).
+What runs often is compiled to C (cache/compiler.py: one library per Function, a cache
+entry on disk by structure, verified before it is loaded). This module knows Φ's
+structure: :func:`compile_pulse_map` compiles Φ's dense Function and takes its step from
+it; :func:`compile_pulse_map_derivatives` compiles Φ's pieces and their derivatives, each
+its own library, and chains them (symbolic/pulse_map_derivatives.py), never casadi's AD
+through the whole graph; :func:`saved_pulse_map_derivatives` keeps that chain on disk
+(cache/functions.py), so a later build of the same structure loads it in milliseconds
+instead of redoing casadi's AD of every piece (4 s for the OCP's map of problem (a), 10 s
+for problem (b)'s).
 
-Cache: the libraries live in ``$LIGHTCRAFT_CACHE``, else ``$XDG_CACHE_HOME/lightcraft_opt``,
-else ``~/.cache/lightcraft_opt`` (:func:`cache_dir`), one file per key, the sha256 of the
-Function's serialized form (its whole expression graph: model structure and options, not the
-numbers it takes through p) with the casadi version, the compiler's ``--version`` and the
-flags. A library is compiled under a temporary name and moved into place with
-``os.replace``, one process at a time per key (a lock file), so Monte Carlo workers that
-share a cache neither clobber nor duplicate each other's work. Anything that goes wrong
-(no compiler, a failed compile, an unwritable cache) gives back the interpreted Function
-with a :class:`CompilationWarning` that names the cause.
-
-Φ's chain derivatives over compiled pieces are kept on disk too, as serialised Functions
-that name their libraries (:func:`saved_pulse_map_derivatives`, function_cache.py): a
-later build of the same structure loads them in milliseconds instead of redoing casadi's
-AD of every piece (4 s for the OCP's map of problem (a), 10 s for problem (b)'s).
-
-Φ is compiled by default (:func:`pulse_map_for`): ``simulate``, the closed loop and Monte
-Carlo ask for the pulse map of a model through it and get the compiled map, built once per
-process and model (an in-process memo) and compiled once per structure (the disk cache).
-``LIGHTCRAFT_COMPILE=0`` in the environment, or ``compiled=False``, keeps the interpreted
-map; without a C compiler the interpreted map comes with one warning.
+The per-process memo: :func:`pulse_map_for`, :func:`derivatives_for`,
+:func:`dense_sensitivity_for` and :func:`reduced_derivatives_for` build once per process
+and model (the 16 latest kept) and compile once per structure (the disk cache).
+``simulate``, the closed loop and Monte Carlo get Φ through :func:`pulse_map_for`,
+compiled by default; ``LIGHTCRAFT_COMPILE=0`` in the environment, or ``compiled=False``,
+keeps the interpreted map; without a C compiler the interpreted map comes with one
+:class:`~lightcraft_opt.cache.CompilationWarning` per process.
 
 Cost, measured for Flight 5 with the default options (Φ composed of named pieces,
 symbolic/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14 s (idle to
 loaded) and under 0.3 GB once per model structure; a cache hit costs a few ms (serialising
-and hashing the Function); a pulse then takes 0.15-0.4 ms instead of 0.9-2 ms, with results
-identical here to the last bit (promised: to round-off). The flat SX construction of
-before (flat_pulse_map.py) took 3 min and 2.8 GB to compile and gained 1.6x. -O0 compiles
-faster but runs slower than casadi's interpreter; -O1 took longer and more memory than -O2
-on straight-line code.
+and hashing the Function, verifying the library); a pulse then takes 0.15-0.4 ms instead
+of 0.9-2 ms, with results identical here to the last bit (promised: to round-off). The
+flat SX construction of before (flat_pulse_map.py) took 3 min and 2.8 GB to compile and
+gained 1.6x. -O0 compiles faster but runs slower than casadi's interpreter; -O1 took
+longer and more memory than -O2 on straight-line code.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
-import functools
-import hashlib
 import os
-import shutil
-import subprocess
 import sys
-import tempfile
 import time
 import warnings
 from collections import OrderedDict
 from collections.abc import Callable, Hashable, Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import fields
 from pathlib import Path
 from typing import TypeVar
 
 import casadi as ca
 
-from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.function_cache import (
+from lightcraft_opt.cache import (
+    DEFAULT_FLAGS,
+    DERIVATIVE_FLAGS,
     BuildReport,
-    cache_dir,
+    CompilationWarning,
+    compile_all,
+    compile_function,
+    compiler_version,
     load_functions,
     save_functions,
     source_digest,
     structure_key,
 )
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic import pulse_map_derivatives as derivative_chain
@@ -91,44 +80,19 @@ from lightcraft_opt.symbolic.reduced_map_derivatives import (
     build_reduced_map_derivatives,
 )
 
-try:  # POSIX: serialise compilations of one key across processes
-    import fcntl
-except ImportError:  # pragma: no cover - Windows: atomic replace only
-    fcntl = None  # type: ignore[assignment]
-
 __all__ = [
-    "DEFAULT_FLAGS",
     "DERIVATIVES_CACHE",
-    "DERIVATIVE_FLAGS",
     "DERIVATIVE_INSTRUCTION_LIMIT",
-    "CompilationWarning",
-    "cache_dir",
     "compile_by_default",
-    "compile_function",
     "compile_pulse_map",
     "compile_pulse_map_derivatives",
     "dense_sensitivity_for",
     "derivatives_for",
     "derivatives_key",
-    "library_path",
     "pulse_map_for",
     "reduced_derivatives_for",
     "saved_pulse_map_derivatives",
 ]
-
-#: Optimisation flags of the default build. -O2 keeps IEEE semantics, so the library
-#: agrees with the interpreter to round-off (checked to 1e-12 by tests/test_compiled.py).
-#: -O3 is also exact but gains nothing measurable on this straight-line code and compiles
-#: slower; -ffast-math reorders sums and assumes no NaN/inf, which changes results and
-#: blinds simulate's non-finite check; -march=native may fuse multiply-adds (different
-#: last bits) and ties the library to one CPU. Pass ``flags=`` to choose otherwise.
-DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
-
-#: Flags of the derivative pieces (symbolic/pulse_map_derivatives.py). Their SX is long
-#: straight-line code (the jump's Hessian for a 4 x 16 optic: 106k instructions, 2.9 MB of
-#: C) on which gcc -O2 spends minutes; -O1 compiles it in 27 s and runs it 9x faster than
-#: casadi's interpreter (-O0: 9 s, 2.6x). Same IEEE semantics as -O2.
-DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
 
 #: Derivative pieces above this many SX instructions stay interpreted: gcc's time and memory
 #: grow faster than the code (the Hessian of one Yoshida substep, 553k instructions, is 13 MB
@@ -136,106 +100,15 @@ DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
 #: 4 x 16 optic; substep Hessian 229k) compiles whole.
 DERIVATIVE_INSTRUCTION_LIMIT = 250_000
 
-_BUILD = ("-fPIC", "-shared")  # always: a loadable shared library
 _THIS_MODULE = sys.modules[__name__]
 _BUILDING_PIECES = "building Φ's derivative pieces (casadi's AD of each piece, seconds) ..."
-_CACHE_FORMAT = b"lightcraft_opt.compiled 1"
-
-
-class CompilationWarning(RuntimeWarning):
-    """A Function could not be compiled; its interpreted form is used instead."""
-
-
-class _CompileError(Exception):
-    """Why compiling failed (turned into a :class:`CompilationWarning`)."""
-
-
-def _compiler_command(compiler: str | None) -> str:
-    return compiler or os.environ.get("CC") or "gcc"
-
-
-@functools.lru_cache(maxsize=8)
-def _compiler_version(cc: str) -> str:
-    """First line of ``cc --version``; raises _CompileError when there is no such compiler.
-    Asked once per process and compiler (a failure is not cached: a later call asks again)."""
-    try:
-        proc = subprocess.run(
-            [cc, "--version"], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60
-        )
-    except (OSError, subprocess.SubprocessError) as err:
-        raise _CompileError(f"no C compiler {cc!r} ({err})") from err
-    if proc.returncode != 0:
-        raise _CompileError(f"{cc} --version failed: {proc.stderr.strip()[-500:]}")
-    return proc.stdout.splitlines()[0] if proc.stdout else cc
-
-
-def _key(f: ca.Function, compiler_version: str, flags: Sequence[str]) -> str:
-    digest = hashlib.sha256(_CACHE_FORMAT)
-    for part in (ca.__version__, compiler_version, " ".join(flags)):
-        digest.update(b"\0" + part.encode())
-    digest.update(b"\0" + f.serialize().encode())
-    return digest.hexdigest()
-
-
-def library_path(
-    f: ca.Function, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
-) -> Path:
-    """Where the compiled library of ``f`` is (or will be) cached.
-
-    Raises
-    ------
-    FileNotFoundError : when ``compiler`` (default ``$CC``, else gcc) does not run: its
-        version is part of the key.
-    """
-    try:
-        return _library_path(f, _compiler_command(compiler), flags)
-    except _CompileError as err:
-        raise FileNotFoundError(str(err)) from err
-
-
-def _library_path(f: ca.Function, cc: str, flags: Sequence[str]) -> Path:
-    return cache_dir() / f"{f.name()}-{_key(f, _compiler_version(cc), flags)}.so"
-
-
-def compile_function(
-    f: ca.Function, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
-) -> ca.Function:
-    """``f`` compiled to C and loaded back, from the cache when it is there.
-
-    Parameters
-    ----------
-    f : an SX or MX Function (e.g. ``PulseMap.dense``).
-    compiler : C compiler command; default ``$CC``, else ``gcc``.
-    flags : optimisation flags (see :data:`DEFAULT_FLAGS` for why -O2).
-
-    Returns
-    -------
-    casadi.Function with the name, inputs and outputs of ``f`` that evaluates the same
-    expressions natively (no derivatives); ``f`` itself, with a
-    :class:`CompilationWarning` naming the cause, when compiling is not possible.
-    """
-    cc = _compiler_command(compiler)
-    try:
-        path = _library_path(f, cc, flags)
-        if not path.exists():
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with _locked(path.with_suffix(".lock")):
-                if not path.exists():  # another process may have built it meanwhile
-                    _build(f, path, cc, flags)
-        return ca.external(f.name(), str(path))
-    except (_CompileError, OSError, RuntimeError) as err:
-        warnings.warn(
-            f"could not compile {f.name()!r}, using the interpreted Function: {err}",
-            CompilationWarning,
-            stacklevel=2,
-        )
-        return f
 
 
 def compile_pulse_map(
     phi: PulseMap, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
 ) -> PulseMap:
-    """The pulse map with its dense Function compiled (:func:`compile_function`).
+    """The pulse map with its dense Function compiled
+    (:func:`~lightcraft_opt.cache.compile_function`).
 
     ``step`` is taken from the compiled ``dense`` (its last column is ``x_next``, the
     same expression), so one library serves both and gcc runs once. If compiling fails,
@@ -254,44 +127,6 @@ def compile_pulse_map(
         phi.step.name_out(),
     )
     return dataclasses.replace(phi, step=step, dense=dense)
-
-
-def _build(f: ca.Function, path: Path, cc: str, flags: Sequence[str]) -> None:
-    """Generate C for ``f``, compile it beside ``path`` and move it into place."""
-    work = Path(tempfile.mkdtemp(prefix=f".{f.name()}-", dir=path.parent))
-    try:
-        source = work / f"{f.name()}.c"
-        generator = ca.CodeGenerator(source.name, {"with_header": False})
-        generator.add(f)
-        source.write_text(generator.dump())
-        target = work / path.name
-        cmd = [cc, *flags, *_BUILD, str(source), "-o", str(target), "-lm"]
-        try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
-        except OSError as err:
-            raise _CompileError(f"{cc} did not run ({err})") from err
-        if proc.returncode != 0:
-            raise _CompileError(
-                f"{' '.join(cmd[: 1 + len(flags)])} ... exited {proc.returncode}: "
-                f"{proc.stderr.strip()[-500:]}"
-            )
-        os.replace(target, path)
-    finally:
-        shutil.rmtree(work, ignore_errors=True)
-
-
-@contextlib.contextmanager
-def _locked(lock_path: Path) -> Iterator[None]:
-    """Hold an exclusive lock on ``lock_path`` (a no-op without fcntl)."""
-    if fcntl is None:  # pragma: no cover
-        yield
-        return
-    with open(lock_path, "a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
 
 
 # --------------------------------------------------------------------------- Φ by default
@@ -389,12 +224,24 @@ def compile_pulse_map_derivatives(
     report: BuildReport | None = None,
 ) -> PulseMapDerivatives:
     """Φ's explicit-chain derivatives (symbolic/pulse_map_derivatives.py) over compiled
-    pieces: each value piece (:data:`DEFAULT_FLAGS`) and derivative piece
-    (:data:`DERIVATIVE_FLAGS`) of at most ``max_instructions`` SX instructions is its own
-    library, cached like any other, compiled ``workers`` at a time (default: the cores);
-    bigger pieces stay interpreted. A piece that does not compile stays interpreted (with
-    the warning of :func:`compile_function`). ``report`` is told what is being built and
-    how many libraries are compiled so far."""
+    pieces: each value piece (``DEFAULT_FLAGS``) and derivative piece (``DERIVATIVE_FLAGS``,
+    cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
+    cached like any other, compiled ``workers`` at a time (default: the cores); bigger
+    pieces stay interpreted. A piece that does not compile stays interpreted (with the
+    warning of ``compile_function``). ``report`` is told what is being built and how many
+    libraries are compiled so far."""
+    return _compiled_derivatives(phi, derivatives, compiler, workers, max_instructions, report)[0]
+
+
+def _compiled_derivatives(
+    phi: PulseMap,
+    derivatives: DerivativePieces | None,
+    compiler: str | None,
+    workers: int | None,
+    max_instructions: int,
+    report: BuildReport | None,
+) -> tuple[PulseMapDerivatives, list[Path]]:
+    """(:func:`compile_pulse_map_derivatives`, the libraries its chain loads)."""
     if phi.pieces is None:
         raise ParameterError("phi", "needs a Φ from build_pulse_map, with its pieces")
     if derivatives is None:
@@ -402,14 +249,14 @@ def compile_pulse_map_derivatives(
             report(_BUILDING_PIECES)
         derivatives = build_derivative_pieces(phi.pieces)
     built = [f for f in derivatives.functions() if f is not None]
-    fast, done = _compiled_with_pieces(
+    fast, done, libraries = _compiled_with_pieces(
         phi.pieces, built, compiler, workers, max_instructions, report
     )
     compiled_derivatives = iter(done)
     replaced = tuple(
         None if f is None else next(compiled_derivatives) for f in derivatives.functions()
     )
-    return chain_derivatives(phi, DerivativePieces.of(replaced), fast)
+    return chain_derivatives(phi, DerivativePieces.of(replaced), fast), libraries
 
 
 def _compiled_with_pieces(
@@ -419,65 +266,25 @@ def _compiled_with_pieces(
     workers: int | None,
     max_instructions: int,
     report: BuildReport | None = None,
-) -> tuple[PulseMapPieces, list[ca.Function]]:
-    """Φ's value pieces (:data:`DEFAULT_FLAGS`) and the given derivative pieces
-    (:data:`DERIVATIVE_FLAGS`) compiled, each its own library, ``workers`` at a time (default:
+) -> tuple[PulseMapPieces, list[ca.Function], list[Path]]:
+    """Φ's value pieces (``DEFAULT_FLAGS``) and the given derivative pieces
+    (``DERIVATIVE_FLAGS``) compiled, each its own library, ``workers`` at a time (default:
     the cores); pieces over ``max_instructions`` SX instructions, or that do not compile,
-    stay interpreted."""
+    stay interpreted. Returns the pieces, the derivative pieces and the libraries loaded."""
     values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
     jobs = [(f, DEFAULT_FLAGS) for f in values] + [(f, DERIVATIVE_FLAGS) for f in derivatives]
-    done = _compile_all(jobs, compiler, workers, max_instructions, report)
+    done, libraries = compile_all(
+        jobs,
+        compiler=compiler,
+        workers=workers,
+        max_instructions=max_instructions,
+        report=report,
+    )
     normalise, jump, substep, coning_rate = done[:4]
     fast = dataclasses.replace(
         pieces, normalise=normalise, jump=jump, substep=substep, coning_rate=coning_rate
     )
-    return fast, done[4:]
-
-
-def _compile_all(
-    jobs: Sequence[tuple[ca.Function, tuple[str, ...]]],
-    compiler: str | None,
-    workers: int | None,
-    max_instructions: int,
-    report: BuildReport | None = None,
-) -> list[ca.Function]:
-    """Each (Function, flags) compiled, its own library, ``workers`` at a time (default: the
-    cores), in order; a Function over ``max_instructions`` SX instructions, or one that does
-    not compile, stays interpreted. ``report`` (if any) hears how many libraries are not in
-    the cache, then each one compiled."""
-    small = [job for job in jobs if job[0].n_instructions() <= max_instructions]
-    missing = _missing_libraries(small, compiler) if report is not None else set()
-    if report is not None and missing:
-        report(
-            f"compiling {len(missing)} libraries with {_compiler_command(compiler)} "
-            "(a minute or more, once per structure) ..."
-        )
-    count = iter(range(1, len(missing) + 1))  # next() is atomic under the GIL
-
-    def compiled_or_not(job: tuple[ca.Function, tuple[str, ...]]) -> ca.Function:
-        f, flags = job
-        if f.n_instructions() > max_instructions:
-            return f
-        out = compile_function(f, compiler=compiler, flags=flags)
-        if report is not None and id(f) in missing:
-            report(f"  compiled {next(count)}/{len(missing)}: {f.name()}")
-        return out
-
-    n = workers or os.cpu_count() or 1
-    with ThreadPoolExecutor(max_workers=max(1, n)) as pool:
-        return list(pool.map(compiled_or_not, jobs))
-
-
-def _missing_libraries(
-    jobs: Sequence[tuple[ca.Function, tuple[str, ...]]], compiler: str | None
-) -> set[int]:
-    """ids of the Functions of ``jobs`` whose library is not in the cache (none when
-    there is no compiler: nothing will be compiled)."""
-    cc = _compiler_command(compiler)
-    try:
-        return {id(f) for f, flags in jobs if not _library_path(f, cc, flags).exists()}
-    except _CompileError:
-        return set()
+    return fast, done[4:], libraries
 
 
 def derivatives_for(
@@ -508,7 +315,7 @@ def derivatives_for(
     return _remembered(_DERIVATIVES, (model, opts, want), build)
 
 
-#: Name of the cache files of Φ's compiled derivatives (function_cache.py).
+#: Name of the cache entries of Φ's compiled derivatives (cache/functions.py).
 DERIVATIVES_CACHE = "pulse_map_derivatives"
 
 
@@ -519,11 +326,12 @@ def saved_pulse_map_derivatives(
     report: BuildReport | None = None,
 ) -> PulseMapDerivatives:
     """:func:`compile_pulse_map_derivatives` of ``phi``, kept on disk by structure
-    (function_cache.py): the chain's Functions over the compiled pieces, serialised (they
-    name the libraries), under the key :func:`derivatives_key`. A hit loads in
-    milliseconds instead of seconds of casadi's AD on each piece; a damaged file is built
-    again with a :class:`~lightcraft_opt.function_cache.CacheWarning`. Derivatives with a
-    piece that failed to compile (no compiler ...) are used, never saved.
+    (cache/functions.py): the chain's Functions over the compiled pieces, serialised with
+    the libraries they call (verified before loading), under the key
+    :func:`derivatives_key`. A hit loads in milliseconds instead of seconds of casadi's AD
+    on each piece; a damaged entry, or one whose library is damaged, is built again with a
+    :class:`~lightcraft_opt.cache.CacheWarning`. Derivatives with a piece that failed to
+    compile (no compiler ...) are used, never saved.
     ``max_instructions`` as in :func:`compile_pulse_map_derivatives`."""
     start = time.perf_counter()
     key = derivatives_key(phi, max_instructions)
@@ -533,14 +341,13 @@ def saved_pulse_map_derivatives(
             report(f"Φ's derivatives: loaded from the cache in {time.perf_counter() - start:.1f} s")
         pieces_of = DerivativePieces.of(tuple(loaded[3:]))
         return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of)
-    derivatives = compile_pulse_map_derivatives(
-        phi, max_instructions=max_instructions, report=report
-    )
+    derivatives, libraries = _compiled_derivatives(phi, None, None, None, max_instructions, report)
     pieces = derivatives.pieces.functions()
     complete = derivatives.hessian is not None and _all_compiled(pieces, max_instructions)
     if key is not None and complete:
         functions = [derivatives.values, derivatives.jacobian, derivatives.hessian]
-        save_functions(DERIVATIVES_CACHE, key, [*functions, *(f for f in pieces if f)])
+        saved = [*functions, *(f for f in pieces if f)]
+        save_functions(DERIVATIVES_CACHE, key, saved, libraries)
     return derivatives
 
 
@@ -561,9 +368,8 @@ def derivatives_key(
     in through p), the options and input layout, the compiler's version, flags and
     instruction limit, and the source of the chain and of this module; None without a C
     compiler."""
-    try:
-        version = _compiler_version(_compiler_command(None))
-    except _CompileError:
+    version = compiler_version()
+    if version is None:
         return None
     pieces = phi.pieces
     assert pieces is not None
@@ -598,11 +404,11 @@ def dense_sensitivity_for(
 ) -> ca.Function:
     """``pulse_map_dense_sensitivity(x, u, p, t, dx, dp) -> (X, dX)`` of ``model``'s Φ
     (:func:`~lightcraft_opt.symbolic.pulse_map_sensitivities.build_dense_sensitivity`) in
-    ``n_directions`` directions, chained over pieces compiled (:data:`DERIVATIVE_FLAGS`)
-    unless ``compiled`` is False or :func:`compile_by_default` says no. The pieces are built
-    once per process for equal models, options and directions and compiled once per
-    structure (the disk cache); the chain itself, a short MX graph, is assembled on each
-    call."""
+    ``n_directions`` directions, chained over pieces compiled
+    (:data:`~lightcraft_opt.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is False or
+    :func:`compile_by_default` says no. The pieces are built once per process for equal
+    models, options and directions and compiled once per structure (the disk cache); the
+    chain itself, a short MX graph, is assembled on each call."""
     opts = options or PulseMapOptions()
     want = compile_by_default() if compiled is None else bool(compiled)
     phi = pulse_map_for(model, opts, compiled=False)
@@ -614,7 +420,7 @@ def dense_sensitivity_for(
         if not want:
             return interpreted
         with _compilation_warned_once():
-            _, done = _compiled_with_pieces(
+            _, done, _ = _compiled_with_pieces(
                 own, interpreted.functions(), None, None, DERIVATIVE_INSTRUCTION_LIMIT
             )
         return interpreted.replaced(tuple(done))
@@ -632,10 +438,11 @@ def reduced_derivatives_for(
 ) -> ReducedMapDerivatives:
     """The reduced map Ψ's value and Jacobian chains for ``model``
     (:func:`~lightcraft_opt.symbolic.reduced_map_derivatives.build_reduced_map_derivatives`),
-    over pieces compiled (values with :data:`DEFAULT_FLAGS`, Jacobians with
-    :data:`DERIVATIVE_FLAGS`) unless ``compiled`` is False or :func:`compile_by_default` says
-    no; built once per process for equal models and options, compiled once per structure
-    (Flight 5 with a 4 x 16 optic: about a minute on 2 cores, then the disk cache)."""
+    over pieces compiled (values with :data:`~lightcraft_opt.cache.DEFAULT_FLAGS`,
+    Jacobians with :data:`~lightcraft_opt.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is
+    False or :func:`compile_by_default` says no; built once per process for equal models
+    and options, compiled once per structure (Flight 5 with a 4 x 16 optic: about a minute
+    on 2 cores, then the disk cache)."""
     opts = options or ReducedMapOptions()
     want = compile_by_default() if compiled is None else bool(compiled)
 
@@ -646,7 +453,7 @@ def reduced_derivatives_for(
         flags = (DERIVATIVE_FLAGS, DERIVATIVE_FLAGS, DEFAULT_FLAGS, DEFAULT_FLAGS)
         jobs = list(zip(interpreted.pieces(), flags, strict=True))
         with _compilation_warned_once():
-            done = _compile_all(jobs, None, None, DERIVATIVE_INSTRUCTION_LIMIT)
+            done, _ = compile_all(jobs, max_instructions=DERIVATIVE_INSTRUCTION_LIMIT)
         return interpreted.replaced((done[0], done[1], done[2], done[3]))
 
     return _remembered(_REDUCED, (model, opts, want), build)

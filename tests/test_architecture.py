@@ -76,6 +76,10 @@ def test_import_contracts_kept() -> None:
         ("ocp/problem.py", "import lightcraft_opt.ocp.transcription\n", "ocp/: the what"),
         ("control/result.py", "import lightcraft_opt.control.mpc\n", "control/: options and"),
         ("ocp/result.py", "import casadi\n", "numpy-only: no casadi"),
+        ("cache/entries.py", "import lightcraft_opt.cache.compiler\n", "cache/: the C compiler"),
+        ("cache/functions.py", "import lightcraft_opt.cache.compiler\n", "cache/: the C compiler"),
+        ("cache/compiler.py", "import lightcraft_opt.symbolic.rcs\n", "cache/ is about files"),
+        ("cache/entries.py", "import lightcraft_opt.compiled\n", "Capabilities point down"),
     ],
 )
 def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, broken: str) -> None:

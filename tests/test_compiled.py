@@ -25,18 +25,23 @@ import pytest
 from support.models import table1_flight5
 
 from lightcraft_opt import compiled
+from lightcraft_opt.cache import (
+    CacheWarning,
+    CompilationWarning,
+    cache_path,
+    compile_function,
+    library_path,
+    load_functions,
+)
+from lightcraft_opt.cache import compiler as cache_compiler
 from lightcraft_opt.compiled import (
     DERIVATIVES_CACHE,
-    CompilationWarning,
-    compile_function,
     compile_pulse_map,
     compile_pulse_map_derivatives,
     derivatives_key,
-    library_path,
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.function_cache import CacheWarning, cache_path, load_functions
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine
@@ -114,7 +119,7 @@ def test_second_compile_is_a_cache_hit(small, monkeypatch):
     def no_build(*args, **kwargs):
         raise AssertionError("compiled again instead of loading the cached library")
 
-    monkeypatch.setattr(compiled, "_build", no_build)
+    monkeypatch.setattr(cache_compiler, "_build", no_build)
     with warnings.catch_warnings():
         warnings.simplefilter("error", CompilationWarning)
         again = compile_pulse_map(phi)
@@ -128,7 +133,7 @@ def test_a_new_process_finds_the_same_library(small):
     code = (
         "import sys; sys.path.insert(0, sys.argv[1]);"
         "from test_compiled import SMALL, _small_model;"
-        "from lightcraft_opt.compiled import library_path;"
+        "from lightcraft_opt.cache import library_path;"
         "from lightcraft_opt.symbolic.pulse_map import build_pulse_map;"
         "print(library_path(build_pulse_map(_small_model(), SMALL).dense))"
     )
@@ -401,7 +406,7 @@ def test_compiled_chain_derivatives_are_saved_and_loaded_by_structure(small, mon
         raise AssertionError("built again instead of loading the saved derivatives")
 
     with monkeypatch.context() as patch:
-        patch.setattr(compiled, "compile_pulse_map_derivatives", no_build)
+        patch.setattr(compiled, "_compiled_derivatives", no_build)
         with warnings.catch_warnings():
             warnings.simplefilter("error", CacheWarning)
             loaded = saved_pulse_map_derivatives(phi, max_instructions=limit)

@@ -43,7 +43,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import cache_dir
+from lightcraft_opt.cache import cache_dir
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     CONING,
@@ -293,7 +293,7 @@ def coning_model(
     altitudes : grid of altitudes [m] (increasing).
     speeds : vertical speed at each altitude [m/s] (default: the nominal flight's from
         the pad when it passes that altitude).
-    cache : keep the model on disk, in ``compiled.cache_dir()`` (True) or the folder
+    cache : keep the model on disk, in ``cache.cache_dir()`` (True) or the folder
         given, under the sha256 of Φ's expression graph, the model's parameter vector,
         the grid and the coordinates' Functions, and read it back instead of linearising
         again (a hit costs Φ's build and serialisation, ~3 s, instead of ~25 s).
