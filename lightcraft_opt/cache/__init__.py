@@ -4,6 +4,8 @@
   atomic write, verification before use, removal and a warning when damaged;
 - functions.py: casadi Functions on disk (Φ's chain derivatives, the NLP's surrogate);
 - compiler.py: the C compiler, and the libraries it makes from casadi Functions.
+
+The MPC's scheduled models (control/prediction_model.py) are entries too.
 """
 
 from lightcraft_opt.cache.compiler import (
