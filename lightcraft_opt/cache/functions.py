@@ -1,7 +1,7 @@
 """casadi Functions kept on disk by structure, as cache entries (entries.py).
 
 Some products of a build are pure structure, the same for every run of a problem whose
-structure is the same: Φ's explicit-chain derivatives over compiled pieces (compiled.py)
+structure is the same: Φ's explicit-chain derivatives over compiled pieces (compiled/pulse_map.py)
 and the SX Functions of the NLP's surrogate (ocp/transcription.py). Building them takes
 seconds (casadi's symbolic AD, CSE and expansion); loading their serialised form takes
 milliseconds. :func:`save_functions` keeps such Functions as one entry, serialised and

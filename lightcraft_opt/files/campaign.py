@@ -7,7 +7,7 @@ wind) with two more tables::
     [campaign]
     controller = "mpc"                     # "lqr", "director", or "none": the open loop (default)
     compiled = false                       # optional: Φ interpreted (default: compiled to C
-                                           # where gcc works, compiled.py)
+                                           # where gcc works, compiled/)
 
     [dispersions.mass]                     # one table per dispersed quantity
     distribution = "normal"
