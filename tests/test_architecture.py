@@ -83,6 +83,11 @@ def test_import_contracts_kept() -> None:
             "layout/: the layouts never import",
         ),
         ("layout/vector_layout.py", "import lightcraft_opt.params\n", "A layout knows no model"),
+        ("cache/entries.py", "import lightcraft_opt.cache.compiler\n", "cache/: the C compiler"),
+        ("cache/functions.py", "import lightcraft_opt.cache.compiler\n", "cache/: the C compiler"),
+        ("cache/compiler.py", "import lightcraft_opt.symbolic.rcs\n", "cache/ is about files"),
+        ("cache/entries.py", "import lightcraft_opt.compiled\n", "Capabilities point down"),
+        ("compiled/pulse_map.py", "import lightcraft_opt.compiled.memo\n", "compiled/: the memo"),
     ],
 )
 def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, broken: str) -> None:

@@ -25,18 +25,25 @@ import pytest
 from support.models import table1_flight5
 
 from lightcraft_opt import compiled
+from lightcraft_opt.cache import (
+    CacheWarning,
+    CompilationWarning,
+    cache_path,
+    compile_function,
+    library_path,
+    load_functions,
+)
+from lightcraft_opt.cache import compiler as cache_compiler
 from lightcraft_opt.compiled import (
     DERIVATIVES_CACHE,
-    CompilationWarning,
-    compile_function,
     compile_pulse_map,
     compile_pulse_map_derivatives,
     derivatives_key,
-    library_path,
+    memo,
     saved_pulse_map_derivatives,
 )
+from lightcraft_opt.compiled import pulse_map as compiled_pulse_map
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.function_cache import CacheWarning, cache_path, load_functions
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine
@@ -114,7 +121,7 @@ def test_second_compile_is_a_cache_hit(small, monkeypatch):
     def no_build(*args, **kwargs):
         raise AssertionError("compiled again instead of loading the cached library")
 
-    monkeypatch.setattr(compiled, "_build", no_build)
+    monkeypatch.setattr(cache_compiler, "_build", no_build)
     with warnings.catch_warnings():
         warnings.simplefilter("error", CompilationWarning)
         again = compile_pulse_map(phi)
@@ -128,7 +135,7 @@ def test_a_new_process_finds_the_same_library(small):
     code = (
         "import sys; sys.path.insert(0, sys.argv[1]);"
         "from test_compiled import SMALL, _small_model;"
-        "from lightcraft_opt.compiled import library_path;"
+        "from lightcraft_opt.cache import library_path;"
         "from lightcraft_opt.symbolic.pulse_map import build_pulse_map;"
         "print(library_path(build_pulse_map(_small_model(), SMALL).dense))"
     )
@@ -265,8 +272,8 @@ def test_mapaccum_chunks_fly_the_per_pulse_policy_flight(flight5, case, status, 
 @pytest.fixture
 def fresh_memo(monkeypatch):
     """pulse_map_for's in-process memo and one-warning flag, emptied for one test."""
-    monkeypatch.setattr(compiled, "_MAPS", type(compiled._MAPS)())
-    monkeypatch.setattr(compiled, "_warned_once", False)
+    monkeypatch.setattr(memo, "_MAPS", type(memo._MAPS)())
+    monkeypatch.setattr(memo, "_warned_once", False)
 
 
 def test_pulse_map_for_builds_once_and_compiles_by_default(small, fresh_memo, monkeypatch):
@@ -282,7 +289,7 @@ def test_pulse_map_for_builds_once_and_compiles_by_default(small, fresh_memo, mo
     def no_build(*args, **kwargs):
         raise AssertionError("built Φ again for an equal model")
 
-    monkeypatch.setattr(compiled, "build_pulse_map", no_build)
+    monkeypatch.setattr(memo, "build_pulse_map", no_build)
     assert compiled.pulse_map_for(model, SMALL) is first
     assert compiled.pulse_map_for(_small_model(), SMALL) is first  # equal, not the same object
     again = simulate(model, 0.5, options=SMALL)  # simulate asks pulse_map_for
@@ -344,13 +351,13 @@ def test_compiled_dense_sensitivity_equals_the_interpreted_chain(small, monkeypa
     library at DERIVATIVE_FLAGS) against the same chain interpreted, in 2 random directions
     of the state and every parameter."""
     model, _, _ = small
-    monkeypatch.setattr(compiled, "_SENSITIVITIES", type(compiled._SENSITIVITIES)())
+    monkeypatch.setattr(memo, "_SENSITIVITIES", type(memo._SENSITIVITIES)())
     with warnings.catch_warnings():
         warnings.simplefilter("error", CompilationWarning)
         fast = compiled.dense_sensitivity_for(model, SMALL, 2, compiled=True)
     slow = compiled.dense_sensitivity_for(model, SMALL, 2, compiled=False)
     assert compiled.dense_sensitivity_for(model, SMALL, 2, compiled=True) is not fast  # MX anew
-    assert len(compiled._SENSITIVITIES) == 2  # ... over the pieces built once
+    assert len(memo._SENSITIVITIES) == 2  # ... over the pieces built once
     rng = np.random.default_rng(4)
     x = initial_state(model, r_L=(0.01, -0.02, 4.0), v_L=(0.2, 0.1, 8.0), w_B=(0.0, 2.0, -1.0))
     u, p = nominal_inputs(model), parameter_values(model)
@@ -401,7 +408,7 @@ def test_compiled_chain_derivatives_are_saved_and_loaded_by_structure(small, mon
         raise AssertionError("built again instead of loading the saved derivatives")
 
     with monkeypatch.context() as patch:
-        patch.setattr(compiled, "compile_pulse_map_derivatives", no_build)
+        patch.setattr(compiled_pulse_map, "_compiled_derivatives", no_build)
         with warnings.catch_warnings():
             warnings.simplefilter("error", CacheWarning)
             loaded = saved_pulse_map_derivatives(phi, max_instructions=limit)

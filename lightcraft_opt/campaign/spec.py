@@ -102,7 +102,7 @@ class Campaign:
     plant_parameters : {PARAMETERS slot: value} the plant has and the controller does not
         (its wind), before the draws.
     dispersions : what each run draws (:class:`~lightcraft_opt.campaign.dispersions.Dispersions`).
-    compiled : fly the plant Φ compiled to C (compiled.py; cached on disk): True, False,
+    compiled : fly the plant Φ compiled to C (compiled/; cached on disk): True, False,
         or None (default) for compiled unless ``LIGHTCRAFT_COMPILE=0``.
     title : a name for reports.
     """

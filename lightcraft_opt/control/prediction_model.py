@@ -35,10 +35,10 @@ thrust's lift) is measured there as the prediction error against Φ.
 from __future__ import annotations
 
 import functools
-import hashlib
+import io
 import math
 import os
-import tempfile
+import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -46,7 +46,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import cache_dir
+from lightcraft_opt.cache import cache_dir, load_entry, structure_key, write_entry
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     CONING,
@@ -289,10 +289,12 @@ def coning_model(
     altitudes : grid of altitudes [m] (increasing).
     speeds : vertical speed at each altitude [m/s] (default: the nominal flight's from
         the pad when it passes that altitude).
-    cache : keep the model on disk, in ``compiled.cache_dir()`` (True) or the folder
-        given, under the sha256 of Φ's expression graph, the model's parameter vector,
-        the grid and the coordinates' Functions, and read it back instead of linearising
-        again (a hit costs Φ's build and serialisation, ~3 s, instead of ~25 s).
+    cache : keep the model on disk as a cache entry (cache/entries.py: checksummed,
+        verified before use, built again with a warning when damaged), in
+        :func:`~lightcraft_opt.cache.cache_dir` (True) or the folder given, under the
+        sha256 of Φ's expression graph, the model's parameter vector, the grid and the
+        coordinates' Functions, and read it back instead of linearising again (a hit costs
+        Φ's build and serialisation, ~3 s, instead of ~25 s).
 
     Raises
     ------
@@ -331,12 +333,15 @@ def coning_model(
         raise ParameterError("speeds", f"needs one speed per altitude ({a_grid.size})")
     folder = (cache_dir() if cache is True else Path(cache)) if cache else None
     path = None if folder is None else folder / _cache_name(model, phi, s_grid, a_grid, v_grid)
-    if path is not None and path.exists():
-        return _load(path, lay, u_op, model.name)
+    if path is not None:
+        errors = (ValueError, KeyError, OSError, zipfile.BadZipFile)
+        loaded = load_entry(path, lambda data: _decoded(data, lay, u_op, model.name), errors)
+        if loaded is not None:
+            return loaded
     jac = pulse_map if isinstance(pulse_map, PulseMapJacobian) else pulse_map_jacobian(phi)
     result = _linearise_grid(model, jac, s_grid, a_grid, v_grid, u_op)
     if path is not None:
-        _save(result, path)
+        write_entry(path, _encoded(result))
     return result
 
 
@@ -397,39 +402,36 @@ def _linearise_grid(
 
 
 # --------------------------------------------------------------------------- disk cache
-_CACHE_FORMAT = b"lightcraft_opt.coning_model 1"
 _ARRAYS = ("spins", "altitudes", "speeds", "A", "B", "omega_per_spin", "spin_decay")
 
 
 def _cache_name(
     model: Model, phi: PulseMap, spins: np.ndarray, alts: np.ndarray, speeds: np.ndarray
 ) -> str:
-    digest = hashlib.sha256(_CACHE_FORMAT)
-    digest.update(ca.__version__.encode())
-    for f in (phi.step, build_coning_coordinates(), _coordinate_jacobian()):
-        digest.update(b"\0" + f.serialize().encode())
-    for a in (parameter_values(model), spins, alts, speeds):
-        digest.update(b"\0" + np.ascontiguousarray(a, dtype=float).tobytes())
-    return f"coning_model-{digest.hexdigest()}.npz"
+    """The entry's file name: the structure key of what the tables are computed from."""
+    numbers = (parameter_values(model), spins, alts, speeds)
+    key = structure_key(
+        "coning_model",
+        phi.step,
+        build_coning_coordinates(),
+        _coordinate_jacobian(),
+        *(np.ascontiguousarray(a, dtype=float).tobytes() for a in numbers),
+    )
+    return f"coning_model-{key}.npz"
 
 
-def _save(cm: ConingModel, path: Path) -> None:
-    """Write atomically (a temporary file moved into place); an unwritable cache is
-    skipped."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz")
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, period=cm.period, **{k: getattr(cm, k) for k in _ARRAYS})
-        os.replace(tmp, path)
-    except OSError:
-        return
+def _encoded(cm: ConingModel) -> bytes:
+    """The model's tables as the bytes of an .npz file (no pickles)."""
+    out = io.BytesIO()
+    np.savez(out, period=cm.period, **{k: getattr(cm, k) for k in _ARRAYS})
+    return out.getvalue()
 
 
-def _load(path: Path, lay: VectorLayout, u_op: np.ndarray, name: str) -> ConingModel:
-    with np.load(path) as data:
-        arrays = {k: np.array(data[k]) for k in _ARRAYS}
-        period = float(data["period"])
+def _decoded(data: bytes, lay: VectorLayout, u_op: np.ndarray, name: str) -> ConingModel:
+    """The model of the tables in ``data`` (:func:`_encoded`) for this input layout."""
+    with np.load(io.BytesIO(data), allow_pickle=False) as tables:
+        arrays = {k: np.array(tables[k]) for k in _ARRAYS}
+        period = float(tables["period"])
     index = np.asarray(select_entries(lay, _model_inputs(lay), "inputs"))
     assert {f.name for f in fields(ConingModel)} >= set(_ARRAYS)
     return ConingModel(

@@ -31,6 +31,7 @@ from typing import Any, cast
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.cache import BuildReport
 from lightcraft_opt.compiled import (
     compile_by_default,
     derivatives_for,
@@ -38,7 +39,6 @@ from lightcraft_opt.compiled import (
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.errors import OptionError, ParameterError
-from lightcraft_opt.function_cache import BuildReport
 from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.options import (

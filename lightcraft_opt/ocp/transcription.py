@@ -55,14 +55,14 @@ from typing import assert_never
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.function_cache import (
+from lightcraft_opt.cache import (
     BuildReport,
     load_functions,
     save_functions,
     source_digest,
     structure_key,
 )
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.evaluation import ConvexBlocks, SharedEvaluation, horizon_map
@@ -175,7 +175,7 @@ class Surrogate:
     hess: ca.Function
 
 
-#: Name of the cache files of the surrogates (function_cache.py).
+#: Name of the cache files of the surrogates (cache/functions.py).
 SURROGATE_CACHE = "ocp_surrogate"
 _THIS_MODULE = sys.modules[__name__]
 
@@ -606,7 +606,7 @@ class MultipleShooting:
 
     def surrogate(self, *, upper: bool = True, report: BuildReport | None = None) -> Surrogate:
         """The SX Functions of :meth:`chain_derivatives` (module docstring), from the disk
-        cache (function_cache.py) when this structure was built before, else built
+        cache (cache/functions.py) when this structure was built before, else built
         (casadi's AD and expansion: seconds at a hundred pulses) and saved. The key is the
         graph they are built from: the NLP with Φ's outputs as symbols and Φ's arguments
         (both before expansion), Φ's sparsity patterns, the sizes, ``upper`` and the

@@ -16,7 +16,7 @@ Structure (docs/architecture.md#rule-17): Φ is a short MX graph over named SX p
     X = coast_substep.mapaccum(substeps)(x_+, W(u, x_+), p, t + h [0 .. substeps-1])
     x_next = normalise_attitude(X[:, -1])
 
-Its generated C is about a megabyte and compiles in seconds (compiled.py), and its
+Its generated C is about a megabyte and compiles in seconds (compiled/pulse_map.py), and its
 derivatives can be chained over the compiled pieces (pulse_map_derivatives.py). It
 evaluates the expressions of the flat construction (flat_pulse_map.py) in the same
 order: the two agree to rounding (tests/symbolic/test_pulse_map_structure.py).

@@ -59,7 +59,7 @@ _SX_OPTIONS = {"cse": True}
 class DerivativePieces:
     """Each piece's ``<piece>_jacobian(inputs...) -> jac`` and ``<piece>_hessian(inputs...,
     adjoint) -> (jac, hess)`` (module docstring), for the normalisation, the jump, the coast
-    substep and the coning rate: what gets compiled (compiled.py)."""
+    substep and the coning rate: what gets compiled (compiled/pulse_map.py)."""
 
     normalise_jacobian: ca.Function
     normalise_hessian: ca.Function | None

@@ -15,7 +15,7 @@ pulse_map_pieces.py (in the order they run) is::
     ∂X_j/∂θ = D after the node's substep; the last node N_x(s_n) D_n
 
 Each piece runs in casadi's SX forward mode (``jtimes``) on its own, value and n directions
-in one small Function that compiles in seconds (compiled.py), so the products above are never
+in one small Function that compiles in seconds (compiled/), so the products above are never
 formed as matrices and no AD graph spans the flight: only the chain is written here. n
 directions cost about as much as n + 1 evaluations of Φ.
 tests/symbolic/test_pulse_map_sensitivities.py checks it against casadi's AD through Φ's
@@ -43,7 +43,7 @@ _SX_OPTIONS = {"cse": True}
 class SensitivityPieces:
     """Each piece in forward mode, n directions at once, value and derivative together (SX
     with ``{"cse": True}``, so they share their subexpressions): what gets compiled
-    (compiled.py).
+    (compiled/pulse_map.py).
 
     - ``normalise_attitude_forward(x, dx) -> (x_unit, dx_unit)``;
     - ``pulse_jump_forward(x, pulse, p, dx, dp) -> (x_plus, dx_plus)`` (the pulse input held);

@@ -285,7 +285,7 @@ def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) ->
     full states: the jump ``reduced_pulse_jump`` = Φ's jump at lift(project(x)), the substep
     ``reduced_coast_substep`` = lift ∘ Ψ's substep ∘ project, and the identity for Φ's
     normalisation; so Φ's explicit-chain derivatives and their compilation
-    (pulse_map_derivatives.py, compiled.py) serve it as they are. The states it returns lie on
+    (pulse_map_derivatives.py, compiled/) serve it as they are. The states it returns lie on
     Ψ's manifold: the body's twist about b1 is the smallest rotation from upright, w_B[b1] = 0.
     Its ``options`` carry the substeps, dense and the HOLD profile (the scheme is not read)."""
     psi = build_reduced_map(model, options)

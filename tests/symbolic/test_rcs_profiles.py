@@ -171,7 +171,7 @@ def test_layouts_per_profile_and_the_map_exposes_its_own(rcs_model):
         assert phi.inputs == map_input_layout(N_THR, False, profile, m)
         assert phi.step.size1_in(1) == phi.inputs.size
         assert phi.options is not None and phi.options.rcs_profile is profile
-        serialized.add(phi.dense.serialize())  # what compiled.py hashes
+        serialized.add(phi.dense.serialize())  # what cache/compiler.py hashes
     assert len(serialized) == 3
 
 

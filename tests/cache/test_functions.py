@@ -1,9 +1,10 @@
-"""Functions kept on disk by structure (function_cache.py, docs/architecture.md#rule-18).
+"""Functions kept on disk by structure (cache/functions.py, docs/architecture.md#rule-18).
 
 Reference: the Functions that were saved. A loaded Function is the same graph, so it gives
-the same numbers to the last bit; a file that is not exactly what was written (an altered
-byte, a truncation, a compiled library it names that is gone) is refused with a
-CacheWarning, never used and never a crash.
+the same numbers to the last bit; an entry that is not exactly what was written (cut to
+half, bytes flipped, emptied, its checksum missing, a compiled library it calls gone or
+damaged) is refused with a CacheWarning that names the file, never used and never a
+crash, and built again.
 """
 
 from __future__ import annotations
@@ -17,12 +18,15 @@ import warnings
 import casadi as ca
 import numpy as np
 import pytest
+from support.damage import DAMAGES, half
 from support.paths import REPO_ROOT
 
-from lightcraft_opt.compiled import compile_function
-from lightcraft_opt.function_cache import (
+from lightcraft_opt.cache import (
     CacheWarning,
     cache_path,
+    checksum_path,
+    compile_function,
+    library_path,
     load_functions,
     save_functions,
     structure_key,
@@ -66,39 +70,47 @@ def test_saved_functions_load_back_to_the_last_bit(cache):
         _same_numbers(a, b)
 
 
-@pytest.mark.parametrize(
-    "damage",
-    [
-        lambda data: data[: len(data) // 2],  # truncated
-        lambda data: data[:-10] + bytes(b ^ 1 for b in data[-10:]),  # bits flipped
-        lambda data: b"another format 1" + data[data.index(b"\n") :],  # not this format
-        lambda data: b"",  # empty
-    ],
-    ids=["truncated", "flipped", "format", "empty"],
-)
-def test_a_damaged_file_is_refused_with_a_warning(cache, damage):
+@pytest.mark.parametrize("damage", DAMAGES)
+def test_a_damaged_entry_is_refused_with_a_warning_and_built_again(cache, damage):
     save_functions("pair", "k1", _functions())
     path = cache_path("pair", "k1")
-    path.write_bytes(damage(path.read_bytes()))
-    with pytest.warns(CacheWarning, match="damaged"):
+    spoil, fault = DAMAGES[damage]
+    spoil(path)
+    with pytest.warns(CacheWarning, match=f"{path.name} is damaged \\(.*{fault}") as record:
         assert load_functions("pair", "k1") is None
-    save_functions("pair", "k1", _functions())  # rebuilt: the file is whole again
-    assert load_functions("pair", "k1") is not None
+    assert len(record) == 1 and str(path) in str(record[0].message)
+    assert not path.exists() and not checksum_path(path).exists()  # removed: no warning again
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        assert load_functions("pair", "k1") is None  # a plain miss now
+    save_functions("pair", "k1", _functions())  # rebuilt: the entry is whole again
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CacheWarning)
+        loaded = load_functions("pair", "k1")
+    assert loaded is not None
+    _same_numbers(_functions()[0], loaded[0])
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs a C compiler")
-def test_a_file_whose_compiled_library_is_gone_is_refused_with_a_warning(cache):
-    """A saved Function that calls a compiled library names it: with the library gone, a
-    new process (this one keeps the library loaded) cannot load the file and builds it
-    again."""
-    compiled = compile_function(_functions()[0])
+@pytest.mark.parametrize("damage", ["gone", "half"])
+def test_an_entry_whose_compiled_library_is_not_whole_is_refused_before_loading(cache, damage):
+    """A saved Function that calls a compiled library names it, and unpacking it loads the
+    library: with the library gone or cut to half (which dlopen answers with SIGBUS), the
+    entry is refused before unpacking, in a new process (this one keeps the library
+    loaded), which exits normally and builds the Functions again."""
+    square = _functions()[0]
+    compiled = compile_function(square)
     assert compiled.is_a("External")
+    library = library_path(square)
     x = ca.MX.sym("x", 3)
-    save_functions("uses_library", "k1", [ca.Function("twice", [x], [2 * compiled(x)])])
-    for library in cache.glob("square-*.so"):
+    twice = ca.Function("twice", [x], [2 * compiled(x)])
+    save_functions("uses_library", "k1", [twice], [library])
+    if damage == "gone":
         library.unlink()
+    else:
+        half(library)
     code = (
-        "from lightcraft_opt.function_cache import load_functions\n"
+        "from lightcraft_opt.cache import load_functions\n"
         "print(load_functions('uses_library', 'k1'))"
     )
     run = subprocess.run(
@@ -110,7 +122,10 @@ def test_a_file_whose_compiled_library_is_gone_is_refused_with_a_warning(cache):
     )
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "None"
-    assert "CacheWarning" in run.stderr and "cannot be loaded" in run.stderr
+    fault = "gone" if damage == "gone" else "do not match the checksum"
+    assert "CacheWarning" in run.stderr and f"{library}, which is" in run.stderr, run.stderr
+    assert fault in run.stderr, run.stderr
+    assert not cache_path("uses_library", "k1").exists()
 
 
 def test_an_unwritable_cache_warns_and_the_run_goes_on(tmp_path, monkeypatch):
@@ -119,7 +134,7 @@ def test_an_unwritable_cache_warns_and_the_run_goes_on(tmp_path, monkeypatch):
     monkeypatch.setenv("LIGHTCRAFT_CACHE", str(blocker / "cache"))
     with pytest.warns(CacheWarning, match="could not write"):
         save_functions("pair", "k1", _functions())
-    with pytest.warns(CacheWarning, match="unreadable"):
+    with pytest.warns(CacheWarning, match="is unreadable"):
         assert load_functions("pair", "k1") is None
 
 

@@ -1,0 +1,237 @@
+"""The C compiler: a casadi.Function compiled to a shared library, kept as a cache entry.
+
+The generated C of a Function is compiled by the system C compiler (``$CC``, else gcc)
+into a shared library and loaded back with ``casadi.external``; the result evaluates the
+same expression graph to round-off (IEEE arithmetic, no ``-ffast-math``) and has the same
+name, inputs and outputs, without derivatives of its own.
+
+A library is a cache entry (entries.py) named by the Function and a key, the structure
+key of the Function's serialised form (its whole expression graph: model structure and
+options, not the numbers it takes through p) with the compiler's ``--version`` and the
+flags. It is built in a temporary folder, moved into place and its checksum written, one
+process at a time, so Monte Carlo workers that share a cache neither clobber nor
+duplicate each other's work; it is verified before dlopen sees it, and a damaged one is
+built again with a :class:`~.entries.CacheWarning`. Anything else that goes wrong (no
+compiler, a failed compile, an unwritable cache) gives back the interpreted Function with
+a :class:`CompilationWarning` that names the cause.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import subprocess
+import warnings
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import casadi as ca
+
+from lightcraft_opt.cache.entries import (
+    BuildReport,
+    EntryStatus,
+    cache_dir,
+    check_entry,
+    entry_file,
+    structure_key,
+)
+
+__all__ = [
+    "DEFAULT_FLAGS",
+    "DERIVATIVE_FLAGS",
+    "CompilationWarning",
+    "CompileJob",
+    "compile_all",
+    "compile_function",
+    "compiler_version",
+    "library_path",
+]
+
+#: Optimisation flags of the default build. -O2 keeps IEEE semantics, so the library
+#: agrees with the interpreter to round-off (checked to 1e-12 by tests/test_compiled.py).
+#: -O3 is also exact but gains nothing measurable on this straight-line code and compiles
+#: slower; -ffast-math reorders sums and assumes no NaN/inf, which changes results and
+#: blinds simulate's non-finite check; -march=native may fuse multiply-adds (different
+#: last bits) and ties the library to one CPU. Pass ``flags=`` to choose otherwise.
+DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
+
+#: Flags of derivative pieces (symbolic/pulse_map_derivatives.py). Their SX is long
+#: straight-line code (the jump's Hessian for a 4 x 16 optic: 106k instructions, 2.9 MB of
+#: C) on which gcc -O2 spends minutes; -O1 compiles it in 27 s and runs it 9x faster than
+#: casadi's interpreter (-O0: 9 s, 2.6x). Same IEEE semantics as -O2.
+DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
+
+#: A Function to compile and its flags.
+CompileJob = tuple[ca.Function, tuple[str, ...]]
+
+_BUILD = ("-fPIC", "-shared")  # always: a loadable shared library
+
+
+class CompilationWarning(RuntimeWarning):
+    """A Function could not be compiled; its interpreted form is used instead."""
+
+
+class _CompileError(Exception):
+    """Why compiling failed (turned into a :class:`CompilationWarning`)."""
+
+
+def _compiler_command(compiler: str | None) -> str:
+    return compiler or os.environ.get("CC") or "gcc"
+
+
+def compiler_version(compiler: str | None = None) -> str | None:
+    """First line of ``compiler --version`` (default ``$CC``, else gcc); None when there is
+    no such compiler."""
+    try:
+        return _version(_compiler_command(compiler))
+    except _CompileError:
+        return None
+
+
+@functools.lru_cache(maxsize=8)
+def _version(cc: str) -> str:
+    """First line of ``cc --version``; raises _CompileError when there is no such compiler.
+    Asked once per process and compiler (a failure is not cached: a later call asks again)."""
+    try:
+        proc = subprocess.run(
+            [cc, "--version"], capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60
+        )
+    except (OSError, subprocess.SubprocessError) as err:
+        raise _CompileError(f"no C compiler {cc!r} ({err})") from err
+    if proc.returncode != 0:
+        raise _CompileError(f"{cc} --version failed: {proc.stderr.strip()[-500:]}")
+    return proc.stdout.splitlines()[0] if proc.stdout else cc
+
+
+def library_path(
+    f: ca.Function, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
+) -> Path:
+    """Where the compiled library of ``f`` is (or will be) cached.
+
+    Raises
+    ------
+    FileNotFoundError : when ``compiler`` (default ``$CC``, else gcc) does not run: its
+        version is part of the key.
+    """
+    try:
+        return _library_path(f, _compiler_command(compiler), flags)
+    except _CompileError as err:
+        raise FileNotFoundError(str(err)) from err
+
+
+def _library_path(f: ca.Function, cc: str, flags: Sequence[str]) -> Path:
+    key = structure_key("library", f, _version(cc), " ".join(flags))
+    return cache_dir() / f"{f.name()}-{key}.so"
+
+
+def compile_function(
+    f: ca.Function, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
+) -> ca.Function:
+    """``f`` compiled to C and loaded back, from the cache when it is there and whole.
+
+    Parameters
+    ----------
+    f : an SX or MX Function (e.g. ``PulseMap.dense``).
+    compiler : C compiler command; default ``$CC``, else ``gcc``.
+    flags : optimisation flags (see :data:`DEFAULT_FLAGS` for why -O2).
+
+    Returns
+    -------
+    casadi.Function with the name, inputs and outputs of ``f`` that evaluates the same
+    expressions natively (no derivatives); ``f`` itself, with a
+    :class:`CompilationWarning` naming the cause, when compiling is not possible.
+    """
+    return _compiled(f, _compiler_command(compiler), flags)[0]
+
+
+def _compiled(f: ca.Function, cc: str, flags: Sequence[str]) -> tuple[ca.Function, Path | None]:
+    """(:func:`compile_function` of ``f``, the library it loads or None when it is ``f``)."""
+    try:
+        path = entry_file(_library_path(f, cc, flags), lambda target: _build(f, target, cc, flags))
+        return ca.external(f.name(), str(path)), path
+    except (_CompileError, OSError, RuntimeError) as err:
+        warnings.warn(
+            f"could not compile {f.name()!r}, using the interpreted Function: {err}",
+            CompilationWarning,
+            stacklevel=3,
+        )
+        return f, None
+
+
+def _build(f: ca.Function, target: Path, cc: str, flags: Sequence[str]) -> None:
+    """Generate C for ``f`` beside ``target`` and compile it into ``target``."""
+    source = target.with_name(f"{f.name()}.c")
+    generator = ca.CodeGenerator(source.name, {"with_header": False})
+    generator.add(f)
+    source.write_text(generator.dump())
+    cmd = [cc, *flags, *_BUILD, str(source), "-o", str(target), "-lm"]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    except OSError as err:
+        raise _CompileError(f"{cc} did not run ({err})") from err
+    if proc.returncode != 0:
+        raise _CompileError(
+            f"{' '.join(cmd[: 1 + len(flags)])} ... exited {proc.returncode}: "
+            f"{proc.stderr.strip()[-500:]}"
+        )
+
+
+def compile_all(
+    jobs: Sequence[CompileJob],
+    *,
+    compiler: str | None = None,
+    workers: int | None = None,
+    max_instructions: int | None = None,
+    report: BuildReport | None = None,
+) -> tuple[list[ca.Function], list[Path]]:
+    """Each (Function, flags) compiled, its own library, ``workers`` at a time (default: the
+    cores), in order; a Function over ``max_instructions`` SX instructions, or one that
+    does not compile, stays interpreted. ``report`` (if any) hears how many libraries are
+    not in the cache, then each one compiled.
+
+    Returns
+    -------
+    The Functions, compiled or not, in the order of ``jobs``, and the libraries the
+    compiled ones load.
+    """
+    cc = _compiler_command(compiler)
+    limit = max_instructions
+
+    def small(f: ca.Function) -> bool:
+        return limit is None or f.n_instructions() <= limit
+
+    missing = _missing_libraries([j for j in jobs if small(j[0])], cc) if report else set()
+    if report is not None and missing:
+        report(
+            f"compiling {len(missing)} libraries with {cc} "
+            "(a minute or more, once per structure) ..."
+        )
+    count = iter(range(1, len(missing) + 1))  # next() is atomic under the GIL
+
+    def compiled_or_not(job: CompileJob) -> tuple[ca.Function, Path | None]:
+        f, flags = job
+        if not small(f):
+            return f, None
+        out = _compiled(f, cc, flags)
+        if report is not None and id(f) in missing:
+            report(f"  compiled {next(count)}/{len(missing)}: {f.name()}")
+        return out
+
+    n = workers or os.cpu_count() or 1
+    with ThreadPoolExecutor(max_workers=max(1, n)) as pool:
+        done = list(pool.map(compiled_or_not, jobs))
+    return [f for f, _ in done], [path for _, path in done if path is not None]
+
+
+def _missing_libraries(jobs: Sequence[CompileJob], cc: str) -> set[int]:
+    """ids of the Functions of ``jobs`` whose library is not whole in the cache (none when
+    there is no compiler: nothing will be compiled)."""
+    try:
+        return {
+            id(f)
+            for f, flags in jobs
+            if check_entry(_library_path(f, cc, flags)).status is not EntryStatus.WHOLE
+        }
+    except (_CompileError, OSError):
+        return set()

@@ -1,0 +1,249 @@
+"""Φ compiled: its dense Function, and its derivative chains over compiled pieces, kept
+on disk by structure.
+
+What runs often is compiled to C (cache/compiler.py: one library per Function, a cache
+entry by structure, verified before it is loaded); this module knows Φ's structure.
+:func:`compile_pulse_map` compiles Φ's dense Function and takes its step from it;
+:func:`compile_pulse_map_derivatives` compiles Φ's pieces and their derivatives, each its
+own library, and chains them (symbolic/pulse_map_derivatives.py), never casadi's AD through
+the whole graph (docs/architecture.md#rule-17); :func:`saved_pulse_map_derivatives` keeps
+that chain on disk (cache/functions.py), so a later build of the same structure loads it in
+milliseconds instead of redoing casadi's AD of every piece (4 s for the OCP's map of problem
+(a), 10 s for problem (b)'s).
+
+Cost, measured for Flight 5 with the default options (Φ composed of named pieces,
+symbolic/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14 s (idle to
+loaded) and under 0.3 GB once per model structure; a cache hit costs a few ms (serialising
+and hashing the Function, verifying the library); a pulse then takes 0.15-0.4 ms instead
+of 0.9-2 ms, with results identical here to the last bit (promised: to round-off). The
+flat SX construction of before (flat_pulse_map.py) took 3 min and 2.8 GB to compile and
+gained 1.6x. -O0 compiles faster but runs slower than casadi's interpreter; -O1 took
+longer and more memory than -O2 on straight-line code.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import fields
+from pathlib import Path
+
+import casadi as ca
+
+from lightcraft_opt.cache import (
+    DEFAULT_FLAGS,
+    DERIVATIVE_FLAGS,
+    BuildReport,
+    compile_all,
+    compile_function,
+    compiler_version,
+    load_functions,
+    save_functions,
+    source_digest,
+    structure_key,
+)
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.symbolic import pulse_map_derivatives as derivative_chain
+from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.pulse_map_derivatives import (
+    DerivativePieces,
+    PulseMapDerivatives,
+    build_derivative_pieces,
+    chain_derivatives,
+)
+from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
+
+__all__ = [
+    "BUILDING_PIECES",
+    "DERIVATIVES_CACHE",
+    "DERIVATIVE_INSTRUCTION_LIMIT",
+    "compile_pieces",
+    "compile_pulse_map",
+    "compile_pulse_map_derivatives",
+    "derivatives_key",
+    "saved_pulse_map_derivatives",
+]
+
+#: Derivative pieces above this many SX instructions stay interpreted: gcc's time and memory
+#: grow faster than the code (the Hessian of one Yoshida substep, 553k instructions, is 13 MB
+#: of C that takes 3.3 GB and over a minute even at -O0). The OCP's Strang map (2 substeps,
+#: 4 x 16 optic; substep Hessian 229k) compiles whole.
+DERIVATIVE_INSTRUCTION_LIMIT = 250_000
+
+#: What a build reports when it starts casadi's AD of Φ's pieces.
+BUILDING_PIECES = "building Φ's derivative pieces (casadi's AD of each piece, seconds) ..."
+
+_THIS_MODULE = sys.modules[__name__]
+
+
+def compile_pulse_map(
+    phi: PulseMap, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
+) -> PulseMap:
+    """The pulse map with its dense Function compiled
+    (:func:`~lightcraft_opt.cache.compile_function`).
+
+    ``step`` is taken from the compiled ``dense`` (its last column is ``x_next``, the
+    same expression), so one library serves both and gcc runs once. If compiling fails,
+    ``phi`` comes back unchanged (with the warning).
+    """
+    dense = compile_function(phi.dense, compiler=compiler, flags=flags)
+    if dense is phi.dense:
+        return phi
+    x, u, p, t = (ca.MX.sym(dense.name_in(i), dense.sparsity_in(i)) for i in range(4))
+    X, engine = dense(x, u, p, t)
+    step = ca.Function(
+        phi.step.name(),
+        [x, u, p, t],
+        [X[:, -1], engine],
+        phi.step.name_in(),
+        phi.step.name_out(),
+    )
+    return dataclasses.replace(phi, step=step, dense=dense)
+
+
+def compile_pulse_map_derivatives(
+    phi: PulseMap,
+    derivatives: DerivativePieces | None = None,
+    *,
+    compiler: str | None = None,
+    workers: int | None = None,
+    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    report: BuildReport | None = None,
+) -> PulseMapDerivatives:
+    """Φ's explicit-chain derivatives (symbolic/pulse_map_derivatives.py) over compiled
+    pieces: each value piece (``DEFAULT_FLAGS``) and derivative piece (``DERIVATIVE_FLAGS``,
+    cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
+    cached like any other, compiled ``workers`` at a time (default: the cores); bigger
+    pieces stay interpreted. A piece that does not compile stays interpreted (with the
+    warning of ``compile_function``). ``report`` is told what is being built and how many
+    libraries are compiled so far."""
+    return _compiled_derivatives(phi, derivatives, compiler, workers, max_instructions, report)[0]
+
+
+def _compiled_derivatives(
+    phi: PulseMap,
+    derivatives: DerivativePieces | None,
+    compiler: str | None,
+    workers: int | None,
+    max_instructions: int,
+    report: BuildReport | None,
+) -> tuple[PulseMapDerivatives, list[Path]]:
+    """(:func:`compile_pulse_map_derivatives`, the libraries its chain loads)."""
+    if phi.pieces is None:
+        raise ParameterError("phi", "needs a Φ from build_pulse_map, with its pieces")
+    if derivatives is None:
+        if report is not None:
+            report(BUILDING_PIECES)
+        derivatives = build_derivative_pieces(phi.pieces)
+    built = [f for f in derivatives.functions() if f is not None]
+    fast, done, libraries = compile_pieces(
+        phi.pieces, built, compiler, workers, max_instructions, report
+    )
+    compiled_derivatives = iter(done)
+    replaced = tuple(
+        None if f is None else next(compiled_derivatives) for f in derivatives.functions()
+    )
+    return chain_derivatives(phi, DerivativePieces.of(replaced), fast), libraries
+
+
+def compile_pieces(
+    pieces: PulseMapPieces,
+    derivatives: Sequence[ca.Function],
+    compiler: str | None = None,
+    workers: int | None = None,
+    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    report: BuildReport | None = None,
+) -> tuple[PulseMapPieces, list[ca.Function], list[Path]]:
+    """Φ's value pieces (``DEFAULT_FLAGS``) and the given derivative pieces
+    (``DERIVATIVE_FLAGS``) compiled, each its own library, ``workers`` at a time (default:
+    the cores); pieces over ``max_instructions`` SX instructions, or that do not compile,
+    stay interpreted. Returns the pieces, the derivative pieces and the libraries loaded."""
+    values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
+    jobs = [(f, DEFAULT_FLAGS) for f in values] + [(f, DERIVATIVE_FLAGS) for f in derivatives]
+    done, libraries = compile_all(
+        jobs,
+        compiler=compiler,
+        workers=workers,
+        max_instructions=max_instructions,
+        report=report,
+    )
+    normalise, jump, substep, coning_rate = done[:4]
+    fast = dataclasses.replace(
+        pieces, normalise=normalise, jump=jump, substep=substep, coning_rate=coning_rate
+    )
+    return fast, done[4:], libraries
+
+
+#: Name of the cache entries of Φ's compiled derivatives (cache/functions.py).
+DERIVATIVES_CACHE = "pulse_map_derivatives"
+
+
+def saved_pulse_map_derivatives(
+    phi: PulseMap,
+    *,
+    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    report: BuildReport | None = None,
+) -> PulseMapDerivatives:
+    """:func:`compile_pulse_map_derivatives` of ``phi``, kept on disk by structure
+    (cache/functions.py): the chain's Functions over the compiled pieces, serialised with
+    the libraries they call (verified before loading), under the key
+    :func:`derivatives_key`. A hit loads in milliseconds instead of seconds of casadi's AD
+    on each piece; a damaged entry, or one whose library is damaged, is built again with a
+    :class:`~lightcraft_opt.cache.CacheWarning`. Derivatives with a piece that failed to
+    compile (no compiler ...) are used, never saved.
+    ``max_instructions`` as in :func:`compile_pulse_map_derivatives`."""
+    start = time.perf_counter()
+    key = derivatives_key(phi, max_instructions)
+    loaded = None if key is None else load_functions(DERIVATIVES_CACHE, key)
+    if loaded is not None and len(loaded) == 3 + len(fields(DerivativePieces)):
+        if report is not None:
+            report(f"Φ's derivatives: loaded from the cache in {time.perf_counter() - start:.1f} s")
+        pieces_of = DerivativePieces.of(tuple(loaded[3:]))
+        return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of)
+    derivatives, libraries = _compiled_derivatives(phi, None, None, None, max_instructions, report)
+    pieces = derivatives.pieces.functions()
+    complete = derivatives.hessian is not None and _all_compiled(pieces, max_instructions)
+    if key is not None and complete:
+        functions = [derivatives.values, derivatives.jacobian, derivatives.hessian]
+        saved = [*functions, *(f for f in pieces if f)]
+        save_functions(DERIVATIVES_CACHE, key, saved, libraries)
+    return derivatives
+
+
+def _all_compiled(derivative_pieces: Sequence[ca.Function | None], limit: int) -> bool:
+    """Whether every derivative piece of at most ``limit`` instructions came back
+    compiled (not: a compile failed)."""
+    return all(
+        f is not None and (f.is_a("External") or f.n_instructions() > limit)
+        for f in derivative_pieces
+    )
+
+
+def derivatives_key(
+    phi: PulseMap, max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT
+) -> str | None:
+    """The structure key of ``phi``'s compiled derivatives: Φ's graph (its dense Function
+    and pieces, which hold the model's structure and the options; the model's numbers go
+    in through p), the options and input layout, the compiler's version, flags and
+    instruction limit, and the source of the chain and of this module; None without a C
+    compiler."""
+    version = compiler_version()
+    if version is None:
+        return None
+    pieces = phi.pieces
+    assert pieces is not None
+    numbers = (pieces.substeps, pieces.step_length, pieces.n_thrusters, pieces.has_carrier)
+    return structure_key(
+        "pulse_map_derivatives",
+        phi.dense,
+        pieces.normalise,
+        pieces.jump,
+        pieces.substep,
+        pieces.coning_rate,
+        repr((numbers, pieces.substep_inputs, phi.options, phi.inputs, phi.period)),
+        version,
+        repr((DEFAULT_FLAGS, DERIVATIVE_FLAGS, max_instructions)),
+        source_digest(derivative_chain, _THIS_MODULE),
+    )
