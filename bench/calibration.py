@@ -6,7 +6,7 @@ fitting ``--fit`` (default ``cm,offset,tilt,blast_angle``: 6 components). Its Ja
 ways, in one process, best of ``--repeats``:
 
 * **AD**: casadi's forward AD through Φ's interpreted graph (what calibration did before);
-* **chain VM**: the forward-mode chain over Φ's pieces (symbolic/pulse_map_sensitivities.py),
+* **chain VM**: the forward-mode chain over Φ's pieces (symbolic/maps/pulse_map_sensitivities.py),
   interpreted;
 * **chain C**: the same over compiled pieces (``compiled.dense_sensitivity_for``; compiled
   cold in a cache folder of its own, the time printed apart).
@@ -39,8 +39,8 @@ from lightcraft_opt.layout import initial_state
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_sensitivities import build_dense_sensitivity
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import build_dense_sensitivity
 
 
 def best_of(f: Callable[[], object], repeats: int) -> float:

@@ -45,8 +45,8 @@ from lightcraft_opt.control.options import MpcOptions, MpcSolver
 from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.closed_loop import load_closed_loop
-from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -75,7 +75,7 @@ from lightcraft_opt.ocp.options import (
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_SOLVERS = "ipopt:exact,ipopt:gauss_newton,fatrop:exact,sqp_hpipm:gauss_newton"

@@ -3,8 +3,8 @@
 Three constructions of the same Φ (the same expressions, equal to rounding:
 tests/symbolic/test_pulse_map_structure.py):
 
-* **flat VM**: one flat SX graph (``symbolic.flat_pulse_map``), what Φ was before;
-* **structured VM**: named SX pieces composed in MX (``symbolic.pulse_map``), interpreted;
+* **flat VM**: one flat SX graph (``symbolic.maps.reference_pulse_map``), what Φ was before;
+* **structured VM**: named SX pieces composed in MX (``symbolic.maps.pulse_map``), interpreted;
 * **structured C**: the same compiled by gcc (``compiled.compile_pulse_map``; the chain's
   pieces by ``compiled.compile_pulse_map_derivatives``); compiles are timed cold, in a cache
   folder of their own.
@@ -13,7 +13,7 @@ For two maps, the full-accuracy one (default options: split4, 32 substeps, the m
 8 x 32 optic) and the OCP's (split, 2 substeps, a 4 x 16 optic), it prints the build time
 and the per-pulse time of a value, of the Jacobian in (x, u) and of the Hessian of
 λᵀx_next + νᵀengine: casadi's AD through the flat and the structured graphs, and the
-explicit chain over the pieces (``symbolic.pulse_map_derivatives``), interpreted.
+explicit chain over the pieces (``symbolic.maps.pulse_map_derivatives``), interpreted.
 
 Then the 10 s Flight 5 flight as users call it: ``simulate(model, 10.0)`` the first time
 (build and compile, or a cache hit) and again (the built Φ reused), best of ``--repeats``,
@@ -58,12 +58,12 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.params import Engine, Model
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import (
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
     build_pulse_map_derivatives,
 )
+from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]
 OCP_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=2, dense=2)

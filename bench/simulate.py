@@ -6,13 +6,13 @@ difference of the final states:
 * **Φ**: :func:`lightcraft_opt.simulate` with a prebuilt pulse map (its build time is
   reported apart), best of ``--repeats`` runs.
 * **DOP853**: the same equations written out here as a hybrid loop. At each pulse time
-  t_k = k T the laser jump (:func:`~lightcraft_opt.symbolic.pulse_jump.pulse_jump`, paper
+  t_k = k T the laser jump (:func:`~lightcraft_opt.symbolic.maps.pulse_jump.pulse_jump`, paper
   Eqs. 12-13 of the seed paper, docs/references.md#paper-eq-12, wrapped in a casadi.Function and
   evaluated numerically) is applied; then ``scipy.integrate.solve_ivp(method="DOP853")``
   integrates the coast right-hand side
-  (:func:`~lightcraft_opt.symbolic.coast_rhs.build_coast_rhs`, evaluated numerically in a Python
-  callback) across the pulse interval, and the attitude quaternion is scaled back to unit length
-  after each interval as Φ does. Same equations, same inputs and parameters, integrated by an
+  (:func:`~lightcraft_opt.symbolic.maps.coast_rhs.build_coast_rhs`, evaluated numerically in a
+  Python callback) across the pulse interval, and the attitude quaternion is scaled back to unit
+  length after each interval as Φ does. Same equations, same inputs and parameters, integrated by an
   independent adaptive integrator instead of Φ's fixed-step Yoshida splitting: at a tight
   tolerance (``--rtol``) it is the reference, and ``--check`` runs it once more at rtol / 100 to
   show that the reference itself has converged. A ladder of looser tolerances then finds the
@@ -57,9 +57,9 @@ from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -74,8 +74,12 @@ from lightcraft_opt.ocp import (
 from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOptions
 from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.simulation import SimulationResult, SimulationStatus, simulate
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
-from lightcraft_opt.symbolic.reduced_map import ReducedMap, ReducedMapOptions, build_reduced_map
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.reduced_map import (
+    ReducedMap,
+    ReducedMapOptions,
+    build_reduced_map,
+)
 
 if TYPE_CHECKING:
     from lightcraft_opt import linearize

@@ -48,7 +48,7 @@ from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 __all__ = ["DESCRIPTION", "file_kind", "main"]
 

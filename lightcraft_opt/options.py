@@ -42,7 +42,7 @@ def checked_duration(duration: object, name: str = "duration") -> float:
 
 
 class CoastScheme(Enum):
-    """How the pulse map integrates the coast between pulses (symbolic/coast.py).
+    """How the pulse map integrates the coast between pulses (symbolic/maps/coast.py).
 
     Strang splitting: docs/references.md#strang-1968; Yoshida composition:
     docs/references.md#yoshida-1990.

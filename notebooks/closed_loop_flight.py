@@ -46,7 +46,7 @@ from lightcraft_opt.plots.closed_loop import (
     plot_closed_loop_tilt,
     plot_solve_times,
 )
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 # the repository root, wherever Jupyter was started (notebooks/ or the root)
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "pyproject.toml").is_file())

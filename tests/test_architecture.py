@@ -65,6 +65,11 @@ def test_import_contracts_kept() -> None:
     ("where", "line", "broken"),
     [
         ("symbolic/_wrong_arrow.py", "import matplotlib\n", "symbolic/ imports no matplotlib"),
+        (
+            "symbolic/terms/gravity.py",
+            "import lightcraft_opt.symbolic.maps.coast\n",
+            "symbolic/: the maps",
+        ),
         ("params.py", "import casadi\n", "The vocabulary (errors, params"),
         ("simulation/simulate.py", "import lightcraft_opt.plots\n", "Capabilities point down"),
         ("control/mpc.py", "from lightcraft_opt import cli\n", "Capabilities point down"),
@@ -85,7 +90,7 @@ def test_import_contracts_kept() -> None:
         ("layout/vector_layout.py", "import lightcraft_opt.params\n", "A layout knows no model"),
         ("cache/entries.py", "import lightcraft_opt.cache.compiler\n", "cache/: the C compiler"),
         ("cache/functions.py", "import lightcraft_opt.cache.compiler\n", "cache/: the C compiler"),
-        ("cache/compiler.py", "import lightcraft_opt.symbolic.rcs\n", "cache/ is about files"),
+        ("cache/compiler.py", "import lightcraft_opt.symbolic.terms.rcs\n", "cache/ is about"),
         ("cache/entries.py", "import lightcraft_opt.compiled\n", "Capabilities point down"),
         ("compiled/pulse_map.py", "import lightcraft_opt.compiled.memo\n", "compiled/: the memo"),
     ],

@@ -49,8 +49,8 @@ from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 SMALL = PulseMapOptions(substeps=4, dense=2)
@@ -136,7 +136,7 @@ def test_a_new_process_finds_the_same_library(small):
         "import sys; sys.path.insert(0, sys.argv[1]);"
         "from test_compiled import SMALL, _small_model;"
         "from lightcraft_opt.cache import library_path;"
-        "from lightcraft_opt.symbolic.pulse_map import build_pulse_map;"
+        "from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map;"
         "print(library_path(build_pulse_map(_small_model(), SMALL).dense))"
     )
     out = subprocess.run(

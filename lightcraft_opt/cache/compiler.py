@@ -56,7 +56,7 @@ __all__ = [
 #: last bits) and ties the library to one CPU. Pass ``flags=`` to choose otherwise.
 DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
 
-#: Flags of derivative pieces (symbolic/pulse_map_derivatives.py). Their SX is long
+#: Flags of derivative pieces (symbolic/maps/pulse_map_derivatives.py). Their SX is long
 #: straight-line code (the jump's Hessian for a 4 x 16 optic: 106k instructions, 2.9 MB of
 #: C) on which gcc -O2 spends minutes; -O1 compiles it in 27 s and runs it 9x faster than
 #: casadi's interpreter (-O0: 9 s, 2.6x). Same IEEE semantics as -O2.

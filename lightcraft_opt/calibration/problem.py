@@ -14,7 +14,7 @@ the dense output's positions and velocities at the two nodes around t, so
 
 with constant Hermite weights (the track times are fixed). Its Jacobian is exact: the forward
 sensitivities of the dense output in the directions of θ, chained over Φ's compiled pieces
-(symbolic/pulse_map_sensitivities.py) when a sensitivity Function is given, else casadi's
+(symbolic/maps/pulse_map_sensitivities.py) when a sensitivity Function is given, else casadi's
 AD through the graph. Near a pulse the velocity jumps: a time in the first dense
 sub-interval after the pulse at t_k is interpolated from the cubic through the first two
 nodes after the pulse (one sub-step of extrapolation, same order), never across the jump.
@@ -42,8 +42,8 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.pulse_map import PulseMap
-from lightcraft_opt.symbolic.rotation import quat_multiply
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.terms.rotation import quat_multiply
 
 __all__ = [
     "CalibrationProblem",
@@ -251,7 +251,8 @@ def build_calibration_problem(
     (module docstring); no physics built here, only Φ composed pulse by pulse.
 
     ``sensitivity``: ``pulse_map_dense_sensitivity`` of the same Φ in len(components)
-    directions (:func:`~lightcraft_opt.symbolic.pulse_map_sensitivities.build_dense_sensitivity`,
+    directions
+    (:func:`~lightcraft_opt.symbolic.maps.pulse_map_sensitivities.build_dense_sensitivity`,
     or compiled from :func:`~lightcraft_opt.compiled.dense_sensitivity_for`) for the
     chained Jacobian; None differentiates Φ's graph by AD (an interpreted Φ only).
     """

@@ -51,7 +51,7 @@ from lightcraft_opt.layout import (
     tilted_attitude,
 )
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 if TYPE_CHECKING:
     from lightcraft_opt.control.controllers import Controller

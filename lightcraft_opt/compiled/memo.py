@@ -37,19 +37,19 @@ from lightcraft_opt.compiled.pulse_map import (
 )
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import (
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
     build_derivative_pieces,
     chain_derivatives,
 )
-from lightcraft_opt.symbolic.pulse_map_sensitivities import (
+from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import (
     SensitivityPieces,
     build_dense_sensitivity,
     build_sensitivity_pieces,
 )
-from lightcraft_opt.symbolic.reduced_map import ReducedMapOptions, build_reduced_map
-from lightcraft_opt.symbolic.reduced_map_derivatives import (
+from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, build_reduced_map
+from lightcraft_opt.symbolic.maps.reduced_map_derivatives import (
     ReducedMapDerivatives,
     build_reduced_map_derivatives,
 )
@@ -186,7 +186,7 @@ def dense_sensitivity_for(
     compiled: bool | None = None,
 ) -> ca.Function:
     """``pulse_map_dense_sensitivity(x, u, p, t, dx, dp) -> (X, dX)`` of ``model``'s Φ
-    (:func:`~lightcraft_opt.symbolic.pulse_map_sensitivities.build_dense_sensitivity`) in
+    (:func:`~lightcraft_opt.symbolic.maps.pulse_map_sensitivities.build_dense_sensitivity`) in
     ``n_directions`` directions, chained over pieces compiled
     (:data:`~lightcraft_opt.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is False or
     :func:`compile_by_default` says no. The pieces are built once per process for equal
@@ -218,7 +218,7 @@ def reduced_derivatives_for(
     model: Model, options: ReducedMapOptions | None = None, *, compiled: bool | None = None
 ) -> ReducedMapDerivatives:
     """The reduced map Ψ's value and Jacobian chains for ``model``
-    (:func:`~lightcraft_opt.symbolic.reduced_map_derivatives.build_reduced_map_derivatives`),
+    (:func:`~lightcraft_opt.symbolic.maps.reduced_map_derivatives.build_reduced_map_derivatives`),
     over pieces compiled (values with :data:`~lightcraft_opt.cache.DEFAULT_FLAGS`,
     Jacobians with :data:`~lightcraft_opt.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is
     False or :func:`compile_by_default` says no; built once per process for equal models

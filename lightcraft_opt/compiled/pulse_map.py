@@ -5,14 +5,14 @@ What runs often is compiled to C (cache/compiler.py: one library per Function, a
 entry by structure, verified before it is loaded); this module knows Φ's structure.
 :func:`compile_pulse_map` compiles Φ's dense Function and takes its step from it;
 :func:`compile_pulse_map_derivatives` compiles Φ's pieces and their derivatives, each its
-own library, and chains them (symbolic/pulse_map_derivatives.py), never casadi's AD through
+own library, and chains them (symbolic/maps/pulse_map_derivatives.py), never casadi's AD through
 the whole graph (docs/architecture.md#rule-17); :func:`saved_pulse_map_derivatives` keeps
 that chain on disk (cache/functions.py), so a later build of the same structure loads it in
 milliseconds instead of redoing casadi's AD of every piece (4 s for the OCP's map of problem
 (a), 10 s for problem (b)'s).
 
 Cost, measured for Flight 5 with the default options (Φ composed of named pieces,
-symbolic/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14 s (idle to
+symbolic/maps/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14 s (idle to
 loaded) and under 0.3 GB once per model structure; a cache hit costs a few ms (serialising
 and hashing the Function, verifying the library); a pulse then takes 0.15-0.4 ms instead
 of 0.9-2 ms, with results identical here to the last bit (promised: to round-off). The
@@ -45,15 +45,15 @@ from lightcraft_opt.cache import (
     structure_key,
 )
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.symbolic import pulse_map_derivatives as derivative_chain
-from lightcraft_opt.symbolic.pulse_map import PulseMap
-from lightcraft_opt.symbolic.pulse_map_derivatives import (
+from lightcraft_opt.symbolic.maps import pulse_map_derivatives as derivative_chain
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     DerivativePieces,
     PulseMapDerivatives,
     build_derivative_pieces,
     chain_derivatives,
 )
-from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
+from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 
 __all__ = [
     "BUILDING_PIECES",
@@ -112,7 +112,7 @@ def compile_pulse_map_derivatives(
     max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
     report: BuildReport | None = None,
 ) -> PulseMapDerivatives:
-    """Φ's explicit-chain derivatives (symbolic/pulse_map_derivatives.py) over compiled
+    """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) over compiled
     pieces: each value piece (``DEFAULT_FLAGS``) and derivative piece (``DERIVATIVE_FLAGS``,
     cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
     cached like any other, compiled ``workers`` at a time (default: the cores); bigger

@@ -52,9 +52,9 @@ from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
-from lightcraft_opt.symbolic.error_state import build_error_state
-from lightcraft_opt.symbolic.invariants import build_invariants
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.error_state import build_error_state
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
     from lightcraft_opt.control.controllers import Controller

@@ -28,7 +28,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import CONING, STATE, VectorLayout, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import dlqr_gain
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
+from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 
 __all__ = [
     "ConingFrame",
@@ -63,7 +63,7 @@ class Measurement:
 
     Attributes
     ----------
-    z : (8,) coning coordinates (symbolic/coning_coordinates.py).
+    z : (8,) coning coordinates (symbolic/maps/coning_coordinates.py).
     yaw : ψ [rad], the turn of B about the vertical from the upright attitude.
     omega : coning rate in B [rad/s].
     spin : rotor spin [rad/s].

@@ -2,14 +2,14 @@
 
 Every pulse, ``u = director.step(x)`` (docs/director.md):
 
-1. read the measured state as Ψ's z (symbolic/reduced_map.py: position, velocity, angular
+1. read the measured state as Ψ's z (symbolic/maps/reduced_map.py: position, velocity, angular
    momentum, the body axis's coning offset, the mass bookkeeping);
 2. take the previous plan shifted by a pulse as the trajectory (z̄_j, ū_j), with z̄_0 the
    measured state; evaluate Ψ along it (the defects d_j) and Ψ's Jacobians at the first
    stage, the new last stage and ``relinearize - 2`` others in turn (the rest are the last
    pulses' Jacobians, shifted: a multi-level real-time iteration; ``relinearize = horizon``
    is the plain one) by the explicit chain over compiled pieces
-   (symbolic/reduced_map_derivatives.py);
+   (symbolic/maps/reduced_map_derivatives.py);
 3. solve one QP on the stage structure (director_qp.py, HPIPM), warm-started by shifting:
    Gauss-Newton least squares on the beam offset (the optic at the mass centre), the drift
    from the pad axis, the lateral velocity, the coning, the tilt of H, the pointing, the
@@ -85,7 +85,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.linearize.beam_riding import scheduled_focus
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.reduced_map import build_reduced_map
+from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 
 __all__ = ["DirectorController", "director_model"]
 

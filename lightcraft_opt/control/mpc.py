@@ -2,7 +2,7 @@
 
 Built once, then ``u = controller.step(x)`` every pulse (docs/architecture.md#rule-1):
 
-1. measure the coning coordinates z of the state (symbolic/coning_coordinates.py: lateral
+1. measure the coning coordinates z of the state (symbolic/maps/coning_coordinates.py: lateral
    position and velocity in the yaw-aligned frame, tilt of H, coning vector);
 2. schedule the prediction model over the horizon (control/prediction_model.py: Φ's
    Jacobians in z, interpolated at the measured spin and altitude, the coning rows turned
@@ -64,7 +64,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import CONING
 from lightcraft_opt.linearize import PulseMapJacobian, dlqr_gain
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["MpcController", "input_basis", "input_constraints"]
 

@@ -1,7 +1,7 @@
 """Φ's linear models in coning coordinates, scheduled on spin and altitude: the prediction
 model of the nutation MPC and of its LQR baseline.
 
-Coordinates: z = (r_Y, v_Y, h_Y, c_B) of :mod:`lightcraft_opt.symbolic.coning_coordinates`
+Coordinates: z = (r_Y, v_Y, h_Y, c_B) of :mod:`lightcraft_opt.symbolic.maps.coning_coordinates`
 (layout :data:`~lightcraft_opt.layout.CONING`: lateral position and velocity in the
 yaw-aligned frame Y, tilt of the angular momentum, coning vector), 8 entries; inputs: the
 beam pointing and the phase-locked RCS slots of the map input
@@ -68,9 +68,9 @@ from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
-from lightcraft_opt.symbolic.error_state import build_error_state
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
+from lightcraft_opt.symbolic.maps.error_state import build_error_state
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 __all__ = [
     "DEFAULT_ALTITUDES",

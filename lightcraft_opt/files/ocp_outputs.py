@@ -32,7 +32,7 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.simulation.result import PulseRecord
-from lightcraft_opt.symbolic.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 __all__ = [
     "constraint_margins",

@@ -74,7 +74,7 @@ STATE = VectorLayout(
 
 #: The error state δ of linear models (16 entries): STATE with the quaternion q_LB
 #: replaced by theta_B, the small rotation of B from the operating attitude (B components;
-#: the chart is symbolic/error_state.py). Every other slot is additive.
+#: the chart is symbolic/maps/error_state.py). Every other slot is additive.
 ERROR_STATE = VectorLayout(
     "error state",
     [
@@ -89,7 +89,7 @@ ERROR_STATE = VectorLayout(
     ],
 )
 
-#: The state z of the coning-aware reduced map Ψ (14 entries; symbolic/reduced_map.py,
+#: The state z of the coning-aware reduced map Ψ (14 entries; symbolic/maps/reduced_map.py,
 #: docs/beam_riding.md#reduced-map): the mass centre's position and velocity, the system
 #: angular momentum H_L about the mass centre (its direction the cone's mean axis), the
 #: coning offset: b1's components across Ĥ along e1, e2 of the frame T_H = [e1 e2 Ĥ] (L's
@@ -108,7 +108,7 @@ REDUCED_STATE = VectorLayout(
     ],
 )
 
-#: Coning coordinates z of the nutation controllers (symbolic/coning_coordinates.py,
+#: Coning coordinates z of the nutation controllers (symbolic/maps/coning_coordinates.py,
 #: docs/frames.md): lateral position and velocity and the tilt of H in the yaw-aligned
 #: frame Y, and the coning vector c_B (transverse over axial angular momentum, in B).
 CONING = VectorLayout(
@@ -121,7 +121,7 @@ CONING = VectorLayout(
     ],
 )
 
-#: Per-pulse engine quantities, Φ's second output (symbolic/pulse_map.py).
+#: Per-pulse engine quantities, Φ's second output (symbolic/maps/pulse_map.py).
 ENGINE = VectorLayout(
     "engine output",
     [
@@ -169,7 +169,7 @@ def map_input_layout(
         - ``PHASE_LOCKED``: ``rcs_thrust`` (n) [N], the mean levels, then ``rcs_cos`` (n)
           and ``rcs_sin`` (n) [N]: thrust_i(τ) = rcs_thrust_i + rcs_cos_i cos(ω τ)
           + rcs_sin_i sin(ω τ), ω the coning rate in B right after the pulse
-          (:func:`lightcraft_opt.symbolic.coast.coning_rate_B`).
+          (:func:`lightcraft_opt.symbolic.maps.coast.coning_rate_B`).
 
         Φ does not clip the thrust (a smooth map for the optimiser): whoever sets the
         inputs keeps 0 <= thrust_i(τ) <= max_thrust_i at every τ, e.g. for
@@ -231,7 +231,7 @@ def input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:
 
 
 def substep_input_layout(n_thrusters: int, has_carrier: bool, profile: RcsProfile) -> VectorLayout:
-    """Inputs w of Φ's coast substep (symbolic/pulse_map_pieces.py) by RCS profile.
+    """Inputs w of Φ's coast substep (symbolic/maps/pulse_map_pieces.py) by RCS profile.
 
     HOLD and SUBINTERVALS: the continuous inputs (:func:`input_layout`: the thrust levels of
     the substep's sub-interval [N], the motor torque [N m]). PHASE_LOCKED: the mean, cosine

@@ -1,6 +1,6 @@
 """Linearisation of the pulse map Φ: pulse-to-pulse multipliers, controllability, LQR.
 
-One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/pulse_map.py) about an
+One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/maps/pulse_map.py) about an
 operating point (x_op, u_op) gives the discrete-time linear model
 
     δ[k+1] = A δ[k] + B δu[k],   A = ∂Φ/∂x,  B = ∂Φ/∂u   (exact casadi AD),

@@ -8,8 +8,8 @@ beam-riding multiplier above 1 means an offset grows by that factor a pulse: the
 leaves the beam however well it was launched.
 
 The beam's size at the craft decides it (docs/beam_riding.md). Under the ``waist`` size model
-(symbolic/beam.py: Gaussian optics of a beam of fixed quality) the director's geometric focus f
-sets the size at height h,
+(symbolic/terms/beam.py: Gaussian optics of a beam of fixed quality) the director's geometric
+focus f sets the size at height h,
 
     a(h; f) = a0 sqrt((1 - h/f)^2 + (h/z_R)^2),
 
@@ -46,8 +46,8 @@ from lightcraft_opt.linearize.operating_points import PulseMapJacobian, jacobian
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
 from lightcraft_opt.options import FocusSchedule, PulseMapOptions
 from lightcraft_opt.params import BeamSizeModel, Laser, Model
-from lightcraft_opt.symbolic.beam import beam_side
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.terms.beam import beam_side
 
 __all__ = [
     "AltitudeStability",

@@ -9,7 +9,7 @@ model, and its multipliers are frozen-time growth rates, meaningful while the cl
 changes little over the modes' time scale (a few pulses).
 
 Error state. :func:`error_state` gives δ = x ⊖ x_op, the minimal error state of
-:mod:`lightcraft_opt.symbolic.error_state` (the chart the linear models of
+:mod:`lightcraft_opt.symbolic.maps.error_state` (the chart the linear models of
 :mod:`.state_space` are written in).
 """
 
@@ -36,9 +36,9 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.linearize.signal_names import select_entries
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE, build_error_state
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 
 
 class PointStatus(Enum):
@@ -74,7 +74,7 @@ class PulseMapJacobian:
 
 def pulse_map_jacobian(pulse_map: PulseMap) -> PulseMapJacobian:
     """Φ's value and Jacobians in one casadi.Function: the explicit chain over Φ's pieces
-    (symbolic/pulse_map_derivatives.py; a few seconds to build at the default 32 substeps,
+    (symbolic/maps/pulse_map_derivatives.py; a few seconds to build at the default 32 substeps,
     3x faster to evaluate than AD through Φ) when the map has them, else casadi's AD.
     Build once, pass it as ``pulse_map`` to the functions here."""
     if pulse_map.pieces is None:

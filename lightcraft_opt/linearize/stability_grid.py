@@ -17,7 +17,7 @@ from lightcraft_opt.linearize.operating_points import PulseMapJacobian, climb_po
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 
 @dataclass(frozen=True)

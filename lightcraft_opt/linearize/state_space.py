@@ -1,6 +1,6 @@
 """The discrete-time linear model of the pulse map Φ about an operating point.
 
-One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/pulse_map.py) about an
+One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/maps/pulse_map.py) about an
 operating point (x_op, u_op) gives the discrete-time linear model
 
     δ[k+1] = A δ[k] + B δu[k],   A = ∂Φ/∂x,  B = ∂Φ/∂u   (exact casadi AD),
@@ -10,7 +10,7 @@ with ``dt = T`` and the layout's names.
 
 Coordinates (:class:`Coordinates`). ``FULL`` differentiates Φ on the 17 raw states
 (quaternion components included). ``ERROR_STATE`` (default) works on the minimal error
-state δ of :mod:`lightcraft_opt.symbolic.error_state`: x = x_op ⊕ δ, the attitude a
+state δ of :mod:`lightcraft_opt.symbolic.maps.error_state`: x = x_op ⊕ δ, the attitude a
 small rotation theta_B of B; A = ∂(Φ(x_op ⊕ δ) ⊖ Φ(x_op))/∂δ at δ = 0, so A maps
 errors about x_op to errors about Φ(x_op). The default kept states
 (:data:`REDUCED_STATES`) are r_L, v_L, theta_B[b2, b3], w_B[b2, b3]: left out are the
@@ -39,8 +39,8 @@ from lightcraft_opt.linearize.operating_points import (
 from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.error_state import ERROR_STATE
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 #: Error-state entries kept by default: the beam-riding and vertical channels.
 REDUCED_STATES = ("r_L", "v_L", "theta_B[b2]", "theta_B[b3]", "w_B[b2]", "w_B[b3]")

@@ -66,8 +66,8 @@ class OcpStart(Enum):
 class PredictionMap(Enum):
     """The pulse map an OCP predicts with.
 
-    ``FULL``: Φ (symbolic/pulse_map.py) with the options' scheme and substeps. ``REDUCED``:
-    the coning-aware reduced map Ψ (symbolic/reduced_map.py) on full states, its slow coast in
+    ``FULL``: Φ (symbolic/maps/pulse_map.py) with the options' scheme and substeps. ``REDUCED``:
+    the coning-aware reduced map Ψ (symbolic/maps/reduced_map.py) on full states, its slow coast in
     the options' ``substeps`` RK4 steps: the cone's phase exact at every pulse, 15-20 times
     closer to Φ than Φ's own Strang map with 2 substeps along coning flights
     (docs/beam_riding.md#reduced-map); held RCS levels only. Composed like Φ, so its
@@ -147,7 +147,7 @@ class OcpOptions:
     prediction : which pulse map predicts: Φ or the reduced map Ψ (:class:`PredictionMap`).
     chain_derivatives : with IPOPT and the exact Hessian, take the NLP's gradient,
         Jacobian and Hessian from Φ's explicit-chain derivatives over compiled pieces
-        (symbolic/pulse_map_derivatives.py; transcription.MultipleShooting.chain_derivatives)
+        (symbolic/maps/pulse_map_derivatives.py; transcription.MultipleShooting.chain_derivatives)
         instead of casadi's AD through Φ: equal to rounding, faster to evaluate. False: AD.
     time_limit : wall-clock limit of a solve [s], > 0, or None for none (max_iter still
         bounds the iterations); default :data:`OCP_TIME_LIMIT`. A solve that reaches it

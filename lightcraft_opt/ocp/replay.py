@@ -34,7 +34,7 @@ from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Engine, Model
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = [
     "PLAN_GAP_LIMIT",

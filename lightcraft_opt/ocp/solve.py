@@ -70,9 +70,9 @@ from lightcraft_opt.ocp.time_limit import (
 )
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.options import RcsProfile
-from lightcraft_opt.symbolic.pulse_map import PulseMap
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
-from lightcraft_opt.symbolic.reduced_map import ReducedMapOptions, reduced_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, reduced_pulse_map
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
 

@@ -40,7 +40,7 @@ import numpy as np
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.params import BeamSizeModel
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = [
     "Start",

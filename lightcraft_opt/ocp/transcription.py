@@ -27,7 +27,8 @@ m_i the mean level and c_i, s_i the cosine and sine amplitudes: the thrust then 
 
 Φ enters through one ``map`` over the horizon: the jump is exact and every derivative is
 an exact derivative of Φ (no finite differences). Given Φ's explicit-chain derivatives
-(symbolic/pulse_map_derivatives.py, compiled pieces), :meth:`MultipleShooting.chain_derivatives`
+(symbolic/maps/pulse_map_derivatives.py, compiled pieces),
+:meth:`MultipleShooting.chain_derivatives`
 builds the NLP's gradient, constraint Jacobian and Lagrangian Hessian from them instead of
 casadi's AD through Φ: the NLP is written a second time with Φ's outputs as free symbols Y
 (ℓ(w, Y) = λ_f f + λ_gᵀ g, cheap to differentiate), and at the point w̄
@@ -66,6 +67,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.evaluation import ConvexBlocks, SharedEvaluation, horizon_map
+from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
@@ -84,9 +86,8 @@ from lightcraft_opt.ocp.problem import (
     TrackReference,
 )
 from lightcraft_opt.options import RcsProfile
-from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_pulse_measures
-from lightcraft_opt.symbolic.pulse_map import PulseMap
-from lightcraft_opt.symbolic.pulse_map_derivatives import PulseMapDerivatives
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import PulseMapDerivatives
 
 __all__ = ["SURROGATE_CACHE", "MultipleShooting", "Surrogate", "state_scale"]
 

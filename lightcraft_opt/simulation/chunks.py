@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.simulation.flight_log import FlightLog
-from lightcraft_opt.symbolic.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["CHUNK_SECONDS", "chunk_pulses", "step_in_chunks"]
 

@@ -24,7 +24,7 @@ from lightcraft_opt.options import SimulationOptions, checked_duration
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
 
 __all__ = ["coast_integrator", "simulate_coast"]
 

@@ -9,7 +9,7 @@ import numpy as np
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.params import BeamProfile, Laser
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.beam import beam_side
+from lightcraft_opt.symbolic.terms.beam import beam_side
 
 __all__ = ["LEFT_BEAM_PULSES", "Z_UP", "FlightLog", "beam_gap", "beam_sides"]
 
@@ -22,7 +22,7 @@ _OFFSET = ENGINE.slot("offset_L")
 
 
 def beam_sides(z: np.ndarray, focus: float, p: np.ndarray, laser: Laser) -> np.ndarray:
-    """The beam's size :func:`~lightcraft_opt.symbolic.beam.beam_side` at altitudes ``z``
+    """The beam's size :func:`~lightcraft_opt.symbolic.terms.beam.beam_side` at altitudes ``z``
     (any shape) [m], as numbers [m], for callers that hold no casadi (plots)."""
     z = np.asarray(z, dtype=float)
     sides = [float(beam_side(float(zi), float(focus), p, laser)) for zi in z.ravel()]
@@ -42,7 +42,7 @@ def beam_gap(
     Positive when they do not overlap (docs/frames.md#end-of-flight). The optic is the
     disc of the capture radius about its centre (tilted, its shadow on the beam plane is an
     ellipse inside that disc, so a positive clearance is never wrong). The footprint is the
-    nominal edge of the profile (symbolic/beam.py), the soft edge's half-fluence line:
+    nominal edge of the profile (symbolic/terms/beam.py), the soft edge's half-fluence line:
     the square of side ``side`` with edges along east and north (HOLLOW_SQUARE: the outer
     square; an optic over the hole is centred, not out), the disc of diameter ``side``
     (TOP_HAT; GAUSSIAN: the 1/e^2 diameter).
@@ -50,7 +50,7 @@ def beam_gap(
     Parameters
     ----------
     offset_L : (2,) east/north offset of the optic centre from the beam axis, L frame [m].
-    side : beam size at the craft, :func:`~lightcraft_opt.symbolic.beam.beam_side` [m].
+    side : beam size at the craft, :func:`~lightcraft_opt.symbolic.terms.beam.beam_side` [m].
     capture_radius : outer radius of the optic [m].
     profile : the beam's transverse profile.
     signed : an optic centre over the footprint counts its depth inside: the distance from

@@ -7,7 +7,7 @@ import numpy as np
 
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
-from lightcraft_opt.symbolic.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 __all__ = ["flight_result"]
 

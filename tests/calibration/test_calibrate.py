@@ -6,7 +6,7 @@ residual graph), sampled at irregular video times with a gap and Gaussian noise 
 axis (a 10 cm craft tracked on video); the recovered values must lie within 3 standard
 deviations of the truth, and the standard deviations must be small in physical terms.
 Flight 5's model uses the sector impulse model, in which ``tipping_gain`` does not enter
-at all (symbolic/engine.py): a parameter the data cannot identify by construction.
+at all (symbolic/terms/engine.py): a parameter the data cannot identify by construction.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_sensitivities import build_dense_sensitivity
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import build_dense_sensitivity
 
 MODEL_FILE = REPO_ROOT / "models" / "flight5.toml"
 NOISE = 0.007  # m, per axis

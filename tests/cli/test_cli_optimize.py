@@ -31,7 +31,7 @@ from lightcraft_opt.ocp.options import OCP_TIME_LIMIT
 from lightcraft_opt.ocp.solve import rollout
 from lightcraft_opt.ocp.transcription import state_scale
 from lightcraft_opt.plots.ocp import ocp_figures
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 MODELS = REPO_ROOT / "models"
 CAPTURE_RADIUS = 0.055  # models/flight5.toml capture_radius_mm = 55

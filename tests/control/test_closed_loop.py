@@ -44,7 +44,7 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, initial_state, parameter_values
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 MODEL = load_model(REPO_ROOT / "models" / "flight5-rcs.toml")
 NO_CLOCK = MpcOptions(time_budget=None)

@@ -3,7 +3,7 @@
 References:
 
 - casadi's AD through Ψ's own MX composition: the explicit chain over the SX pieces
-  (symbolic/reduced_map_derivatives.py) gives the same Jacobians to round-off;
+  (symbolic/maps/reduced_map_derivatives.py) gives the same Jacobians to round-off;
 - the same QP solved by HPIPM (interior point, Riccati recursion on the stage structure)
   and by qrqp (casadi's active-set method, exact on its active set): the same minimiser,
   with some input bounds active, and the dynamics hold along it;
@@ -50,8 +50,8 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.params import BeamSizeModel
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.reduced_map import build_reduced_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 
 #: No wall-clock budget: the flights below depend on their inputs only (a solve late on a
 #: loaded machine would otherwise fly the fallback).

@@ -2,7 +2,7 @@
 
 References:
 
-- the coning angle of symbolic/invariants.py (angle b1 to H) and the symmetry of the
+- the coning angle of symbolic/terms/invariants.py (angle b1 to H) and the symmetry of the
   craft about the vertical: the coning coordinates read the same angle and turn with the
   craft's yaw; their Jacobians match finite differences (docs/architecture.md#rule-3);
 - the holonomy of a despun frame whose axis cones at half-angle θ: it turns about the
@@ -60,9 +60,9 @@ from lightcraft_opt.linearize import (
     pulse_map_jacobian,
 )
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.coning_coordinates import build_coning_coordinates
-from lightcraft_opt.symbolic.invariants import build_invariants
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 MODEL = load_model(REPO_ROOT / "models" / "flight5-rcs.toml")
 TOP = 0.2  # max_thrust of each thruster [N]

@@ -29,7 +29,7 @@ from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.linearize.operating_points import pulse_map_jacobian
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 TABLES = ("spins", "altitudes", "speeds", "A", "B", "omega_per_spin", "spin_decay")
 

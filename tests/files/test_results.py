@@ -37,7 +37,7 @@ from lightcraft_opt.ocp.problem import (
 from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.flight_log import beam_gap
-from lightcraft_opt.symbolic.beam import beam_side
+from lightcraft_opt.symbolic.terms.beam import beam_side
 
 MODEL = REPO_ROOT / "models" / "flight5.toml"
 

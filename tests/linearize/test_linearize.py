@@ -49,9 +49,9 @@ from lightcraft_opt.params import Engine, Model, Rcs, SpinDecay, Thruster
 from lightcraft_opt.plots import plot_multipliers, plot_stability_map
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
-from lightcraft_opt.symbolic.gravity import EARTH_GM, build_gravity
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE, build_error_state
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, build_gravity
 
 FAST = PulseMapOptions(substeps=8)
 FLIGHT5 = load_model(REPO_ROOT / "models" / "flight5.toml")

@@ -30,8 +30,8 @@ from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.ocp.transcription import SURROGATE_CACHE, MultipleShooting, Surrogate
 from lightcraft_opt.params import Engine
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 
 BUILT = "building the NLP's derivatives"
 LOADED = "the NLP's derivatives: loaded from the cache"

@@ -47,7 +47,7 @@ from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import BeamSizeModel, Engine
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 RTOL = 1e-12
 

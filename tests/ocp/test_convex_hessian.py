@@ -29,7 +29,7 @@ from lightcraft_opt.ocp.evaluation import ConvexBlocks
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 
 def test_each_block_is_projected_on_the_psd_cone():

@@ -32,6 +32,7 @@ from support.models import table1_flight5
 
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
+from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
     ControlBound,
@@ -60,9 +61,8 @@ from lightcraft_opt.params import (
     SpinDecayModel,
 )
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.gravity import EARTH_GM, WGS84_A, WGS84_F
-from lightcraft_opt.symbolic.ocp_measures import build_node_measures, build_pulse_measures
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, WGS84_A, WGS84_F
 
 CHEAP_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=1, dense=1)
 QUADRATURE = {"quadrature_radial": 4, "quadrature_azimuthal": 16}

@@ -25,7 +25,7 @@ from lightcraft_opt.ocp.options import OcpOptions, PredictionMap
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 PULSES = 20
 

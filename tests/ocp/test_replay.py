@@ -54,7 +54,7 @@ from lightcraft_opt.ocp.solve import CompiledOcp, rollout
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.params import Engine
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 CHEAP_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=1, dense=1)
 T0 = 0.3  # s: the first pulse, inside the gust below

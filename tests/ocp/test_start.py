@@ -36,7 +36,7 @@ from lightcraft_opt.ocp.start import (
 )
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 TOL = 1e-8
 

@@ -30,7 +30,7 @@ from lightcraft_opt.plots.track import plot_track_xy
 from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
 from lightcraft_opt.simulation.simulate import simulate
-from lightcraft_opt.symbolic.beam import beam_side
+from lightcraft_opt.symbolic.terms.beam import beam_side
 
 R = STATE.slot("r_L").start
 V = STATE.slot("v_L").start

@@ -25,7 +25,7 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.gravity import EARTH_RATE, build_gravity
+from lightcraft_opt.symbolic.terms.gravity import EARTH_RATE, build_gravity
 
 V0 = 20.0  # launch speed, straight up [m/s]
 

@@ -24,7 +24,7 @@ from lightcraft_opt.layout import ENGINE, initial_state, nominal_inputs
 from lightcraft_opt.params import BeamProfile
 from lightcraft_opt.simulation import LEFT_BEAM_PULSES, beam_gap, simulate
 from lightcraft_opt.simulation.result import SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 OFFSET = slice(ENGINE.slot("offset_L").start, ENGINE.slot("offset_L").stop)
 

@@ -17,7 +17,7 @@ from support.paths import REPO_ROOT
 from lightcraft_opt import load_model, simulate
 from lightcraft_opt.layout import ENGINE, initial_state
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 MODELS = REPO_ROOT / "models"
 

@@ -7,8 +7,8 @@ import numpy as np
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.solve import rollout
 from lightcraft_opt.ocp.transcription import MultipleShooting
-from lightcraft_opt.symbolic.pulse_map import PulseMap
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 
 
 def parameters(tr: MultipleShooting, problem: OcpProblem) -> np.ndarray:

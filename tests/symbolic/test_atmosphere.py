@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from support.jacobian_check import assert_jacobians_match_finite_differences
 
-from lightcraft_opt.symbolic.atmosphere import LAYERS, R0, build_atmosphere
+from lightcraft_opt.symbolic.terms.atmosphere import LAYERS, R0, build_atmosphere
 
 # geometric altitude [m]: density [kg/m^3], temperature [K], pressure [Pa] (table, 5 digits)
 TABLE = {

@@ -17,9 +17,9 @@ from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Aerodynamics, Environment, Wind
 from lightcraft_opt.simulation.coast_reference import simulate_coast
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.gravity import EARTH_GM, dcm_EL, site_position_E
-from lightcraft_opt.symbolic.invariants import build_invariants
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, dcm_EL, site_position_E
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 WINDY = Environment(
     wind=Wind(

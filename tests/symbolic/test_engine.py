@@ -29,9 +29,9 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.params import BeamSizeModel, ImpulseModel, Model
-from lightcraft_opt.symbolic.beam import beam_side, fluence
-from lightcraft_opt.symbolic.engine import ENGINE_OUTPUT_NAMES, build_engine, health
-from lightcraft_opt.symbolic.rotation import dcm
+from lightcraft_opt.symbolic.terms.beam import beam_side, fluence
+from lightcraft_opt.symbolic.terms.engine import ENGINE_OUTPUT_NAMES, build_engine, health
+from lightcraft_opt.symbolic.terms.rotation import dcm
 
 F5 = load_model("models/flight5.toml")
 F16 = load_model("models/flight16.toml")

@@ -17,7 +17,7 @@ import pytest
 import sympy as sp
 from sympy.physics import mechanics as me
 
-from lightcraft_opt.symbolic.gyrostat import gyrostat_accelerations
+from lightcraft_opt.symbolic.terms.gyrostat import gyrostat_accelerations
 
 
 @pytest.fixture(scope="module")

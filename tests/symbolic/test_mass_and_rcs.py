@@ -14,9 +14,9 @@ from support.models import table1_flight5
 
 from lightcraft_opt.layout import STATE, initial_state, parameter_values
 from lightcraft_opt.params import Liner, Rcs, Thruster
-from lightcraft_opt.symbolic.coast_rhs import coast_terms
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rcs import STANDARD_GRAVITY
+from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rcs import STANDARD_GRAVITY
 
 LINER = Liner(mass=0.003, radius=0.045, axial_offset=0.01)
 RCS = Rcs(

@@ -18,8 +18,8 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.options import PulseMapOptions, SimulationOptions
 from lightcraft_opt.simulation.coast_reference import simulate_coast
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 MODELS = REPO_ROOT / "models"
 

@@ -1,4 +1,4 @@
-"""Φ's explicit-chain derivatives (symbolic/pulse_map_derivatives.py) against two references.
+"""Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) against two references.
 
 - casadi's AD through the composed Φ (``phi.step``): the same derivatives by another
   route, so they agree to rounding (1e-9 relative to the largest entry; 1e-15 here);
@@ -29,9 +29,9 @@ from support.models import (
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import ENGINE, STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
-from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map
 
 AD_RTOL = 1e-9
 FD_RTOL = 1e-5

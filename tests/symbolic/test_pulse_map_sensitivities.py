@@ -1,4 +1,4 @@
-"""Φ's dense-output sensitivities (symbolic/pulse_map_sensitivities.py) against casadi's AD.
+"""Φ's dense-output sensitivities (symbolic/maps/pulse_map_sensitivities.py) against casadi's AD.
 
 The chain runs each piece in forward mode and carries n directions through the pulse; casadi's
 AD through Φ's composed dense output (``phi.dense``) is the same derivative by another route,
@@ -27,12 +27,12 @@ from support.models import (
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, nominal_inputs, parameter_values
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_sensitivities import (
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import (
     build_dense_sensitivity,
     build_sensitivity_pieces,
 )
+from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map
 
 AD_RTOL = 1e-9
 N_DIRECTIONS = 3

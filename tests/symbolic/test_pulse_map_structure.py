@@ -31,8 +31,8 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Carrier
-from lightcraft_opt.symbolic.flat_pulse_map import build_flat_pulse_map
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map
 
 CARRIER = Carrier(
     mass=0.010,

@@ -1,4 +1,4 @@
-"""Physics of pulse trains through the pulse map Φ (symbolic/pulse_map.py).
+"""Physics of pulse trains through the pulse map Φ (symbolic/maps/pulse_map.py).
 
 References:
 
@@ -54,8 +54,10 @@ from lightcraft_opt.params import (
     SpinDecayModel,
     Wind,
 )
-from lightcraft_opt.symbolic.coast_rhs import coast_terms
-from lightcraft_opt.symbolic.gravity import (
+from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.terms.gravity import (
     EARTH_GM,
     WGS84_A,
     WGS84_F,
@@ -64,10 +66,8 @@ from lightcraft_opt.symbolic.gravity import (
     gravity_E,
     site_position_E,
 )
-from lightcraft_opt.symbolic.invariants import build_invariants
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.rotation import cross, dcm
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.rotation import cross, dcm
 
 EPS = np.finfo(float).eps
 

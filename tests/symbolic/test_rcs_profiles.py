@@ -10,7 +10,7 @@ References:
   scheme against it;
 - closed forms: the propellant used, T Δt / (Isp g0), and the rocket equation
   Δv = Isp g0 ln(m0 / m1) for one thruster over one sub-interval; the angular impulse
-  r × F Δt; the coning rate ω = (H1 - A w1) / A (symbolic/coast.py ``coning_rate_B``),
+  r × F Δt; the coning rate ω = (H1 - A w1) / A (symbolic/maps/coast.py ``coning_rate_B``),
   1356.43 rad/s for Flight 5 at 10,000 RPM (docs/physics.md#coning-rates), against the rate at
   which CVODES turns w_⊥ in B; the change of the coning angle under a torque that turns
   with H_⊥, |M| T / H1 in tan θ, and the bound 2 |M| / (ω H1) for any held B-torque;
@@ -59,12 +59,12 @@ from lightcraft_opt.ocp.solve import CompiledOcp, rollout
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile, SimulationOptions
 from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
-from lightcraft_opt.symbolic.coast import coning_rate_B
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.gyrostat import angular_momentum
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.rcs import STANDARD_GRAVITY
+from lightcraft_opt.symbolic.maps.coast import coning_rate_B
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rcs import STANDARD_GRAVITY
 
 MODELS = REPO_ROOT / "models"
 N_THR = 4

@@ -1,4 +1,4 @@
-"""The coning-aware reduced map Ψ (symbolic/reduced_map.py) against Φ.
+"""The coning-aware reduced map Ψ (symbolic/maps/reduced_map.py) against Φ.
 
 References: Φ itself at full accuracy (Yoshida splitting, 32 substeps, the model's optic),
 flown along coning flights (a beam 3-4 cm off the pad axis pumps the coning up, from an
@@ -35,9 +35,9 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
-from lightcraft_opt.symbolic.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives
-from lightcraft_opt.symbolic.reduced_map import (
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.reduced_map import (
     REDUCED_STATE,
     ReducedMapOptions,
     build_reduced_map,

@@ -21,8 +21,8 @@ from lightcraft_opt.layout import STATE, initial_state, parameter_values, quater
 from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.params import Carrier
 from lightcraft_opt.simulation.coast_reference import simulate_coast
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs, coast_terms
-from lightcraft_opt.symbolic.invariants import build_invariants
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs, coast_terms
+from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 TIGHT = SimulationOptions(rtol=1e-12, atol=1e-14, samples_per_interval=40, stop_on_landing=False)
 
@@ -174,7 +174,7 @@ def test_gyrostat_spin_rate_follows_motor_torque():
 
 
 def _system_inertia(model):
-    from lightcraft_opt.symbolic.mass_properties import mass_properties
+    from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
 
     x = initial_state(model)
     mp = mass_properties(ca.DM(x), ca.DM(parameter_values(model)))

@@ -12,7 +12,7 @@ from support.jacobian_check import assert_jacobians_match_finite_differences
 
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.params import Environment, Model, Wind
-from lightcraft_opt.symbolic.wind import build_wind, wind_velocity_L
+from lightcraft_opt.symbolic.terms.wind import build_wind, wind_velocity_L
 
 
 def with_wind(model: Model, wind: Wind) -> tuple[ca.Function, np.ndarray]:

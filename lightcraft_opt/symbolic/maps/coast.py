@@ -36,10 +36,10 @@ import casadi as ca
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import STATE
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.gyrostat import angular_momentum, gyrostat_accelerations
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rotation import dcm, quat_derivative, quat_multiply
+from lightcraft_opt.symbolic.maps.assemble import assemble
+from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum, gyrostat_accelerations
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rotation import dcm, quat_derivative, quat_multiply
 
 __all__ = ["coning_rate_B", "exact_spin_flow", "rk4_coast", "split_coast"]
 

@@ -29,8 +29,8 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import ERROR_STATE, STATE
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.rotation import conjugate, quat_multiply
+from lightcraft_opt.symbolic.maps.assemble import assemble
+from lightcraft_opt.symbolic.terms.rotation import conjugate, quat_multiply
 
 __all__ = ["ERROR_STATE", "build_error_state"]  # ERROR_STATE re-exported from layout
 

@@ -18,7 +18,7 @@ import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.params import Environment
-from lightcraft_opt.symbolic.rotation import Expr, cross
+from lightcraft_opt.symbolic.terms.rotation import Expr, cross
 
 __all__ = [
     "EARTH_GM",

@@ -31,8 +31,8 @@ import casadi as ca
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
 from lightcraft_opt.options import RcsProfile
-from lightcraft_opt.symbolic.pulse_map import PulseMap, substep_inputs
-from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, substep_inputs
+from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 
 __all__ = ["SensitivityPieces", "build_dense_sensitivity", "build_sensitivity_pieces"]
 
@@ -117,7 +117,7 @@ def build_dense_sensitivity(
 
     Parameters
     ----------
-    phi : a Φ from :func:`~lightcraft_opt.symbolic.pulse_map.build_pulse_map` (with its
+    phi : a Φ from :func:`~lightcraft_opt.symbolic.maps.pulse_map.build_pulse_map` (with its
         pieces).
     n_directions : n, the columns of the seeds dx = ∂x/∂θ (STATE.size, n) and dp = ∂p/∂θ
         (PARAMETERS.size, n); x in the STATE layout (L and B frames), p in PARAMETERS.

@@ -7,9 +7,9 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.symbolic.gyrostat import angular_momentum
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rotation import dcm
+from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rotation import dcm
 
 __all__ = ["build_invariants"]
 

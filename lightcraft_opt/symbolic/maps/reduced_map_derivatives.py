@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, REDUCED_STATE
-from lightcraft_opt.symbolic.reduced_map import ReducedMap
+from lightcraft_opt.symbolic.maps.reduced_map import ReducedMap
 
 __all__ = ["ReducedMapDerivatives", "build_reduced_map_derivatives"]
 

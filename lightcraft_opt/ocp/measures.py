@@ -10,7 +10,7 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
-from lightcraft_opt.symbolic.rotation import dcm
+from lightcraft_opt.symbolic.terms.rotation import dcm
 
 __all__ = ["build_node_measures", "build_pulse_measures"]
 

@@ -48,7 +48,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces, build_pulse_map_pieces
+from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces, build_pulse_map_pieces
 
 __all__ = [
     "PulseMap",
@@ -123,7 +123,7 @@ def compose_pulse_map(
     """Φ's MX composition (module docstring) of ``pieces``: ``<name>(x, u, p, t)`` and
     ``<name>_dense``; the options' substeps, dense and RCS profile are read, u laid out as
     ``inputs``, period [s]. Any pieces with the signatures of pulse_map_pieces.py compose
-    (the reduced map's, symbolic/reduced_map.py, too)."""
+    (the reduced map's, symbolic/maps/reduced_map.py, too)."""
     opts, ulay = options, inputs
     x = ca.MX.sym("x", STATE.size)
     u = ca.MX.sym("u", ulay.size)

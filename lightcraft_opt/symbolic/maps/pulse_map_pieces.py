@@ -3,7 +3,7 @@
 Each is a small SX Function built with ``{"cse": True}`` (common subexpressions shared),
 so Φ (pulse_map.py) calls them from a short MX graph, its generated C stays small (it
 compiles in seconds) and its derivatives can be chained over the pieces
-(:mod:`lightcraft_opt.symbolic.pulse_map_derivatives`):
+(:mod:`lightcraft_opt.symbolic.maps.pulse_map_derivatives`):
 
 - ``normalise_attitude(x) -> x_unit``: the quaternion of x scaled to unit length (STATE layout).
 - ``pulse_jump(x, pulse, p) -> (x_plus, engine)``: the laser pulse (pulse_jump.py); the
@@ -11,7 +11,7 @@ compiles in seconds) and its derivatives can be chained over the pieces
 - ``coast_substep(x, w, p, t) -> x_next``: one step of the coast scheme over h = T /
   substeps from time t [s]. w holds the substep's continuous inputs (:func:`substep_inputs`).
 - ``coning_rate(x, p) -> omega``: the coning rate in B [rad/s] (coast.py
-  :func:`~lightcraft_opt.symbolic.coast.coning_rate_B`), which the PHASE_LOCKED profile
+  :func:`~lightcraft_opt.symbolic.maps.coast.coning_rate_B`), which the PHASE_LOCKED profile
   fixes right after the jump.
 
 The substep's inputs w by RCS profile
@@ -42,11 +42,11 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.coast import Rhs, coning_rate_B, rk4_coast, split_coast
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.rcs import phase_locked_thrust
+from lightcraft_opt.symbolic.maps.assemble import assemble
+from lightcraft_opt.symbolic.maps.coast import Rhs, coning_rate_B, rk4_coast, split_coast
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.terms.rcs import phase_locked_thrust
 
 __all__ = ["PulseMapPieces", "build_pulse_map_pieces"]
 

@@ -22,7 +22,7 @@ optic. The coast splits as Φ's does, but averaged over the cone:
 
 - slow (RK4, ``substeps`` steps a pulse): r, v, H and the propellant under gravity, the
   rotating site frame, wind, aerodynamics, spin decay and the RCS, all from Φ's own
-  :func:`~lightcraft_opt.symbolic.coast_rhs.coast_terms` evaluated with b1 on Ĥ (the cone's
+  :func:`~lightcraft_opt.symbolic.maps.coast_rhs.coast_terms` evaluated with b1 on Ĥ (the cone's
   mean axis): dH_L/dt = R_LB M_B − W_L × H_L;
 - fast (exact): b1 turns about Ĥ by |H| h / A a step (A the transverse moment), so c turns
   by that angle in T_H.
@@ -55,16 +55,16 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.coast import coning_rate_B, rk4_coast
-from lightcraft_opt.symbolic.coast_rhs import coast_terms
-from lightcraft_opt.symbolic.gravity import earth_rate_L
-from lightcraft_opt.symbolic.gyrostat import angular_momentum
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import PulseMap, compose_pulse_map
-from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
-from lightcraft_opt.symbolic.rotation import cross, dcm, quat_multiply
+from lightcraft_opt.symbolic.maps.assemble import assemble
+from lightcraft_opt.symbolic.maps.coast import coning_rate_B, rk4_coast
+from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, compose_pulse_map
+from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
+from lightcraft_opt.symbolic.terms.gravity import earth_rate_L
+from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rotation import cross, dcm, quat_multiply
 
 __all__ = [  # REDUCED_STATE re-exported from layout, its owner
     "REDUCED_STATE",
@@ -277,7 +277,7 @@ def build_reduced_map(model: Model, options: ReducedMapOptions | None = None) ->
 
 
 def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) -> PulseMap:
-    """Ψ in Φ's clothes: a :class:`~lightcraft_opt.symbolic.pulse_map.PulseMap` on full states
+    """Ψ in Φ's clothes: a :class:`~lightcraft_opt.symbolic.maps.pulse_map.PulseMap` on full states
     (STATE), ``reduced_pulse_map(x, u, p, t) -> (x_next, engine)`` with x_next =
     lift(Ψ(project(x))) and ``dense`` the lifted substep states, so every consumer of Φ (the
     OCP's transcription, its costs and constraints on r_L, v_L, q_LB, the simulator) can

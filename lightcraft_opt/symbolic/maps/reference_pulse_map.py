@@ -2,7 +2,7 @@
 
 :func:`build_flat_pulse_map` inlines the jump and every coast substep into one SX
 expression (530k instructions for Flight 5 at the default options). It is what
-:func:`~lightcraft_opt.symbolic.pulse_map.build_pulse_map` built before Φ was composed
+:func:`~lightcraft_opt.symbolic.maps.pulse_map.build_pulse_map` built before Φ was composed
 from named sub-Functions (pulse_map.py), kept so tests and bench/ can check that the
 structured Φ evaluates the same numbers. Use ``build_pulse_map``.
 
@@ -25,12 +25,12 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.coast import Rhs, Rhses, coning_rate_B, rk4_coast, split_coast
-from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
-from lightcraft_opt.symbolic.pulse_jump import pulse_jump
-from lightcraft_opt.symbolic.pulse_map import PulseMap, check_pulse_map_options
-from lightcraft_opt.symbolic.rcs import phase_locked_thrust
+from lightcraft_opt.symbolic.maps.assemble import assemble
+from lightcraft_opt.symbolic.maps.coast import Rhs, Rhses, coning_rate_B, rk4_coast, split_coast
+from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, check_pulse_map_options
+from lightcraft_opt.symbolic.terms.rcs import phase_locked_thrust
 
 __all__ = ["build_flat_pulse_map"]
 

@@ -41,8 +41,8 @@ import numpy as np
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import ENGINE, PARAMETERS, PULSE_INPUT, STATE
 from lightcraft_opt.options import RcsProfile
-from lightcraft_opt.symbolic.pulse_map import PulseMap, substep_inputs
-from lightcraft_opt.symbolic.pulse_map_pieces import PulseMapPieces
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, substep_inputs
+from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 
 __all__ = [
     "DerivativePieces",
@@ -151,7 +151,7 @@ def build_derivative_pieces(pieces: PulseMapPieces, *, hessians: bool = True) ->
 
 def build_pulse_map_derivatives(phi: PulseMap, *, hessians: bool = True) -> PulseMapDerivatives:
     """The explicit-chain Jacobian and (with ``hessians``) Lagrangian Hessian of the
-    structured ``phi`` (:func:`~lightcraft_opt.symbolic.pulse_map.build_pulse_map`),
+    structured ``phi`` (:func:`~lightcraft_opt.symbolic.maps.pulse_map.build_pulse_map`),
     interpreted."""
     if phi.pieces is None:
         raise ParameterError(

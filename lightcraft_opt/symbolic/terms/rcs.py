@@ -14,7 +14,7 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.params import Rcs
-from lightcraft_opt.symbolic.rotation import Expr, cross
+from lightcraft_opt.symbolic.terms.rotation import Expr, cross
 
 __all__ = ["STANDARD_GRAVITY", "phase_locked_thrust", "rcs_loads"]
 
@@ -59,7 +59,7 @@ def phase_locked_thrust(mean: Expr, cos_: Expr, sin_: Expr, omega: Expr, tau: Ex
     ----------
     mean, cos_, sin_ : (n,) mean level and the cosine and sine amplitudes per thruster [N]
         (map-input slots ``rcs_thrust``, ``rcs_cos``, ``rcs_sin``).
-    omega : coning rate in B [rad/s] (symbolic/coast.py ``coning_rate_B``), fixed over
+    omega : coning rate in B [rad/s] (symbolic/maps/coast.py ``coning_rate_B``), fixed over
         the interval.
     tau : time since the pulse [s].
 

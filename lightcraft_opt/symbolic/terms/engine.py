@@ -3,7 +3,7 @@
 Frames (docs/frames.md): B is the despun body frame, b1 = (1, 0, 0)_B the craft axis,
 body positions from P; ``R_LB = dcm(q_LB)``; the mass centre S* is at ``r_L`` in L and at
 ``cm_B`` from P, so a body point s_B sits at ``r_L + R_LB (s_B - cm_B)`` in L. The beam
-(:mod:`lightcraft_opt.symbolic.beam`) rises along L's z through ``pointing_L``.
+(:mod:`lightcraft_opt.symbolic.terms.beam`) rises along L's z through ``pointing_L``.
 
 Captured energy. The optic is the annulus ``shadow_radius < r < capture_radius`` in the
 optic plane, perpendicular to b1 through the ring (at ``ring_height`` h along b1 from P);
@@ -89,9 +89,9 @@ import numpy as np
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
 from lightcraft_opt.params import Engine, ImpulseModel, Model, Propellant
-from lightcraft_opt.symbolic.beam import beam_side, fluence, logistic
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rotation import cross, dcm
+from lightcraft_opt.symbolic.terms.beam import beam_side, fluence, logistic
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rotation import cross, dcm
 
 __all__ = ["ENGINE_OUTPUT_NAMES", "PROJECTION_EPS", "build_engine", "engine_impulse", "health"]
 

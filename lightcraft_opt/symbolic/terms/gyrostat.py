@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from lightcraft_opt.symbolic.rotation import Expr, cross
+from lightcraft_opt.symbolic.terms.rotation import Expr, cross
 
 __all__ = ["angular_momentum", "gyrostat_accelerations"]
 

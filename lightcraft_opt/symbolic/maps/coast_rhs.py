@@ -23,15 +23,15 @@ import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, STATE, input_layout
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.aero import aero_loads
-from lightcraft_opt.symbolic.atmosphere import us1976
-from lightcraft_opt.symbolic.gravity import earth_rate_L, site_acceleration_L
-from lightcraft_opt.symbolic.gyrostat import gyrostat_accelerations
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rcs import rcs_loads
-from lightcraft_opt.symbolic.rotation import dcm, quat_derivative
-from lightcraft_opt.symbolic.spin_decay import spin_decay_torque
-from lightcraft_opt.symbolic.wind import wind_velocity_L
+from lightcraft_opt.symbolic.terms.aero import aero_loads
+from lightcraft_opt.symbolic.terms.atmosphere import us1976
+from lightcraft_opt.symbolic.terms.gravity import earth_rate_L, site_acceleration_L
+from lightcraft_opt.symbolic.terms.gyrostat import gyrostat_accelerations
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rcs import rcs_loads
+from lightcraft_opt.symbolic.terms.rotation import dcm, quat_derivative
+from lightcraft_opt.symbolic.terms.spin_decay import spin_decay_torque
+from lightcraft_opt.symbolic.terms.wind import wind_velocity_L
 
 __all__ = ["build_coast_rhs", "coast_terms"]
 

@@ -37,10 +37,10 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, STATE, quaternion_from_tilt
-from lightcraft_opt.symbolic.coast import coning_rate_B
-from lightcraft_opt.symbolic.gyrostat import angular_momentum
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rotation import conjugate, dcm, quat_multiply
+from lightcraft_opt.symbolic.maps.coast import coning_rate_B
+from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rotation import conjugate, dcm, quat_multiply
 
 __all__ = ["build_coning_coordinates"]
 

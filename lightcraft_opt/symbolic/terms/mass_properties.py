@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.symbolic.rotation import Expr
+from lightcraft_opt.symbolic.terms.rotation import Expr
 
 __all__ = ["MassProperties", "mass_properties"]
 

@@ -21,11 +21,11 @@ import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
 from lightcraft_opt.params import Model
-from lightcraft_opt.symbolic.assemble import assemble
-from lightcraft_opt.symbolic.engine import engine_impulse
-from lightcraft_opt.symbolic.gyrostat import gyrostat_accelerations
-from lightcraft_opt.symbolic.mass_properties import mass_properties
-from lightcraft_opt.symbolic.rotation import dcm
+from lightcraft_opt.symbolic.maps.assemble import assemble
+from lightcraft_opt.symbolic.terms.engine import engine_impulse
+from lightcraft_opt.symbolic.terms.gyrostat import gyrostat_accelerations
+from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
+from lightcraft_opt.symbolic.terms.rotation import dcm
 
 __all__ = ["pulse_jump"]
 
