@@ -13,8 +13,7 @@ from pathlib import Path
 import pytest
 from support.paths import REPO_ROOT
 
-from lightcraft_opt import cli
-from lightcraft_opt.cli import build_parser, main
+from lightcraft_opt.cli import build_parser, main, montecarlo, optimize, simulate
 
 MODEL = REPO_ROOT / "models" / "flight5.toml"
 PROBLEMS = REPO_ROOT / "problems"
@@ -150,7 +149,7 @@ def _raise(exc: BaseException):
 
 def test_an_unexpected_exception_is_one_line_and_exit_1(monkeypatch, capsys):
     monkeypatch.delenv("LIGHTCRAFT_DEBUG", raising=False)
-    monkeypatch.setattr(cli, "_simulate", _raise(RuntimeError("boom\n  in two lines")))
+    monkeypatch.setattr(simulate, "run", _raise(RuntimeError("boom\n  in two lines")))
     assert main(["simulate", "m.toml"]) == 1
     err = capsys.readouterr().err
     assert err == (
@@ -167,13 +166,14 @@ def test_an_unexpected_exception_is_one_line_and_exit_1(monkeypatch, capsys):
 
 
 def test_ctrl_c_exits_130_with_one_line(monkeypatch, capsys):
-    monkeypatch.setattr(cli, "_optimize", _raise(KeyboardInterrupt()))
+    monkeypatch.setattr(optimize, "run", _raise(KeyboardInterrupt()))
     assert main(["optimize", "p.toml"]) == 130
     assert capsys.readouterr().err == "lightcraft: interrupted\n"
 
 
 def test_status_counts_print_as_words():
     assert (
-        cli._counts({"duration_reached": 12, "left_beam": 3}) == "12 duration_reached, 3 left_beam"
+        montecarlo._counts({"duration_reached": 12, "left_beam": 3})
+        == "12 duration_reached, 3 left_beam"
     )
-    assert cli._counts({}) == "no runs"
+    assert montecarlo._counts({}) == "no runs"

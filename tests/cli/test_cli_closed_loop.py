@@ -87,7 +87,7 @@ def test_the_time_budget_comes_from_the_file_or_the_flags(tmp_path, monkeypatch)
     problem = load_closed_loop(src)
     assert problem.mpc.time_budget is None and problem.director.time_budget == 7e-3
 
-    import lightcraft_opt.cli as cli
+    import lightcraft_opt.cli.closed_loop as cli
     import lightcraft_opt.control.director as director
     import lightcraft_opt.control.mpc as mpc
     import lightcraft_opt.control.prediction_model as prediction_model

@@ -15,8 +15,9 @@ import shutil
 import pytest
 from support.paths import REPO_ROOT
 
-from lightcraft_opt import __version__, cli
+from lightcraft_opt import __version__
 from lightcraft_opt.cli import file_kind, main
+from lightcraft_opt.cli.progress import progress_line
 
 MODELS = REPO_ROOT / "models"
 PROBLEMS = REPO_ROOT / "problems"
@@ -102,7 +103,7 @@ class _Terminal(io.StringIO):
 def test_the_progress_line_is_rewritten_on_a_terminal_and_thinned_elsewhere():
     piped, terminal = io.StringIO(), _Terminal()
     for stream in (piped, terminal):
-        show = cli._progress_line(stream)
+        show = progress_line(stream)
         for k in range(25):
             show(k, 100.0 / (k + 1), 10.0**-k)
     lines = piped.getvalue().splitlines()

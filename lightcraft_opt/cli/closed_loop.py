@@ -1,0 +1,174 @@
+"""``lightcraft closed-loop``: fly a closed-loop file's controller against the plant."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+
+from lightcraft_opt.cli.args import output_folder
+from lightcraft_opt.cli.file_kinds import check_kind
+from lightcraft_opt.cli.flags import BUDGET_MS, DURATION
+from lightcraft_opt.control.closed_loop import closed_loop, plant_options
+from lightcraft_opt.control.factory import build_controller
+from lightcraft_opt.control.options import ControllerKind
+from lightcraft_opt.control.result import ClosedLoopResult
+from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
+from lightcraft_opt.plots.closed_loop import compare_closed_loops
+from lightcraft_opt.plots.figures import PLOT_DPI
+from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
+
+#: The values of ``--controller``, one per :class:`ControllerKind`.
+CONTROLLERS = tuple(k.value for k in ControllerKind)
+
+
+def controller_list(text: str) -> tuple[ControllerKind, ...]:
+    """``--controller``: one of :data:`CONTROLLERS` or several, comma-separated
+    (``mpc,lqr,none``), each once."""
+    names = tuple(n.strip() for n in text.split(","))
+    bad = [n for n in names if n not in CONTROLLERS]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown controller {bad[0] if bad else text!r}; choose from "
+            f"{', '.join(CONTROLLERS)}, or several separated by commas (mpc,lqr,none)"
+        )
+    if len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"a controller is listed twice in {text!r}")
+    return tuple(ControllerKind(n) for n in names)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Fly the controller the file names, or each one --controller lists instead; one folder
+    each, plus an overlay (compare.png) in the parent --out when there are several."""
+    check_kind(args.problem, "closed-loop")
+    source = Path(args.problem)
+    problem = load_closed_loop(source, duration=args.duration)
+    if args.deterministic or args.time_budget_ms is not None:
+        budget = None if args.deterministic else args.time_budget_ms * 1e-3
+        problem = dataclasses.replace(
+            problem,
+            mpc=dataclasses.replace(problem.mpc, time_budget=budget),
+            director=dataclasses.replace(problem.director, time_budget=budget),
+        )
+    kinds: tuple[ControllerKind, ...] = args.controller or (problem.controller,)
+    names = [k.value for k in kinds]
+    model = problem.model
+    single = len(kinds) == 1
+    default = f"{source.stem}-{names[0]}" if single else f"{source.stem}-compare"
+    out = output_folder(args.out or Path("runs") / default)
+    print(f"{problem.title!r}: building the plant's pulse map ...", flush=True)
+    start = time.perf_counter()
+    plant = build_pulse_map(model, plant_options(model))
+    print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
+    results = []
+    for kind in kinds:
+        where = out if single else output_folder(out / kind.value)
+        results.append(_fly(problem, plant, kind, where))
+    if not single:
+        fig = compare_closed_loops(
+            results, title=problem.title, capture_radius=model.craft.engine.capture_radius
+        )
+        fig.savefig(out / "compare.png", dpi=PLOT_DPI)
+        print(f"{', '.join(names)} overlaid -> {out}/compare.png")
+    ended = any(r.flight.status.value != "duration_reached" for r in results)
+    return 1 if ended else 0
+
+
+def _fly(
+    problem: ClosedLoopProblem, plant: PulseMap, kind: ControllerKind, out: Path
+) -> ClosedLoopResult:
+    """Fly ``problem`` under the controller ``kind`` and save its files into ``out``."""
+    model = problem.model
+    name = kind.value
+    if kind is not ControllerKind.NONE:
+        print(
+            f"building the {name} controller (its linear prediction model: ~25 s the first "
+            "time for a model, then read from the disk cache) ...",
+            flush=True,
+        )
+    start = time.perf_counter()
+    controller = build_controller(kind, model, plant, mpc=problem.mpc, director=problem.director)
+    if kind is not ControllerKind.NONE:
+        print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
+    print(f"flying {problem.duration:g} s ...", flush=True)
+    result = closed_loop(
+        model,
+        controller,
+        problem.duration,
+        x0=problem.x0,
+        parameters=problem.plant_parameters,
+        pulse_map=plant,
+        options=problem.loop,
+    )
+    # the files and figures below are written by the writers registered in outputs.py
+    result.save(out, problem=problem, inputs=plant.inputs)
+    summary = json.loads((out / "summary.json").read_text())
+    pulse = summary["coning_below_0.5deg_from_pulse"]
+    settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
+    median = summary["solve_time_ms"]["median"]
+    solves = "no solves" if median is None else f"solve time median {median:.2f} ms"
+    print(
+        f"{name}: {summary['status']}: coning {summary['coning_initial_deg']:.2f} -> "
+        f"{summary['coning_final_deg']:.3f} deg ({settled}), max tilt "
+        f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, {solves} "
+        f"-> {out}/"
+    )
+    return result
+
+
+def add(sub: argparse._SubParsersAction) -> None:
+    """Add ``lightcraft closed-loop`` to the subcommands ``sub``."""
+    loop = sub.add_parser(
+        "closed-loop",
+        help="fly a closed-loop problem file under a controller",
+        description="Fly the closed-loop file's craft under the controller it names (its "
+        "controller key: mpc, lqr, director or none; --controller overrides it), u = "
+        "controller.step(x); x = plant(x, u), and write trajectory.csv, "
+        "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
+        "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
+        "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
+        "~/.cache/lightcraft_opt (~25 s the first time). A solve over its wall-clock "
+        "budget is discarded (the shifted plan flies), so results depend on the machine's "
+        "load unless --deterministic. Exit status 0: the flight reached its duration; 1: it "
+        "ended early (left the beam, landed) or no pulse fired; 2: bad input.",
+    )
+    loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
+    loop.add_argument(
+        "--controller",
+        type=controller_list,
+        default=None,
+        metavar="{" + ",".join(CONTROLLERS) + "}[,...]",
+        help="which controller instead of the file's (its controller key; without one, the "
+        "director of a file with [director], else the MPC); several, comma-separated "
+        "(mpc,lqr,none), fly one after the other into <out>/<controller>/ and are overlaid in "
+        "<out>/compare.png",
+    )
+    loop.add_argument(
+        "--out",
+        default=None,
+        help="output folder (default runs/<problem>-<controller>, or runs/<problem>-compare "
+        "for several controllers)",
+    )
+    loop.add_argument(
+        "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"
+    )
+    budget = loop.add_mutually_exclusive_group()
+    budget.add_argument(
+        "--deterministic",
+        action="store_true",
+        help="no wall-clock budget for the MPC and the director (time_budget none): no "
+        "solve is discarded as late, so the results depend only on the inputs, not on the "
+        "machine's load (injected 'late' faults still fall back)",
+    )
+    budget.add_argument(
+        "--time-budget-ms",
+        type=BUDGET_MS,
+        default=None,
+        metavar="MS",
+        help="wall-clock budget of a solve instead of the file's time_budget_ms (MPC and "
+        "director), for real-time studies: a later solve is discarded and the shifted "
+        "plan flies",
+    )
+    loop.set_defaults(run=run)
