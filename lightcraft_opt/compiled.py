@@ -69,8 +69,8 @@ from lightcraft_opt.function_cache import (
     source_digest,
     structure_key,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic import pulse_map_derivatives as derivative_chain
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.pulse_map_derivatives import (

@@ -65,7 +65,7 @@ def test_import_contracts_kept() -> None:
     ("where", "line", "broken"),
     [
         ("symbolic/_wrong_arrow.py", "import matplotlib\n", "symbolic/ imports no matplotlib"),
-        ("params.py", "import casadi\n", "The vocabulary (errors, params"),
+        ("model/craft.py", "import casadi\n", "The vocabulary (errors, model"),
         ("simulation/simulate.py", "import lightcraft_opt.plots\n", "Capabilities point down"),
         ("control/mpc.py", "from lightcraft_opt import cli\n", "Capabilities point down"),
         ("calibration/fit.py", "import lightcraft_opt.campaign.run\n", "Capabilities point down"),
@@ -76,13 +76,14 @@ def test_import_contracts_kept() -> None:
         ("ocp/problem.py", "import lightcraft_opt.ocp.transcription\n", "ocp/: the what"),
         ("control/result.py", "import lightcraft_opt.control.mpc\n", "control/: options and"),
         ("ocp/result.py", "import casadi\n", "numpy-only: no casadi"),
-        ("layout/defaults.py", "import casadi\n", "The vocabulary (errors, params"),
+        ("layout/defaults.py", "import casadi\n", "The vocabulary (errors, model"),
         (
             "layout/vectors.py",
             "from lightcraft_opt.layout.defaults import initial_state\n",
             "layout/: the layouts never import",
         ),
-        ("layout/vector_layout.py", "import lightcraft_opt.params\n", "A layout knows no model"),
+        ("layout/vector_layout.py", "import lightcraft_opt.model\n", "A layout knows no model"),
+        ("model/checks.py", "import lightcraft_opt.model.craft\n", "model/: the whole over"),
     ],
 )
 def test_contracts_catch_a_wrong_arrow(tmp_path: Path, where: str, line: str, broken: str) -> None:

@@ -38,8 +38,8 @@ from lightcraft_opt.compiled import (
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.function_cache import CacheWarning, cache_path, load_functions
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
+from lightcraft_opt.model import Engine
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Engine
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.pulse_map import build_pulse_map

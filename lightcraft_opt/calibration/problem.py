@@ -41,7 +41,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.pulse_map import PulseMap
 from lightcraft_opt.symbolic.rotation import quat_multiply
 

@@ -20,8 +20,8 @@ from lightcraft_opt.control.options import (
 )
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import STATE, checked_vector, initial_state
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import checked_duration
-from lightcraft_opt.params import Model
 
 __all__ = [
     "DISPERSED_PARAMETER",

@@ -46,8 +46,8 @@ from lightcraft_opt.layout import (
     initial_state,
     parameter_values,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions, RcsProfile, checked_duration
-from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result

@@ -34,8 +34,8 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.linearize.signal_names import select_entries
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.error_state import ERROR_STATE, build_error_state
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.pulse_map_derivatives import build_pulse_map_derivatives

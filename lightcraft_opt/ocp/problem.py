@@ -49,8 +49,8 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.params import BeamSizeModel, Model
 
 __all__ = [
     "MAX_HORIZON",

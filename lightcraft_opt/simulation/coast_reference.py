@@ -20,8 +20,8 @@ from lightcraft_opt.layout import (
     input_layout,
     parameter_values,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import SimulationOptions, checked_duration
-from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs

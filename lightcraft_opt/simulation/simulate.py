@@ -29,8 +29,8 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions, checked_duration
-from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog
 from lightcraft_opt.simulation.flight_measures import flight_result

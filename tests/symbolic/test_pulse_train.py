@@ -40,8 +40,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import (
+from lightcraft_opt.model import (
     Aerodynamics,
     BeamSizeModel,
     Engine,
@@ -54,6 +53,7 @@ from lightcraft_opt.params import (
     SpinDecayModel,
     Wind,
 )
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.symbolic.coast_rhs import coast_terms
 from lightcraft_opt.symbolic.gravity import (
     EARTH_GM,
