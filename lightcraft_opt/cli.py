@@ -38,11 +38,12 @@ from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import VectorLayout, initial_state, map_input_layout
 from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import MAX_DURATION
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 from lightcraft_opt.ocp.replay import PlanWarning
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.outputs import fit_flights
 from lightcraft_opt.plots.closed_loop import compare_closed_loops
 from lightcraft_opt.plots.figures import PLOT_DPI

@@ -6,39 +6,15 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.errors import OptionError
 
 __all__ = [
-    "MAX_DURATION",
     "CoastScheme",
     "FocusSchedule",
     "PulseMapOptions",
     "RcsProfile",
     "SimulationOptions",
-    "checked_choice",
-    "checked_duration",
-    "checked_int",
-    "checked_nonnegative",
-    "checked_number",
 ]
-
-#: Longest flight any runner flies [s]: a lightcraft flight lasts seconds; the logs grow
-#: with the pulses (26 an s).
-MAX_DURATION = 3600.0
-
-
-def checked_duration(duration: object, name: str = "duration") -> float:
-    """``duration`` [s] as a float in (0, :data:`MAX_DURATION`], else a ParameterError
-    naming ``name``."""
-    if isinstance(duration, bool) or not isinstance(duration, int | float):
-        raise ParameterError(name, f"must be a number of seconds, got {duration!r}")
-    if not (math.isfinite(duration) and 0 < duration <= MAX_DURATION):
-        raise ParameterError(
-            name,
-            f"must lie in (0, {MAX_DURATION:g}] s, got {duration:g}: an hour at most, a "
-            "lightcraft flight lasts seconds",
-        )
-    return float(duration)
 
 
 class CoastScheme(Enum):
@@ -165,52 +141,3 @@ class SimulationOptions:
                 "SimulationOptions.samples_per_interval must be a positive integer, "
                 f"got {self.samples_per_interval!r}"
             )
-
-
-# --------------------------------------------------------------------------- validators
-
-
-def checked_int(
-    owner: str, name: str, value: object, low: int, high: int | None = None, why: str = ""
-) -> None:
-    """Raise OptionError unless ``value`` is an integer (not a bool) >= ``low`` (and <=
-    ``high`` if given; ``why`` is the reason of that bound)."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise OptionError(f"{owner}.{name} must be an integer >= {low}, got {value!r}")
-    if high is not None and value > high:
-        reason = f" ({why})" if why else ""
-        raise OptionError(f"{owner}.{name} must be <= {high}{reason}, got {value}")
-
-
-def checked_number(
-    owner: str, name: str, value: object, low: float, high: float = math.inf
-) -> None:
-    """Raise OptionError unless ``value`` is a finite number in the open interval
-    (``low``, ``high``); the message reads "> low" when ``high`` is infinite."""
-    if not (
-        isinstance(value, int | float)
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-        and low < value < high
-    ):
-        span = f"> {low:g}" if math.isinf(high) else f"in ({low:g}, {high:g})"
-        raise OptionError(f"{owner}.{name} must be {span}, got {value!r}")
-
-
-def checked_choice(owner: str, name: str, value: object, choices: type[Enum]) -> None:
-    """Raise OptionError listing the allowed values unless ``value`` is a member of the
-    Enum ``choices`` (its value, the string a file writes, is not: files convert)."""
-    if not isinstance(value, choices):
-        allowed = [c.value for c in choices]
-        raise OptionError(f"{owner}.{name} must be one of {allowed}, got {value!r}")
-
-
-def checked_nonnegative(owner: str, name: str, value: object) -> None:
-    """Raise OptionError unless ``value`` is a finite number >= 0."""
-    if not (
-        isinstance(value, int | float)
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-        and value >= 0
-    ):
-        raise OptionError(f"{owner}.{name} must be a finite number >= 0, got {value!r}")

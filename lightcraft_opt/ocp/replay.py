@@ -27,8 +27,9 @@ import warnings
 import numpy as np
 
 from lightcraft_opt.compiled import pulse_map_for
-from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, checked_vector
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
 from lightcraft_opt.model import Engine, Model
+from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult, PlanReplay
 from lightcraft_opt.options import PulseMapOptions

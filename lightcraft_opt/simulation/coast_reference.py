@@ -12,16 +12,10 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.layout import (
-    PARAMETERS,
-    STATE,
-    checked_vector,
-    initial_state,
-    input_layout,
-    parameter_values,
-)
+from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, input_layout, parameter_values
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import SimulationOptions, checked_duration
+from lightcraft_opt.model.checks import checked_duration, checked_vector
+from lightcraft_opt.options import SimulationOptions
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
