@@ -72,8 +72,13 @@ from lightcraft_opt.ocp import (
     replay_plan,
     rollout,
 )
-from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOptions
-from lightcraft_opt.simulation import SimulationResult, SimulationStatus, simulate
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.simulation import (
+    SimulationOptions,
+    SimulationResult,
+    SimulationStatus,
+    simulate,
+)
 from lightcraft_opt.symbolic.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.reduced_map import ReducedMap, ReducedMapOptions, build_reduced_map
 

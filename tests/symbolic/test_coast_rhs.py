@@ -15,8 +15,7 @@ from test_rotational_dynamics import GYROSTAT_CARRIER
 
 from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.model import Aerodynamics, Environment, Wind
-from lightcraft_opt.options import SimulationOptions
-from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.gravity import EARTH_GM, dcm_EL, site_position_E
 from lightcraft_opt.symbolic.invariants import build_invariants

@@ -57,8 +57,12 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile, SimulationOptions
-from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.simulation.coast_reference import (
+    SimulationOptions,
+    coast_integrator,
+    simulate_coast,
+)
 from lightcraft_opt.symbolic.coast import coning_rate_B
 from lightcraft_opt.symbolic.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.gyrostat import angular_momentum
