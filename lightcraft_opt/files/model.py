@@ -88,7 +88,7 @@ __all__ = [
     "model_from_tables",
 ]
 
-#: Table name -> field of the params dataclass -> what the file holds for it.
+#: Table name -> field of the model dataclass (lightcraft_opt.model) -> what the file holds for it.
 SCHEMA: Mapping[str, Mapping[str, Spec]] = {
     "model": {"name": TEXT, "site": TEXT, "laser": TEXT},
     "record": {"name": TEXT, "apogee": quantity("length"), "air_time": quantity("time")},
