@@ -272,7 +272,7 @@ def director_guess(problem: OcpProblem) -> tuple[np.ndarray, np.ndarray]:
     from lightcraft_opt.control.closed_loop import plant_options
     from lightcraft_opt.control.director import DirectorController
     from lightcraft_opt.control.options import DirectorOptions, DirectorRcs
-    from lightcraft_opt.params import BeamSizeModel
+    from lightcraft_opt.model import BeamSizeModel
 
     model = problem.model
     waist = replace(model, laser=replace(model.laser, size_model=BeamSizeModel.WAIST))

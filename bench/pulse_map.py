@@ -55,8 +55,8 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import Engine, Model
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
-from lightcraft_opt.params import Engine, Model
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (

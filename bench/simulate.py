@@ -53,8 +53,8 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs

@@ -60,6 +60,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import Craft, Environment, Flight, Laser, Model, Site, Wind
 from lightcraft_opt.ocp import (
     CompiledOcp,
     OcpOptions,
@@ -71,9 +72,13 @@ from lightcraft_opt.ocp import (
     replay_plan,
     rollout,
 )
-from lightcraft_opt.options import PulseMapOptions, RcsProfile, SimulationOptions
-from lightcraft_opt.params import Craft, Environment, Flight, Laser, Model, Site, Wind
-from lightcraft_opt.simulation import SimulationResult, SimulationStatus, simulate
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.simulation import (
+    SimulationOptions,
+    SimulationResult,
+    SimulationStatus,
+    simulate,
+)
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.reduced_map import (
     ReducedMap,

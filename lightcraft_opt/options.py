@@ -1,44 +1,19 @@
-"""Options of the numeric runners as frozen dataclasses (docs/architecture.md#rule-7)."""
+"""Options every capability shares (docs/architecture.md#rule-7): the coast scheme, the RCS
+profile, the focus schedule and how the pulse map integrates (frozen dataclasses, Enums)."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from enum import Enum
 
-from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.errors import OptionError
 
 __all__ = [
-    "MAX_DURATION",
     "CoastScheme",
     "FocusSchedule",
     "PulseMapOptions",
     "RcsProfile",
-    "SimulationOptions",
-    "checked_choice",
-    "checked_duration",
-    "checked_int",
-    "checked_nonnegative",
-    "checked_number",
 ]
-
-#: Longest flight any runner flies [s]: a lightcraft flight lasts seconds; the logs grow
-#: with the pulses (26 an s).
-MAX_DURATION = 3600.0
-
-
-def checked_duration(duration: object, name: str = "duration") -> float:
-    """``duration`` [s] as a float in (0, :data:`MAX_DURATION`], else a ParameterError
-    naming ``name``."""
-    if isinstance(duration, bool) or not isinstance(duration, int | float):
-        raise ParameterError(name, f"must be a number of seconds, got {duration!r}")
-    if not (math.isfinite(duration) and 0 < duration <= MAX_DURATION):
-        raise ParameterError(
-            name,
-            f"must lie in (0, {MAX_DURATION:g}] s, got {duration:g}: an hour at most, a "
-            "lightcraft flight lasts seconds",
-        )
-    return float(duration)
 
 
 class CoastScheme(Enum):
@@ -136,81 +111,3 @@ class PulseMapOptions:
                 f"PulseMapOptions.rcs_subintervals ({self.rcs_subintervals}) must divide "
                 f"substeps ({self.substeps}): a substep may not straddle two RCS levels"
             )
-
-
-@dataclass(frozen=True)
-class SimulationOptions:
-    """How :func:`lightcraft_opt.simulate` integrates.
-
-    Attributes
-    ----------
-    rtol, atol : relative and absolute tolerances of the variable-step coast
-        integrator (CVODES, Adams method with functional iteration) [-].
-    samples_per_interval : dense-output rows per pulse interval (>= 1).
-    stop_on_landing : end the flight when the mass centre returns below the pad.
-    """
-
-    rtol: float = 1e-9
-    atol: float = 1e-11
-    samples_per_interval: int = 8
-    stop_on_landing: bool = True
-
-    def __post_init__(self) -> None:
-        for name in ("rtol", "atol"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and math.isfinite(v) and 0 < v < 1):
-                raise OptionError(f"SimulationOptions.{name} must be in (0, 1), got {v!r}")
-        if not isinstance(self.samples_per_interval, int) or self.samples_per_interval < 1:
-            raise OptionError(
-                "SimulationOptions.samples_per_interval must be a positive integer, "
-                f"got {self.samples_per_interval!r}"
-            )
-
-
-# --------------------------------------------------------------------------- validators
-
-
-def checked_int(
-    owner: str, name: str, value: object, low: int, high: int | None = None, why: str = ""
-) -> None:
-    """Raise OptionError unless ``value`` is an integer (not a bool) >= ``low`` (and <=
-    ``high`` if given; ``why`` is the reason of that bound)."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise OptionError(f"{owner}.{name} must be an integer >= {low}, got {value!r}")
-    if high is not None and value > high:
-        reason = f" ({why})" if why else ""
-        raise OptionError(f"{owner}.{name} must be <= {high}{reason}, got {value}")
-
-
-def checked_number(
-    owner: str, name: str, value: object, low: float, high: float = math.inf
-) -> None:
-    """Raise OptionError unless ``value`` is a finite number in the open interval
-    (``low``, ``high``); the message reads "> low" when ``high`` is infinite."""
-    if not (
-        isinstance(value, int | float)
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-        and low < value < high
-    ):
-        span = f"> {low:g}" if math.isinf(high) else f"in ({low:g}, {high:g})"
-        raise OptionError(f"{owner}.{name} must be {span}, got {value!r}")
-
-
-def checked_choice(owner: str, name: str, value: object, choices: type[Enum]) -> None:
-    """Raise OptionError listing the allowed values unless ``value`` is a member of the
-    Enum ``choices`` (its value, the string a file writes, is not: files convert)."""
-    if not isinstance(value, choices):
-        allowed = [c.value for c in choices]
-        raise OptionError(f"{owner}.{name} must be one of {allowed}, got {value!r}")
-
-
-def checked_nonnegative(owner: str, name: str, value: object) -> None:
-    """Raise OptionError unless ``value`` is a finite number >= 0."""
-    if not (
-        isinstance(value, int | float)
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-        and value >= 0
-    ):
-        raise OptionError(f"{owner}.{name} must be a finite number >= 0, got {value!r}")

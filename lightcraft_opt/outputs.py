@@ -48,11 +48,12 @@ from lightcraft_opt.files.simulation_outputs import (
     write_trajectory_csv,
 )
 from lightcraft_opt.layout import VectorLayout, parameter_values
+from lightcraft_opt.model import FlightRecord, Laser, Model
+from lightcraft_opt.model.checks import MAX_DURATION
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult
-from lightcraft_opt.options import MAX_DURATION, PulseMapOptions
-from lightcraft_opt.params import FlightRecord, Laser, Model
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.presenters import register
 from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.result import SimulationResult

@@ -13,7 +13,7 @@ import os
 import pytest
 from support.models import table1_flight5
 
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 
 os.environ.setdefault("LIGHTCRAFT_COMPILE", "0")
 

@@ -12,9 +12,9 @@ from support.models import table1_flight5
 from lightcraft_opt.cli import main
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import STATE, initial_state
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, SimulationOptions
-from lightcraft_opt.params import Craft, Site
-from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.model import Craft, Site
+from lightcraft_opt.options import CoastScheme, PulseMapOptions
+from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
 
 
 def test_nan_initial_state_names_the_field():

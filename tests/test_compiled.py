@@ -45,8 +45,8 @@ from lightcraft_opt.compiled import (
 from lightcraft_opt.compiled import pulse_map as compiled_pulse_map
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
+from lightcraft_opt.model import Engine
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Engine
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map

@@ -20,6 +20,7 @@ PACKAGES = [
     "lightcraft_opt.campaign",
     "lightcraft_opt.files",
     "lightcraft_opt.layout",
+    "lightcraft_opt.model",
 ]
 #: Exported names that are packages on purpose.
 PACKAGE_NAMES = {"lightcraft_opt": {"control", "linearize"}}

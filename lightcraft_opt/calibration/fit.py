@@ -38,8 +38,8 @@ from lightcraft_opt.calibration.result import CalibrationResult, CalibrationStat
 from lightcraft_opt.calibration.statistics import fit_statistics, identifiability_flags
 from lightcraft_opt.compiled import dense_sensitivity_for, pulse_map_for
 from lightcraft_opt.errors import OptionError, ParameterError, renamed
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import build_dense_sensitivity
 

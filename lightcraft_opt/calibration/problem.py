@@ -33,15 +33,9 @@ import numpy as np
 
 from lightcraft_opt.calibration.parameters import FitComponent
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import (
-    PARAMETERS,
-    STATE,
-    checked_vector,
-    initial_state,
-    nominal_inputs,
-    parameter_values,
-)
-from lightcraft_opt.params import Model
+from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, nominal_inputs, parameter_values
+from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.terms.rotation import quat_multiply
 

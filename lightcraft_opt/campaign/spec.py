@@ -19,9 +19,9 @@ from lightcraft_opt.control.options import (
     MpcOptions,
 )
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import STATE, checked_vector, initial_state
-from lightcraft_opt.options import checked_duration
-from lightcraft_opt.params import Model
+from lightcraft_opt.layout import STATE, initial_state
+from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import checked_duration, checked_vector
 
 __all__ = [
     "DISPERSED_PARAMETER",

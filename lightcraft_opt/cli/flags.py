@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from lightcraft_opt.cli.args import integer, real
+from lightcraft_opt.model.checks import MAX_DURATION
 from lightcraft_opt.ocp.problem import MAX_HORIZON
-from lightcraft_opt.options import MAX_DURATION
 
 # The ranges of the numeric flags, each with its reason (cli/args.py).
 DURATION = real(

@@ -15,7 +15,7 @@ from lightcraft_opt.files.model import load_model, load_record
 from lightcraft_opt.files.plan import read_plan
 from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import VectorLayout, initial_state, map_input_layout
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
 

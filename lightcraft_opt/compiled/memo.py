@@ -35,8 +35,8 @@ from lightcraft_opt.compiled.pulse_map import (
     compile_pulse_map,
     saved_pulse_map_derivatives,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,

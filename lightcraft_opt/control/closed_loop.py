@@ -42,12 +42,12 @@ from lightcraft_opt.layout import (
     ERROR_STATE,
     PARAMETERS,
     STATE,
-    checked_vector,
     initial_state,
     parameter_values,
 )
-from lightcraft_opt.options import PulseMapOptions, RcsProfile, checked_duration
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import checked_duration, checked_vector
+from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result

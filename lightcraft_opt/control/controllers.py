@@ -27,7 +27,7 @@ from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import CONING, STATE, VectorLayout, nominal_inputs, parameter_values
 from lightcraft_opt.linearize import dlqr_gain
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 
 __all__ = [

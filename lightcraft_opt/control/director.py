@@ -84,7 +84,7 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.linearize.beam_riding import scheduled_focus
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 
 __all__ = ["DirectorController", "director_model"]

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 from lightcraft_opt.control.options import ControllerKind, DirectorOptions, DirectorRcs, MpcOptions
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 if TYPE_CHECKING:

@@ -63,7 +63,7 @@ from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import CONING
 from lightcraft_opt.linearize import PulseMapJacobian, dlqr_gain
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["MpcController", "input_basis", "input_constraints"]

@@ -8,13 +8,13 @@ from dataclasses import dataclass
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.options import (
-    FocusSchedule,
+from lightcraft_opt.model.checks import (
     checked_choice,
     checked_int,
     checked_nonnegative,
     checked_number,
 )
+from lightcraft_opt.options import FocusSchedule
 
 __all__ = [
     "MAX_CONTROL_HORIZON",

@@ -66,8 +66,8 @@ from lightcraft_opt.linearize.operating_points import (
 )
 from lightcraft_opt.linearize.signal_names import entry_names, select_entries
 from lightcraft_opt.linearize.state_space import linearize
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.maps.error_state import build_error_state
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map

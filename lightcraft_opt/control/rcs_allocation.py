@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 
 __all__ = ["TorqueAllocation"]
 

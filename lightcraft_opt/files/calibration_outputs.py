@@ -34,7 +34,7 @@ from lightcraft_opt.files.model import QUANTITIES, SCHEMA
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import finite_or_none, model_hash
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 
 __all__ = ["MODEL_KEYS", "write_calibration_report", "write_fitted_model"]
 

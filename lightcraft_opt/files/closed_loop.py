@@ -17,7 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt import params
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
@@ -44,6 +43,7 @@ from lightcraft_opt.files.problem import (
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.model import Model, Wind
 from lightcraft_opt.options import FocusSchedule
 
 __all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
@@ -163,7 +163,7 @@ class ClosedLoopProblem:
     source : the file read.
     """
 
-    model: params.Model
+    model: Model
     x0: np.ndarray
     duration: float
     controller: ControllerKind
@@ -256,7 +256,7 @@ def _controller(
     return _TABLE_OF[tables[0]] if tables else absent
 
 
-def _initial(src: str, model: params.Model, raw: Any) -> np.ndarray:
+def _initial(src: str, model: Model, raw: Any) -> np.ndarray:
     """problem_files' [initial] with the coning keys: w_B's transverse part set so that
     tan(coning) = A |w_⊥| / H1 at w_B[b1] = 0 (H1 = J (w1 + spin), A the transverse
     moment: the craft's own inertia, for a centred rotor)."""
@@ -429,7 +429,7 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
     if wind is None:
         return {}
     try:
-        values, keys = schema.read_fields(src, wind, "plant.wind", mf.SCHEMA["wind"], params.Wind)
+        values, keys = schema.read_fields(src, wind, "plant.wind", mf.SCHEMA["wind"], Wind)
         structural = [k for k in values if k not in _WIND_PARAMETERS]
         if structural:
             raise ProblemFileError(
@@ -438,7 +438,7 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
                 "wind tables are structure of the pulse map, not parameters: give them in "
                 "[model_overrides.environment.wind] (the controller then knows them too)",
             )
-        built = schema.build(src, {"wind": ("plant.wind", keys)}, params.Wind, values)
+        built = schema.build(src, {"wind": ("plant.wind", keys)}, Wind, values)
     except ModelFileError as err:
         raise ProblemFileError(src, err.field, err.reason) from err
     return {_WIND_PARAMETERS[f]: getattr(built, f) for f in _WIND_PARAMETERS}

@@ -39,7 +39,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from lightcraft_opt import params
 from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.files.schema import (
     INTEGER,
@@ -55,6 +54,29 @@ from lightcraft_opt.files.schema import (
     read_fields,
     read_toml,
 )
+from lightcraft_opt.model import (
+    Aerodynamics,
+    AeroModel,
+    BeamProfile,
+    BeamSizeModel,
+    Carrier,
+    Craft,
+    Engine,
+    Environment,
+    Flight,
+    FlightRecord,
+    ImpulseModel,
+    Laser,
+    Liner,
+    Model,
+    Propellant,
+    Rcs,
+    Site,
+    SpinDecay,
+    SpinDecayModel,
+    Thruster,
+    Wind,
+)
 
 __all__ = [
     "QUANTITIES",
@@ -66,7 +88,7 @@ __all__ = [
     "model_from_tables",
 ]
 
-#: Table name -> field of the params dataclass -> what the file holds for it.
+#: Table name -> field of the model dataclass (lightcraft_opt.model) -> what the file holds for it.
 SCHEMA: Mapping[str, Mapping[str, Spec]] = {
     "model": {"name": TEXT, "site": TEXT, "laser": TEXT},
     "record": {"name": TEXT, "apogee": quantity("length"), "air_time": quantity("time")},
@@ -77,7 +99,7 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
         "inertia_axial": quantity("inertia"),
         "inertia_transverse": quantity("inertia"),
         "spin": quantity("angular rate"),
-        "propellant": choice(params.Propellant),
+        "propellant": choice(Propellant),
     },
     "liner": {
         "mass": quantity("mass"),
@@ -100,7 +122,7 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
         "max_thrust": quantity("force"),
     },
     "aero": {
-        "model": choice(params.AeroModel),
+        "model": choice(AeroModel),
         "cd": NUMBERS,
         "cl": NUMBERS,
         "cm": NUMBERS,
@@ -113,7 +135,7 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
         "magnus_moment_coefficient": NUMBER,
     },
     "spin_decay": {
-        "model": choice(params.SpinDecayModel),
+        "model": choice(SpinDecayModel),
         "time_constant": quantity("time"),
         "disk_faces": NUMBER,
     },
@@ -122,7 +144,7 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
         "shadow_radius": quantity("length"),
         "ring_radius": quantity("length"),
         "ring_height": quantity("length"),
-        "impulse_model": choice(params.ImpulseModel),
+        "impulse_model": choice(ImpulseModel),
         "blast_angle": quantity("angle"),
         "lateral_gain": NUMBER,
         "tipping_gain": NUMBER,
@@ -170,11 +192,11 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
         "pulse_rate": quantity("frequency"),
         "pulse_duration": quantity("time"),
         "wavelength": quantity("length"),
-        "profile": choice(params.BeamProfile),
+        "profile": choice(BeamProfile),
         "hole_ratio": NUMBER,
         "edge_width": quantity("length"),
         "divergence": quantity("angle"),
-        "size_model": choice(params.BeamSizeModel),
+        "size_model": choice(BeamSizeModel),
         "rayleigh_range": quantity("length"),
         "pointing_limit": quantity("length"),
         "focus_range": quantity("length", "list", 2),
@@ -183,12 +205,12 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
 
 
 # --------------------------------------------------------------------------- public API
-def load_site(path: str | Path) -> params.Site:
+def load_site(path: str | Path) -> Site:
     """Read a launch-site file (``name``, ``latitude_deg``, ``longitude_deg``, ``height_m``).
 
     Returns
     -------
-    params.Site
+    Site
         Geodetic latitude and longitude [rad], height [m].
 
     Raises
@@ -197,16 +219,16 @@ def load_site(path: str | Path) -> params.Site:
         Naming the file and the key, for any problem with the file.
     """
     src, data = read_toml(Path(path))
-    values, keys = read_fields(src, data, "", SCHEMA["site"], params.Site)
-    return build(src, {"site": ("", keys)}, params.Site, values)
+    values, keys = read_fields(src, data, "", SCHEMA["site"], Site)
+    return build(src, {"site": ("", keys)}, Site, values)
 
 
-def load_laser(path: str | Path) -> params.Laser:
+def load_laser(path: str | Path) -> Laser:
     """Read a laser file (``pulse_energy_max_j``, ``pulse_rate_hz``, ``wavelength_um`` ...).
 
     Returns
     -------
-    params.Laser
+    Laser
         In SI: J, Hz, s, m, rad.
 
     Raises
@@ -215,16 +237,16 @@ def load_laser(path: str | Path) -> params.Laser:
         Naming the file and the key, for any problem with the file.
     """
     src, data = read_toml(Path(path))
-    values, keys = read_fields(src, data, "", SCHEMA["laser"], params.Laser)
-    return build(src, {"laser": ("", keys)}, params.Laser, values)
+    values, keys = read_fields(src, data, "", SCHEMA["laser"], Laser)
+    return build(src, {"laser": ("", keys)}, Laser, values)
 
 
-def load_model(path: str | Path) -> params.Model:
+def load_model(path: str | Path) -> Model:
     """Read a flight file (module docstring) and the site and laser files it names.
 
     Returns
     -------
-    params.Model
+    Model
         The validated, frozen model, everything in SI.
 
     Raises
@@ -237,7 +259,7 @@ def load_model(path: str | Path) -> params.Model:
     return model_from_tables(src, file, data)
 
 
-def load_record(path: str | Path) -> params.FlightRecord | None:
+def load_record(path: str | Path) -> FlightRecord | None:
     """The ``[record]`` table of a flight file: the flight it reproduces, as its accounts
     give it (``name``, ``apogee_m``, ``air_time_s``; docs/physics.md#records), for plots to
     mark; None when the file has none."""
@@ -245,24 +267,24 @@ def load_record(path: str | Path) -> params.FlightRecord | None:
     table = _table(src, data, "record")
     if table is None:
         return None
-    values, keys = read_fields(src, table, "record", SCHEMA["record"], params.FlightRecord)
-    return build(src, {"record": ("record", keys)}, params.FlightRecord, values)
+    values, keys = read_fields(src, table, "record", SCHEMA["record"], FlightRecord)
+    return build(src, {"record": ("record", keys)}, FlightRecord, values)
 
 
-def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.Model:
+def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> Model:
     """:func:`load_model` on the tables of a flight file already read (``src`` names it in
     errors; ``file`` locates the site and laser files), e.g. with a problem file's
     overrides merged in (problem_files)."""
     top, _ = read_fields(
-        src, data, "", SCHEMA["model"], params.Model, ("craft", "flight", "environment", "record")
+        src, data, "", SCHEMA["model"], Model, ("craft", "flight", "environment", "record")
     )
     site = load_site(_component(src, file, top, "site"))
     laser = load_laser(_component(src, file, top, "laser"))
     craft = _craft(src, _required_table(src, data, "craft"))
     flight_table = _required_table(src, data, "flight")
-    fvalues, fkeys = read_fields(src, flight_table, "flight", SCHEMA["flight"], params.Flight)
+    fvalues, fkeys = read_fields(src, flight_table, "flight", SCHEMA["flight"], Flight)
     places = {"flight": ("flight", fkeys)}
-    flight = build(src, places, params.Flight, fvalues)
+    flight = build(src, places, Flight, fvalues)
     environment = _environment(src, _table(src, data, "environment"))
     parts = {
         "name": top["name"],
@@ -272,20 +294,20 @@ def model_from_tables(src: str, file: Path, data: Mapping[str, Any]) -> params.M
         "flight": flight,
         "environment": environment,
     }
-    return build(src, places, params.Model, parts)
+    return build(src, places, Model, parts)
 
 
 # --------------------------------------------------------------------------- tables
-def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
+def _craft(src: str, data: Mapping[str, Any]) -> Craft:
     subtables = ("liner", "carrier", "rcs", "aero", "spin_decay", "engine")
-    values, keys = read_fields(src, data, "craft", SCHEMA["craft"], params.Craft, subtables)
+    values, keys = read_fields(src, data, "craft", SCHEMA["craft"], Craft, subtables)
     places: dict[str, tuple[str, Mapping[str, str]]] = {"craft": ("craft", keys)}
     simple: tuple[tuple[str, type], ...] = (
-        ("liner", params.Liner),
-        ("carrier", params.Carrier),
-        ("aero", params.Aerodynamics),
-        ("spin_decay", params.SpinDecay),
-        ("engine", params.Engine),
+        ("liner", Liner),
+        ("carrier", Carrier),
+        ("aero", Aerodynamics),
+        ("spin_decay", SpinDecay),
+        ("engine", Engine),
     )
     for name, cls in simple:
         where = f"craft.{name}"
@@ -298,11 +320,11 @@ def _craft(src: str, data: Mapping[str, Any]) -> params.Craft:
     rcs = _table(src, data, "rcs", "craft.rcs")
     if rcs is not None:
         values["rcs"], places["rcs"] = _rcs(src, rcs)
-    return build(src, places, params.Craft, values)
+    return build(src, places, Craft, values)
 
 
-def _rcs(src: str, data: Mapping[str, Any]) -> tuple[params.Rcs, tuple[str, Mapping[str, str]]]:
-    values, keys = read_fields(src, data, "craft.rcs", SCHEMA["rcs"], params.Rcs, ("thrusters",))
+def _rcs(src: str, data: Mapping[str, Any]) -> tuple[Rcs, tuple[str, Mapping[str, str]]]:
+    values, keys = read_fields(src, data, "craft.rcs", SCHEMA["rcs"], Rcs, ("thrusters",))
     rows = data.get("thrusters")
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
         raise ModelFileError(
@@ -311,24 +333,24 @@ def _rcs(src: str, data: Mapping[str, Any]) -> tuple[params.Rcs, tuple[str, Mapp
     thrusters = []
     for i, row in enumerate(rows):
         where = f"craft.rcs.thrusters[{i}]"
-        t_values, t_keys = read_fields(src, row, where, SCHEMA["thruster"], params.Thruster)
-        thrusters.append(build(src, {"thruster": (where, t_keys)}, params.Thruster, t_values))
+        t_values, t_keys = read_fields(src, row, where, SCHEMA["thruster"], Thruster)
+        thrusters.append(build(src, {"thruster": (where, t_keys)}, Thruster, t_values))
     place = ("craft.rcs", {**keys, "thrusters": "thrusters"})
     values["thrusters"] = tuple(thrusters)
-    return build(src, {"rcs": place}, params.Rcs, values), place
+    return build(src, {"rcs": place}, Rcs, values), place
 
 
-def _environment(src: str, data: Mapping[str, Any] | None) -> params.Environment:
+def _environment(src: str, data: Mapping[str, Any] | None) -> Environment:
     if data is None:
-        return params.Environment()
+        return Environment()
     values, keys = read_fields(
-        src, data, "environment", SCHEMA["environment"], params.Environment, ("wind",)
+        src, data, "environment", SCHEMA["environment"], Environment, ("wind",)
     )
     wind = _table(src, data, "wind", "environment.wind")
     if wind is not None:
-        w_values, w_keys = read_fields(src, wind, "environment.wind", SCHEMA["wind"], params.Wind)
-        values["wind"] = build(src, {"wind": ("environment.wind", w_keys)}, params.Wind, w_values)
-    return build(src, {"environment": ("environment", keys)}, params.Environment, values)
+        w_values, w_keys = read_fields(src, wind, "environment.wind", SCHEMA["wind"], Wind)
+        values["wind"] = build(src, {"wind": ("environment.wind", w_keys)}, Wind, w_values)
+    return build(src, {"environment": ("environment", keys)}, Environment, values)
 
 
 def _table(src: str, parent: Mapping[str, Any], key: str, where: str = "") -> Any:

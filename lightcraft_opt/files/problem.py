@@ -23,7 +23,6 @@ from typing import Any, get_type_hints
 
 import numpy as np
 
-from lightcraft_opt import params
 from lightcraft_opt.errors import ModelFileError, OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import model as mf
 from lightcraft_opt.files import schema
@@ -42,6 +41,7 @@ from lightcraft_opt.files.problem_tables import (
 )
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import initial_state
+from lightcraft_opt.model import Model
 from lightcraft_opt.ocp.options import (
     OCP_PULSE_MAP,
     HessianApproximation,
@@ -315,7 +315,7 @@ def _guess_inputs(src: str, problem: OcpProblem, raw: Any) -> dict[str, tuple[fl
     return out
 
 
-def model_with_overrides(src: str, file: Path, name: str, overrides: Any) -> params.Model:
+def model_with_overrides(src: str, file: Path, name: str, overrides: Any) -> Model:
     """The model file ``name`` (relative to the problem file) with ``overrides`` merged in."""
     if overrides is not None and not isinstance(overrides, dict):
         raise ProblemFileError(src, "model_overrides", f"must be a table, got {overrides!r}")
@@ -376,7 +376,7 @@ def _override_key(field: str | None, overrides: Mapping[str, Any]) -> str | None
     return first
 
 
-def initial_state_from_table(src: str, model: params.Model, raw: Any) -> np.ndarray:
+def initial_state_from_table(src: str, model: Model, raw: Any) -> np.ndarray:
     """(STATE.size,) launch state of ``model`` from an ``[initial]`` table ``raw`` (position
     and velocity in L, tilt and its azimuth, w_B in B, spin; layout.initial_state's defaults
     where a key is absent)."""

@@ -103,7 +103,7 @@ TEXT, SWITCH, NUMBER, NUMBERS = (
 )
 INTEGER = quantity("dimensionless", "integer")
 
-#: Where each params prefix ("craft", "liner", ...) was written: (table as written,
+#: Where each model prefix ("craft", "liner", ...) was written: (table as written,
 #: field -> key).
 Places = Mapping[str, tuple[str, Mapping[str, str]]]
 
@@ -281,7 +281,7 @@ def build(src: str, places: Places, make: Callable[..., T], values: Mapping[str,
 
 
 def _locate(field: str, places: Places) -> str:
-    """Turn a params field ("craft.inertia_axial", "wind.gust_L[1]") into the file's key."""
+    """Turn a model field ("craft.inertia_axial", "wind.gust_L[1]") into the file's key."""
     prefix, _, rest = field.partition(".")
     if prefix not in places:
         return field

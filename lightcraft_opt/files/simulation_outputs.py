@@ -18,7 +18,7 @@ import numpy as np
 
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.layout import PULSE_INPUT
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [

@@ -1,7 +1,7 @@
 """Vector layouts, and a model's default vectors in them.
 
 - :mod:`~lightcraft_opt.layout.vector_layout`: :class:`Slot`, :class:`VectorLayout` (named
-  slots of a flat vector, each with unit and frame), :func:`checked_vector`;
+  slots of a flat vector, each with unit and frame);
 - :mod:`~lightcraft_opt.layout.vectors`: every layout (state, error state, inputs,
   parameters, coning coordinates, engine output ...), the one owner of their indices;
 - :mod:`~lightcraft_opt.layout.controllers`: the layouts of the controllers' own vectors
@@ -30,7 +30,7 @@ from lightcraft_opt.layout.defaults import (
     quaternion_from_tilt,
     tilted_attitude,
 )
-from lightcraft_opt.layout.vector_layout import Slot, VectorLayout, checked_vector
+from lightcraft_opt.layout.vector_layout import Slot, VectorLayout
 from lightcraft_opt.layout.vectors import (
     B123,
     CONING,
@@ -68,7 +68,6 @@ __all__ = [
     "STATE",
     "Slot",
     "VectorLayout",
-    "checked_vector",
     "coning_input_layout",
     "initial_state",
     "input_layout",

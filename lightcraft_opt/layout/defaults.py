@@ -18,9 +18,10 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout.vector_layout import VectorLayout, checked_vector
+from lightcraft_opt.layout.vector_layout import VectorLayout
 from lightcraft_opt.layout.vectors import PARAMETERS, STATE, map_input_layout
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import checked_vector
 
 __all__ = [
     "initial_state",

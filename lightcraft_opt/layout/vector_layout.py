@@ -1,5 +1,5 @@
-"""Named slots of a flat vector: :class:`Slot`, :class:`VectorLayout`, and the check of a
-flat numeric vector (:func:`checked_vector`).
+"""Named slots of a flat vector: :class:`Slot`, :class:`VectorLayout`. (The check of a flat
+numeric vector is :func:`lightcraft_opt.model.checks.checked_vector`.)
 
 Physics code reads ``STATE.get("w_B", x)``, never ``x[10:13]`` (docs/architecture.md#rule-8).
 Every slot has a unit and a frame (docs/frames.md), and :meth:`VectorLayout.labels` turns
@@ -17,7 +17,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 
-__all__ = ["Slot", "VectorLayout", "checked_vector"]
+__all__ = ["Slot", "VectorLayout"]
 
 T = TypeVar("T")
 
@@ -150,17 +150,3 @@ class VectorLayout:
                 comps = s.components or tuple(str(i) for i in range(s.size))
                 out.extend(f"{s.name}[{c}]{unit}" for c in comps)
         return out
-
-
-def checked_vector(name: str, value: Sequence[float] | np.ndarray, size: int) -> np.ndarray:
-    """``value`` as a flat float vector of ``size`` finite entries, or a ParameterError
-    naming ``name``."""
-    try:
-        v = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ParameterError(name, f"must be {size} numbers, got {value!r}") from None
-    if v.size != size:
-        raise ParameterError(name, f"needs {size} values, got {v.size}")
-    if not np.all(np.isfinite(v)):
-        raise ParameterError(name, "must be finite (got NaN or inf)")
-    return v

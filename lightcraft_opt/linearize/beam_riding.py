@@ -44,8 +44,8 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 from lightcraft_opt.linearize.operating_points import PulseMapJacobian, jacobian_for
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
+from lightcraft_opt.model import BeamSizeModel, Laser, Model
 from lightcraft_opt.options import FocusSchedule, PulseMapOptions
-from lightcraft_opt.params import BeamSizeModel, Laser, Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.terms.beam import beam_side
 

@@ -15,8 +15,8 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.linearize.modes import ModeKind, multipliers
 from lightcraft_opt.linearize.operating_points import PulseMapJacobian, climb_point, jacobian_for
 from lightcraft_opt.linearize.state_space import linearize
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 

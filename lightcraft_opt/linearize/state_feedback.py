@@ -23,7 +23,7 @@ from lightcraft_opt.linearize.modes import (
 )
 from lightcraft_opt.linearize.operating_points import OperatingPoint, error_state
 from lightcraft_opt.linearize.signal_names import select_entries
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 
 
 @dataclass(frozen=True)

@@ -37,8 +37,8 @@ from lightcraft_opt.linearize.operating_points import (
     jacobian_for,
 )
 from lightcraft_opt.linearize.signal_names import entry_names, select_entries
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 

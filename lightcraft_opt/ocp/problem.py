@@ -43,14 +43,14 @@ from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import (
     STATE,
     VectorLayout,
-    checked_vector,
     initial_state,
     map_input_layout,
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import BeamSizeModel, Model
+from lightcraft_opt.model.checks import checked_vector, number, numbers, set_frozen
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.params import BeamSizeModel, Model
 
 __all__ = [
     "MAX_HORIZON",
@@ -78,37 +78,6 @@ __all__ = [
 Values = float | Sequence[float]
 
 
-def _number(name: str, value: object, *, low: float = -math.inf, allow_inf: bool = False) -> float:
-    """``value`` as a float >= ``low``: finite (or +-inf when allowed), never NaN."""
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise ParameterError(name, f"must be a number, got {value!r}")
-    v = float(value)
-    if math.isnan(v) or (math.isinf(v) and not allow_inf):
-        raise ParameterError(name, f"must be {'a number' if allow_inf else 'finite'}, got {v!r}")
-    if v < low:
-        raise ParameterError(name, f"must be >= {low}, got {v!r}")
-    return v
-
-
-def _values(name: str, value: Values, size: int, *, allow_inf: bool = False) -> np.ndarray:
-    """A number (broadcast) or ``size`` numbers as a float array; NaN never passes."""
-    try:
-        v = np.asarray(value, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ParameterError(name, f"must be a number or {size} numbers, got {value!r}") from None
-    if v.size == 1:
-        v = np.full(size, v[0])
-    if v.size != size:
-        raise ParameterError(name, f"needs 1 or {size} values, got {v.size}")
-    if np.any(np.isnan(v)) or (not allow_inf and not np.all(np.isfinite(v))):
-        raise ParameterError(name, "must not be NaN" if allow_inf else "must be finite")
-    return v
-
-
-def _set(obj: object, attr: str, value: object) -> None:
-    object.__setattr__(obj, attr, value)
-
-
 # --------------------------------------------------------------------------- objective terms
 class OffsetFrom(Enum):
     """What a lateral offset is measured from."""
@@ -127,7 +96,7 @@ class LaserEnergy:
     weight: float = 1.0
 
     def __post_init__(self) -> None:
-        _set(self, "weight", _number("LaserEnergy.weight", self.weight, low=0.0))
+        set_frozen(self, "weight", number("LaserEnergy.weight", self.weight, low=0.0))
 
 
 @dataclass(frozen=True)
@@ -140,7 +109,7 @@ class FinalAltitude:
     weight: float = 1.0
 
     def __post_init__(self) -> None:
-        _set(self, "weight", _number("FinalAltitude.weight", self.weight, low=0.0))
+        set_frozen(self, "weight", number("FinalAltitude.weight", self.weight, low=0.0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,11 +143,11 @@ class TrackReference:
         if not np.all(np.isfinite(path)):
             raise ParameterError("TrackReference.path", "must be finite (got NaN or inf)")
         path.setflags(write=False)
-        _set(self, "path", path)
-        w = _values("TrackReference.weights", self.weights, size)
+        set_frozen(self, "path", path)
+        w = numbers("TrackReference.weights", self.weights, size)
         if np.any(w < 0):
             raise ParameterError("TrackReference.weights", "must not be negative")
-        _set(self, "weights", tuple(float(v) for v in w))
+        set_frozen(self, "weights", tuple(float(v) for v in w))
 
 
 @dataclass(frozen=True)
@@ -194,7 +163,7 @@ class LateralOffset:
     relative_to: OffsetFrom = OffsetFrom.PAD
 
     def __post_init__(self) -> None:
-        _set(self, "weight", _number("LateralOffset.weight", self.weight, low=0.0))
+        set_frozen(self, "weight", number("LateralOffset.weight", self.weight, low=0.0))
         if not isinstance(self.relative_to, OffsetFrom):
             raise ParameterError(
                 "LateralOffset.relative_to",
@@ -215,11 +184,11 @@ class ControlEffort:
     reference: Values = 0.0
 
     def __post_init__(self) -> None:
-        _set(self, "weight", _number("ControlEffort.weight", self.weight, low=0.0))
+        set_frozen(self, "weight", number("ControlEffort.weight", self.weight, low=0.0))
         ref = np.atleast_1d(np.asarray(self.reference, dtype=float)).reshape(-1)
         if not np.all(np.isfinite(ref)):
             raise ParameterError("ControlEffort.reference", "must be finite")
-        _set(self, "reference", tuple(ref.tolist()))
+        set_frozen(self, "reference", tuple(ref.tolist()))
 
 
 @dataclass(frozen=True)
@@ -231,7 +200,7 @@ class ControlRate:
     weight: float = 1.0
 
     def __post_init__(self) -> None:
-        _set(self, "weight", _number("ControlRate.weight", self.weight, low=0.0))
+        set_frozen(self, "weight", number("ControlRate.weight", self.weight, low=0.0))
 
 
 ObjectiveTerm = (
@@ -287,10 +256,10 @@ class OffsetLimit:
 
     def __post_init__(self) -> None:
         name = "OffsetLimit.max_offset_over_capture_radius"
-        v = _number(name, self.max_offset_over_capture_radius)
+        v = number(name, self.max_offset_over_capture_radius)
         if not 0 < v <= 1:
             raise ParameterError(name, f"must lie in (0, 1], got {v!r}")
-        _set(self, "max_offset_over_capture_radius", v)
+        set_frozen(self, "max_offset_over_capture_radius", v)
 
 
 @dataclass(frozen=True)
@@ -301,10 +270,10 @@ class TiltLimit:
     max_tilt: float
 
     def __post_init__(self) -> None:
-        v = _number("TiltLimit.max_tilt", self.max_tilt)
+        v = number("TiltLimit.max_tilt", self.max_tilt)
         if not 0 < v < math.pi:
             raise ParameterError("TiltLimit.max_tilt", f"must lie in (0, pi) rad, got {v!r}")
-        _set(self, "max_tilt", v)
+        set_frozen(self, "max_tilt", v)
 
 
 @dataclass(frozen=True)
@@ -315,7 +284,7 @@ class NoGroundContact:
     clearance: float = 0.0
 
     def __post_init__(self) -> None:
-        _set(self, "clearance", _number("NoGroundContact.clearance", self.clearance))
+        set_frozen(self, "clearance", number("NoGroundContact.clearance", self.clearance))
 
 
 @dataclass(frozen=True)
@@ -326,12 +295,12 @@ class TerminalAltitude:
     maximum: float = math.inf
 
     def __post_init__(self) -> None:
-        lo = _number("TerminalAltitude.minimum", self.minimum, allow_inf=True)
-        hi = _number("TerminalAltitude.maximum", self.maximum, allow_inf=True)
+        lo = number("TerminalAltitude.minimum", self.minimum, allow_inf=True)
+        hi = number("TerminalAltitude.maximum", self.maximum, allow_inf=True)
         if lo > hi:
             raise ParameterError("TerminalAltitude.minimum", f"{lo} exceeds maximum {hi}")
-        _set(self, "minimum", lo)
-        _set(self, "maximum", hi)
+        set_frozen(self, "minimum", lo)
+        set_frozen(self, "maximum", hi)
 
 
 @dataclass(frozen=True)
@@ -348,12 +317,12 @@ class TerminalState:
                 "TerminalState.slot", f"no such state {self.slot!r}; states: {list(STATE.names)}"
             )
         size = STATE.slot(self.slot).size
-        lo = _values("TerminalState.lower", self.lower, size, allow_inf=True)
-        hi = _values("TerminalState.upper", self.upper, size, allow_inf=True)
+        lo = numbers("TerminalState.lower", self.lower, size, allow_inf=True)
+        hi = numbers("TerminalState.upper", self.upper, size, allow_inf=True)
         if np.any(lo > hi):
             raise ParameterError("TerminalState.lower", f"{lo} exceeds upper {hi}")
-        _set(self, "lower", tuple(lo.tolist()))
-        _set(self, "upper", tuple(hi.tolist()))
+        set_frozen(self, "lower", tuple(lo.tolist()))
+        set_frozen(self, "upper", tuple(hi.tolist()))
 
 
 @dataclass(frozen=True)
@@ -363,7 +332,7 @@ class EnergyBudget:
     total: float
 
     def __post_init__(self) -> None:
-        _set(self, "total", _number("EnergyBudget.total", self.total, low=0.0))
+        set_frozen(self, "total", number("EnergyBudget.total", self.total, low=0.0))
 
 
 @dataclass(frozen=True)
@@ -471,22 +440,24 @@ class OcpProblem:
         if isinstance(n, bool) or not isinstance(n, int | np.integer) or n < 1:
             raise ParameterError("horizon", f"must be an integer >= 1 (pulses), got {n!r}")
         check_horizon("horizon", int(n))
-        _set(self, "horizon", int(n))
-        _set(self, "inputs", self._input_layout())
-        _set(self, "objective", self._kinds("objective", self.objective, OBJECTIVE_KINDS))
+        set_frozen(self, "horizon", int(n))
+        set_frozen(self, "inputs", self._input_layout())
+        set_frozen(self, "objective", self._kinds("objective", self.objective, OBJECTIVE_KINDS))
         if not self.objective:
             raise ParameterError("objective", "needs at least one term")
-        _set(self, "constraints", self._kinds("constraints", self.constraints, CONSTRAINT_KINDS))
-        _set(self, "controls", self._kinds("controls", self.controls, (ControlBound,)))
-        _set(self, "parameters", dict(self.parameters or {}))
+        set_frozen(
+            self, "constraints", self._kinds("constraints", self.constraints, CONSTRAINT_KINDS)
+        )
+        set_frozen(self, "controls", self._kinds("controls", self.controls, (ControlBound,)))
+        set_frozen(self, "parameters", dict(self.parameters or {}))
         self._check_terms()
         x0 = initial_state(self.model) if self.x0 is None else self.x0
-        _set(self, "x0", checked_vector("x0", x0, STATE.size))
-        _set(self, "t0", _number("t0", self.t0))
+        set_frozen(self, "x0", checked_vector("x0", x0, STATE.size))
+        set_frozen(self, "t0", number("t0", self.t0))
         if self.u_previous is not None:
             u_prev = checked_vector("u_previous", self.u_previous, self.inputs.size)
-            _set(self, "u_previous", u_prev)
-        _set(self, "p", self._parameter_vector())
+            set_frozen(self, "u_previous", u_prev)
+        set_frozen(self, "p", self._parameter_vector())
         self._set_bounds()
         self._check_envelope()
         for name in ("x0", "p", "lower", "upper", "slew"):
@@ -552,7 +523,7 @@ class OcpProblem:
         m = self.rcs_subintervals
         if isinstance(m, bool) or not isinstance(m, int | np.integer) or m < 1:
             raise ParameterError("rcs_subintervals", f"must be a positive integer, got {m!r}")
-        _set(self, "rcs_subintervals", int(m))
+        set_frozen(self, "rcs_subintervals", int(m))
         if m > 1 and self.rcs_profile is not RcsProfile.SUBINTERVALS:
             raise ParameterError(
                 "rcs_subintervals",
@@ -638,14 +609,14 @@ class OcpProblem:
             lo = (
                 lower[idx]
                 if bound.lower is None
-                else _values(f"{where}.lower", bound.lower, size, allow_inf=True)
+                else numbers(f"{where}.lower", bound.lower, size, allow_inf=True)
             )
             hi = (
                 upper[idx]
                 if bound.upper is None
-                else _values(f"{where}.upper", bound.upper, size, allow_inf=True)
+                else numbers(f"{where}.upper", bound.upper, size, allow_inf=True)
             )
-            rate = _values(f"{where}.slew_rate", bound.slew_rate, size, allow_inf=True)
+            rate = numbers(f"{where}.slew_rate", bound.slew_rate, size, allow_inf=True)
             if np.any(lo > hi):
                 raise ParameterError(f"{where}.lower", f"{lo} exceeds upper {hi}")
             if np.any(rate <= 0):
@@ -658,9 +629,9 @@ class OcpProblem:
             if np.any(np.isinf(lo) & (lo == hi)):
                 raise ParameterError(f"{where}.lower", "an input cannot be held at infinity")
             lower[idx], upper[idx], slew[idx] = lo, hi, rate * self.period
-        _set(self, "lower", lower)
-        _set(self, "upper", upper)
-        _set(self, "slew", slew)
+        set_frozen(self, "lower", lower)
+        set_frozen(self, "upper", upper)
+        set_frozen(self, "slew", slew)
 
     def _check_envelope(self) -> None:
         """RcsEnvelope: an RCS, level bounds within [0, max_thrust], and thrusters whose

@@ -27,11 +27,12 @@ import warnings
 import numpy as np
 
 from lightcraft_opt.compiled import pulse_map_for
-from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, checked_vector
+from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
+from lightcraft_opt.model import Engine, Model
+from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult, PlanReplay
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Engine, Model
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap

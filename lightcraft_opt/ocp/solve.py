@@ -39,7 +39,8 @@ from lightcraft_opt.compiled import (
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.errors import OptionError, ParameterError
-from lightcraft_opt.layout import PARAMETERS, STATE, checked_vector
+from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.options import (
     HessianApproximation,

@@ -38,8 +38,8 @@ from typing import cast
 import numpy as np
 
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
+from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.ocp.problem import OcpProblem
-from lightcraft_opt.params import BeamSizeModel
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = [

@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import PULSE_INPUT, VectorLayout
-from lightcraft_opt.params import Laser
+from lightcraft_opt.model import Laser
 from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
 from lightcraft_opt.plots.labels import state_label
 

@@ -19,7 +19,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 
-from lightcraft_opt.params import FlightRecord, Laser
+from lightcraft_opt.model import FlightRecord, Laser
 from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
 from lightcraft_opt.plots.labels import auto_length_unit, length_factor
 from lightcraft_opt.plots.track import (

@@ -19,7 +19,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lightcraft_opt.layout import PULSE_INPUT
-from lightcraft_opt.params import BeamProfile, Laser
+from lightcraft_opt.model import BeamProfile, Laser
 from lightcraft_opt.plots.labels import state_label
 from lightcraft_opt.simulation.result import SimulationResult
 

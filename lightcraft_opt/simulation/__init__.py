@@ -6,10 +6,15 @@ rule, and an independent variable-step reference for the coast.
   shared with the closed loop;
 - :mod:`.flight_measures`: :func:`flight_result`, derived measures (tilt, coning, H, energy);
 - :mod:`.result`: :class:`SimulationResult`, :class:`SimulationStatus`, :class:`PulseRecord`;
-- :mod:`.coast_reference`: the laser-off coast by CVODES (:func:`simulate_coast`).
+- :mod:`.coast_reference`: the laser-off coast by CVODES (:func:`simulate_coast`) and how
+  it integrates (:class:`SimulationOptions`).
 """
 
-from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
+from lightcraft_opt.simulation.coast_reference import (
+    SimulationOptions,
+    coast_integrator,
+    simulate_coast,
+)
 from lightcraft_opt.simulation.flight_log import LEFT_BEAM_PULSES, FlightLog, beam_gap
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
@@ -20,6 +25,7 @@ __all__ = [
     "FlightLog",
     "InputPolicy",
     "PulseRecord",
+    "SimulationOptions",
     "SimulationResult",
     "SimulationStatus",
     "beam_gap",

@@ -8,25 +8,48 @@ period and finds the landing by secant steps on the integrated flow.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.layout import (
-    PARAMETERS,
-    STATE,
-    checked_vector,
-    initial_state,
-    input_layout,
-    parameter_values,
-)
-from lightcraft_opt.options import SimulationOptions, checked_duration
-from lightcraft_opt.params import Model
+from lightcraft_opt.errors import OptionError
+from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, input_layout, parameter_values
+from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import checked_duration, checked_number, checked_vector
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
 
-__all__ = ["coast_integrator", "simulate_coast"]
+__all__ = ["SimulationOptions", "coast_integrator", "simulate_coast"]
+
+
+@dataclass(frozen=True)
+class SimulationOptions:
+    """How :func:`simulate_coast` and :func:`coast_integrator` integrate the coast (the
+    pulse map's coasts are fixed-step: :class:`~lightcraft_opt.options.PulseMapOptions`).
+
+    Attributes
+    ----------
+    rtol, atol : relative and absolute tolerances of the variable-step coast
+        integrator (CVODES, Adams method with functional iteration) [-].
+    samples_per_interval : dense-output rows per pulse interval (>= 1).
+    stop_on_landing : end the flight when the mass centre returns below the pad.
+    """
+
+    rtol: float = 1e-9
+    atol: float = 1e-11
+    samples_per_interval: int = 8
+    stop_on_landing: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("rtol", "atol"):
+            checked_number("SimulationOptions", name, getattr(self, name), 0.0, 1.0)
+        if not isinstance(self.samples_per_interval, int) or self.samples_per_interval < 1:
+            raise OptionError(
+                "SimulationOptions.samples_per_interval must be a positive integer, "
+                f"got {self.samples_per_interval!r}"
+            )
 
 
 def coast_integrator(model: Model, samples: int, options: SimulationOptions) -> ca.Function:

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, VectorLayout
-from lightcraft_opt.params import BeamProfile, Laser
+from lightcraft_opt.model import BeamProfile, Laser
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.terms.beam import beam_side
 

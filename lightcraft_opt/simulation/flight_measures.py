@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
 

@@ -23,14 +23,14 @@ from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
     VectorLayout,
-    checked_vector,
     initial_state,
     map_input_layout,
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.options import PulseMapOptions, checked_duration
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
+from lightcraft_opt.model.checks import checked_duration, checked_vector
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog
 from lightcraft_opt.simulation.flight_measures import flight_result

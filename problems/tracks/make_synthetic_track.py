@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from lightcraft_opt.files.model import load_model
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Model
 from lightcraft_opt.simulation.simulate import simulate
 
 HERE = Path(__file__).resolve().parent

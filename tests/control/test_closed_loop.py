@@ -42,7 +42,7 @@ from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, initial_state, parameter_values
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 

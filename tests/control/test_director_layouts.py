@@ -31,7 +31,7 @@ from lightcraft_opt.layout import (
     initial_state,
     map_input_layout,
 )
-from lightcraft_opt.params import BeamSizeModel
+from lightcraft_opt.model import BeamSizeModel
 
 
 @pytest.fixture(scope="module")

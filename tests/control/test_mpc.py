@@ -59,7 +59,7 @@ from lightcraft_opt.linearize import (
     lqr_policy,
     pulse_map_jacobian,
 )
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.terms.invariants import build_invariants

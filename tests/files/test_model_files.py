@@ -17,7 +17,7 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.files.model import QUANTITIES, SCHEMA, load_laser, load_model, load_site
-from lightcraft_opt.params import (
+from lightcraft_opt.model import (
     Aerodynamics,
     BeamSizeModel,
     Environment,

@@ -31,8 +31,8 @@ from lightcraft_opt.linearize.beam_riding import (
     side_at,
     side_stability,
 )
+from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import BeamSizeModel, Model
 from lightcraft_opt.plots import plot_altitude_stability, plot_side_stability
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 

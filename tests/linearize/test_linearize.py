@@ -44,8 +44,8 @@ from lightcraft_opt.linearize import (
     stability_map,
     trim_hover,
 )
+from lightcraft_opt.model import Engine, Model, Rcs, SpinDecay, Thruster
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import Engine, Model, Rcs, SpinDecay, Thruster
 from lightcraft_opt.plots import plot_multipliers, plot_stability_map
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate

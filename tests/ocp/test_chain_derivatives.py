@@ -34,6 +34,7 @@ from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import initial_state
+from lightcraft_opt.model import BeamSizeModel, Engine
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import (
     ControlBound,
@@ -46,7 +47,6 @@ from lightcraft_opt.ocp.problem import (
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import BeamSizeModel, Engine
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 RTOL = 1e-12

@@ -32,6 +32,15 @@ from support.models import table1_flight5
 
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
+from lightcraft_opt.model import (
+    Aerodynamics,
+    Engine,
+    Environment,
+    Model,
+    Site,
+    SpinDecay,
+    SpinDecayModel,
+)
 from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
@@ -51,15 +60,6 @@ from lightcraft_opt.ocp.problem import (
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, solve
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
-from lightcraft_opt.params import (
-    Aerodynamics,
-    Engine,
-    Environment,
-    Model,
-    Site,
-    SpinDecay,
-    SpinDecayModel,
-)
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, WGS84_A, WGS84_F

@@ -32,6 +32,7 @@ from support.results import made_up_solve
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.layout import initial_state
+from lightcraft_opt.model import Engine
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions
 from lightcraft_opt.ocp.problem import (
     ControlBound,
@@ -52,7 +53,6 @@ from lightcraft_opt.ocp.replay import (
 )
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
 from lightcraft_opt.options import CoastScheme, PulseMapOptions
-from lightcraft_opt.params import Engine
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 

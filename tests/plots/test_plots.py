@@ -17,7 +17,7 @@ from support.paths import MODELS
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.model import load_record
 from lightcraft_opt.layout import PULSE_INPUT, STATE, initial_state, parameter_values
-from lightcraft_opt.params import FlightRecord
+from lightcraft_opt.model import FlightRecord
 from lightcraft_opt.plots import (
     altitude_figure,
     attitude_figure,

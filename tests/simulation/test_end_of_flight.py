@@ -21,7 +21,7 @@ from lightcraft_opt.control.controllers import OpenLoopController
 from lightcraft_opt.control.options import ClosedLoopOptions
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import ENGINE, initial_state, nominal_inputs
-from lightcraft_opt.params import BeamProfile
+from lightcraft_opt.model import BeamProfile
 from lightcraft_opt.simulation import LEFT_BEAM_PULSES, beam_gap, simulate
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map

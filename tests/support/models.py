@@ -7,8 +7,7 @@ import math
 from dataclasses import replace
 
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import (
+from lightcraft_opt.model import (
     Aerodynamics,
     Carrier,
     Craft,
@@ -20,6 +19,7 @@ from lightcraft_opt.params import (
     Site,
     SpinDecay,
 )
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from support.paths import MODELS
 
 RPM = 2 * math.pi / 60

@@ -15,7 +15,7 @@ from support.jacobian_check import assert_jacobians_match_finite_differences
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.params import Aerodynamics, AeroModel, Model
+from lightcraft_opt.model import Aerodynamics, AeroModel, Model
 from lightcraft_opt.symbolic.terms.aero import aero_coefficients, aero_loads, build_aero_loads
 
 RHO = 1.0906  # kg/m^3 at 1194 m (docs/physics.md#atmosphere)

@@ -21,7 +21,7 @@ from support.jacobian_check import assert_jacobians_match_finite_differences
 
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, parameter_values
-from lightcraft_opt.params import BeamProfile, BeamSizeModel, Laser, Model
+from lightcraft_opt.model import BeamProfile, BeamSizeModel, Laser, Model
 from lightcraft_opt.symbolic.terms.beam import beam_side, build_beam, fluence
 
 MODEL = load_model("models/flight5.toml")

@@ -14,9 +14,8 @@ from test_mass_and_rcs import LINER, RCS
 from test_rotational_dynamics import GYROSTAT_CARRIER
 
 from lightcraft_opt.layout import initial_state, parameter_values
-from lightcraft_opt.options import SimulationOptions
-from lightcraft_opt.params import Aerodynamics, Environment, Wind
-from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.model import Aerodynamics, Environment, Wind
+from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, dcm_EL, site_position_E
 from lightcraft_opt.symbolic.terms.invariants import build_invariants

@@ -14,8 +14,7 @@ import pytest
 from support.models import table1_flight5, torque_free
 
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
-from lightcraft_opt.options import SimulationOptions
-from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
 from lightcraft_opt.symbolic.maps.coast import exact_spin_flow, rk4_coast, split_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
 

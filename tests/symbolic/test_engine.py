@@ -28,7 +28,7 @@ from lightcraft_opt.layout import (
     initial_state,
     parameter_values,
 )
-from lightcraft_opt.params import BeamSizeModel, ImpulseModel, Model
+from lightcraft_opt.model import BeamSizeModel, ImpulseModel, Model
 from lightcraft_opt.symbolic.terms.beam import beam_side, fluence
 from lightcraft_opt.symbolic.terms.engine import ENGINE_OUTPUT_NAMES, build_engine, health
 from lightcraft_opt.symbolic.terms.rotation import dcm

@@ -18,7 +18,7 @@ from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.params import Environment
+from lightcraft_opt.model import Environment
 from lightcraft_opt.symbolic.terms.gravity import (
     EARTH_GM,
     EARTH_RATE,

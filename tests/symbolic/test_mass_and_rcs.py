@@ -13,7 +13,7 @@ import pytest
 from support.models import table1_flight5
 
 from lightcraft_opt.layout import STATE, initial_state, parameter_values
-from lightcraft_opt.params import Liner, Rcs, Thruster
+from lightcraft_opt.model import Liner, Rcs, Thruster
 from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
 from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
 from lightcraft_opt.symbolic.terms.rcs import STANDARD_GRAVITY

@@ -29,8 +29,8 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
+from lightcraft_opt.model import Carrier
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Carrier
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map
 

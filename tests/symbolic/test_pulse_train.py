@@ -40,8 +40,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.params import (
+from lightcraft_opt.model import (
     Aerodynamics,
     BeamSizeModel,
     Engine,
@@ -54,6 +53,7 @@ from lightcraft_opt.params import (
     SpinDecayModel,
     Wind,
 )
+from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
 from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map

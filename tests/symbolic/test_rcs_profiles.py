@@ -46,6 +46,7 @@ from lightcraft_opt.layout import (
     parameter_values,
     rcs_levels,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions
 from lightcraft_opt.ocp.problem import (
     ControlBound,
@@ -56,9 +57,12 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile, SimulationOptions
-from lightcraft_opt.params import Model
-from lightcraft_opt.simulation.coast_reference import coast_integrator, simulate_coast
+from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.simulation.coast_reference import (
+    SimulationOptions,
+    coast_integrator,
+    simulate_coast,
+)
 from lightcraft_opt.symbolic.maps.coast import coning_rate_B
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map

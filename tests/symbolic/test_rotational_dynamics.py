@@ -18,9 +18,8 @@ from scipy.integrate import solve_ivp
 from support.models import table1_flight5, torque_free
 
 from lightcraft_opt.layout import STATE, initial_state, parameter_values, quaternion_from_tilt
-from lightcraft_opt.options import SimulationOptions
-from lightcraft_opt.params import Carrier
-from lightcraft_opt.simulation.coast_reference import simulate_coast
+from lightcraft_opt.model import Carrier
+from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs, coast_terms
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
 

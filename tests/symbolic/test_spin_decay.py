@@ -16,7 +16,7 @@ from support.jacobian_check import assert_jacobians_match_finite_differences
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.params import Model, SpinDecayModel
+from lightcraft_opt.model import Model, SpinDecayModel
 from lightcraft_opt.symbolic.terms.spin_decay import (
     SMOOTH_MAX_ORDER,
     build_spin_decay,

@@ -11,7 +11,7 @@ import pytest
 from support.jacobian_check import assert_jacobians_match_finite_differences
 
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.params import Environment, Model, Wind
+from lightcraft_opt.model import Environment, Model, Wind
 from lightcraft_opt.symbolic.terms.wind import build_wind, wind_velocity_L
 
 

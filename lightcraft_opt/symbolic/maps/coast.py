@@ -35,7 +35,7 @@ import casadi as ca
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import STATE
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.assemble import assemble
 from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum, gyrostat_accelerations
 from lightcraft_opt.symbolic.terms.mass_properties import mass_properties

@@ -22,7 +22,7 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, STATE, input_layout
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.terms.aero import aero_loads
 from lightcraft_opt.symbolic.terms.atmosphere import us1976
 from lightcraft_opt.symbolic.terms.gravity import earth_rate_L, site_acceleration_L

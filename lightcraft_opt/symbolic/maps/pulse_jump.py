@@ -20,7 +20,7 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
-from lightcraft_opt.params import Model
+from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.assemble import assemble
 from lightcraft_opt.symbolic.terms.engine import engine_impulse
 from lightcraft_opt.symbolic.terms.gyrostat import gyrostat_accelerations

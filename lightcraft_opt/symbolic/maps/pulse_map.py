@@ -46,8 +46,8 @@ from lightcraft_opt.layout import (
     map_input_layout,
     rcs_levels,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces, build_pulse_map_pieces
 
 __all__ = [

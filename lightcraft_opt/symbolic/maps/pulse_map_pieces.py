@@ -40,8 +40,8 @@ from lightcraft_opt.layout import (
     VectorLayout,
     substep_input_layout,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.assemble import assemble
 from lightcraft_opt.symbolic.maps.coast import Rhs, coning_rate_B, rk4_coast, split_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs

@@ -53,8 +53,8 @@ from lightcraft_opt.layout import (
     input_layout,
     map_input_layout,
 )
+from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
-from lightcraft_opt.params import Model
 from lightcraft_opt.symbolic.maps.assemble import assemble
 from lightcraft_opt.symbolic.maps.coast import coning_rate_B, rk4_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms

@@ -49,7 +49,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.params import Aerodynamics, AeroModel
+from lightcraft_opt.model import Aerodynamics, AeroModel
 
 __all__ = [
     "SPEED_EPS",

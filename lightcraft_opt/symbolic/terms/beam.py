@@ -21,7 +21,7 @@ Size along the beam (outer side a of the beam, or diameter for a disc) [m]:
   z_w = f / (1 + (f/z_R)^2) <= z_R / 2, no farther whatever the focus; at z = f the side is
   the diffraction-limited spot a0 f / z_R, the smallest the director can put at that range.
 
-Transverse profiles (:class:`lightcraft_opt.params.BeamProfile`), pulse energy E [J],
+Transverse profiles (:class:`lightcraft_opt.model.BeamProfile`), pulse energy E [J],
 soft-edge width w = ``beam_edge_width`` [m], logistic s(t) = (1 + tanh(t/2)) / 2:
 
 - ``HOLLOW_SQUARE`` (unstable-resonator output), outer side a, hole side b = h a with
@@ -62,7 +62,7 @@ from typing import TypeVar
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT
-from lightcraft_opt.params import BeamProfile, BeamSizeModel, Laser
+from lightcraft_opt.model import BeamProfile, BeamSizeModel, Laser
 
 __all__ = ["beam_side", "build_beam", "fluence", "logistic"]
 

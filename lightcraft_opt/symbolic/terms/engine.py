@@ -88,7 +88,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
-from lightcraft_opt.params import Engine, ImpulseModel, Model, Propellant
+from lightcraft_opt.model import Engine, ImpulseModel, Model, Propellant
 from lightcraft_opt.symbolic.terms.beam import beam_side, fluence, logistic
 from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
 from lightcraft_opt.symbolic.terms.rotation import cross, dcm

@@ -17,7 +17,7 @@ from __future__ import annotations
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.params import Environment
+from lightcraft_opt.model import Environment
 from lightcraft_opt.symbolic.terms.rotation import Expr, cross
 
 __all__ = [

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from lightcraft_opt.params import Rcs
+from lightcraft_opt.model import Rcs
 from lightcraft_opt.symbolic.terms.rotation import Expr, cross
 
 __all__ = ["STANDARD_GRAVITY", "phase_locked_thrust", "rcs_loads"]

@@ -7,7 +7,7 @@ positive value speeds up a rotor spinning positively about b1. ``w_rotor`` is th
 angular rate about b1 relative to N (the air turns with the Earth at 7.3e-5 rad/s: negligible), i.e.
 ``w_B[b1] + spin``. The torque is odd in ``w_rotor`` and opposes it.
 
-Models (:class:`~lightcraft_opt.params.SpinDecayModel`):
+Models (:class:`~lightcraft_opt.model.SpinDecayModel`):
 
 - ``NONE``: T = 0.
 - ``EXPONENTIAL`` (paper Eq. 6, T = J w_dot with an exponential decay): T = -J w / tau,
@@ -46,7 +46,7 @@ import casadi as ca
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.params import SpinDecayModel
+from lightcraft_opt.model import SpinDecayModel
 
 __all__ = [
     "SMOOTH_MAX_ORDER",

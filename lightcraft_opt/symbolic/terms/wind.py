@@ -3,7 +3,7 @@
 Frames (docs/frames.md): L is east-north-up at the pad; ``r_L`` is the craft's position
 relative to the pad [m], its third component the height z above the pad.
 
-Mean wind (:class:`~lightcraft_opt.params.Wind`):
+Mean wind (:class:`~lightcraft_opt.model.Wind`):
 
 - power law: speed(z) = U_ref ((z + z0) / (h_ref + z0))^n, blowing *from* azimuth
   phi(z) = phi_0 + veer z (clockwise from north, the meteorological convention), so the
@@ -35,7 +35,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.params import Wind
+from lightcraft_opt.model import Wind
 
 __all__ = ["build_wind", "gust_L", "mean_wind_L", "wind_velocity_L"]
 
