@@ -169,7 +169,8 @@ def nominal_start(
     problem: OcpProblem, phi: PulseMap, x0: np.ndarray, p: np.ndarray, t0: float
 ) -> Start:
     """The nominal rollout of ``problem`` through ``phi``, in the problem's wind if it stays
-    in the beam there, else in calm air (module docstring).
+    in the beam there (every pulse catches at least :data:`LEFT_BEAM_CAUGHT` of its energy),
+    else in calm air (module docstring).
 
     Parameters
     ----------
@@ -178,10 +179,9 @@ def nominal_start(
         t0 : first pulse time [s].
     """
     began = time.perf_counter()
-    X, U, offsets = _rolled(problem, phi, None, x0, p, t0)
+    X, U, caught = _rolled(problem, phi, None, x0, p, t0)
     calm = wind_scaled(p, 0.0)
-    radius = problem.model.craft.engine.capture_radius
-    if np.array_equal(calm, p) or float(np.max(offsets, initial=0.0)) <= radius:
+    if np.array_equal(calm, p) or float(np.min(caught, initial=1.0)) >= LEFT_BEAM_CAUGHT:
         return Start(StartKind.ROLLOUT, X, U, time.perf_counter() - began)
     X, U, _ = _rolled(problem, phi, None, x0, calm, t0)
     return Start(StartKind.CALM, X, U, time.perf_counter() - began)
@@ -237,12 +237,14 @@ def _rolled(
     p: np.ndarray,
     t0: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`rollout`'s X and U, and (N,) the beam axis's distance from the optic's
-    centre at each pulse [m] (inf where Φ returned a non-finite state)."""
+    """:func:`rollout`'s X and U, and (N,) the fraction of each fired pulse's energy the
+    optic caught (1 for a pulse fired with no energy; 0 where Φ returned a non-finite
+    state)."""
     N, lay = problem.horizon, problem.inputs
     nominal = problem.nominal_input()
     pointing = lay.index("pointing_L")
-    X, U, offsets = [np.asarray(x0, dtype=float)], [], []
+    energy = lay.index("energy")
+    X, U, caught = [np.asarray(x0, dtype=float)], [], []
     u_last = cast("np.ndarray | None", problem.u_previous)
     for k in range(N):
         if u is None:
@@ -260,9 +262,17 @@ def _rolled(
         finite = bool(np.all(np.isfinite(x_next)))
         X.append(x_next if finite else X[-1])
         U.append(uk)
-        offsets.append(float(np.hypot(*ENGINE.get("offset_L", engine))) if finite else np.inf)
-    return np.array(X), np.array(U).reshape(N, lay.size), np.array(offsets)
+        fired = float(uk[energy][0])
+        share = float(ENGINE.get("energy_captured", engine)) / fired if fired > 0 else 1.0
+        caught.append(share if finite else 0.0)
+    return np.array(X), np.array(U).reshape(N, lay.size), np.array(caught)
 
+
+#: A rollout has left the beam when a pulse's optic catches less than this fraction of the
+#: energy fired: the simulator's left-beam rule (simulation/flight_log.py, under 1 %), where
+#: Φ has no gradient to follow back. A rollout that only grazes the edge (problem (c)'s
+#: gust: 1.03 of the capture radius, most of the light still caught) keeps its own wind.
+LEFT_BEAM_CAUGHT = 0.01
 
 #: Parameter slots that OcpOptions.wind_ramp scales (speeds; directions and profiles stay).
 _WIND_SPEEDS = ("wind_speed_ref", "gust_L")

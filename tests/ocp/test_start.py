@@ -142,3 +142,16 @@ def test_in_calm_air_the_start_is_the_nominal_rollout(crosswind_launch):
     X, U = rollout(problem, phi, p=calm)
     np.testing.assert_array_equal(start.X, X)
     np.testing.assert_array_equal(start.U, U)
+
+
+def test_a_rollout_that_grazes_the_edge_keeps_its_wind():
+    """Problem (c)'s gust pushes the nominal rollout to 1.03 of the capture radius, but its
+    optic still catches most of every pulse: Φ has a gradient there, so the start stays the
+    rollout in the problem's own wind (the calm one is for a craft out of the beam)."""
+    loaded = load_problem(REPO_ROOT / "problems" / "rcs_gust_tilt.toml")
+    problem = loaded.problem
+    phi = build_pulse_map(problem.model, problem.pulse_map_options(loaded.options.pulse_map))
+    start = nominal_start(problem, phi, problem.x0, problem.p, problem.t0)
+    assert start.kind is StartKind.ROLLOUT
+    X, _ = rollout(problem, phi)
+    np.testing.assert_array_equal(start.X, X)
