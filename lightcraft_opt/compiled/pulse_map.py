@@ -16,8 +16,8 @@ symbolic/maps/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14
 loaded) and under 0.3 GB once per model structure; a cache hit costs a few ms (serialising
 and hashing the Function, verifying the library); a pulse then takes 0.15-0.4 ms instead
 of 0.9-2 ms, with results identical here to the last bit (promised: to round-off). The
-flat SX construction of before (flat_pulse_map.py) took 3 min and 2.8 GB to compile and
-gained 1.6x. -O0 compiles faster but runs slower than casadi's interpreter; -O1 took
+flat SX construction of before (symbolic/maps/reference_pulse_map.py) took 3 min and 2.8 GB to
+compile and gained 1.6x. -O0 compiles faster but runs slower than casadi's interpreter; -O1 took
 longer and more memory than -O2 on straight-line code.
 """
 

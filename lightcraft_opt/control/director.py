@@ -552,7 +552,7 @@ def _shifted(a: np.ndarray) -> np.ndarray:
 
 
 def _dcm(q: np.ndarray) -> np.ndarray:
-    """R_LB of the unit quaternion q_LB (w, x, y, z), as symbolic/rotation.dcm (which, fed a
+    """R_LB of the unit quaternion q_LB (w, x, y, z), as symbolic/terms/rotation.dcm (which, fed a
     DM, costs 0.8 ms a call: too dear every pulse)."""
     w, x, y, z = q
     return np.array(

@@ -50,7 +50,7 @@ class Coordinates(Enum):
     """The states a linear model is written in."""
 
     FULL = "full"  # layout STATE, quaternion components as they are
-    ERROR_STATE = "error_state"  # symbolic/error_state.ERROR_STATE, minimal attitude
+    ERROR_STATE = "error_state"  # symbolic/maps/error_state.ERROR_STATE, minimal attitude
 
 
 def linearize(

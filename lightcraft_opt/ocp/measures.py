@@ -31,7 +31,7 @@ def build_node_measures() -> ca.Function:
         quaternion, as Φ returns).
     energy_fired : laser energy fired since the counter was 0, ``pulses`` times
         ``reference_pulse_energy`` [J] (the counter advances by E / E_ref a pulse:
-        pulse_jump.py).
+        symbolic/maps/pulse_jump.py).
     """
     x = ca.SX.sym("x", STATE.size)
     p = ca.SX.sym("p", PARAMETERS.size)

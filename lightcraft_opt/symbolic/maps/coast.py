@@ -93,7 +93,7 @@ def coning_rate_B(x: ca.SX, p: ca.SX) -> ca.SX:
 
     Derivation (axisymmetric craft: every particle of I_B on b1, so I_B is diagonal with
     I_B22 = I_B33): H_B = (C w1 + J ψ̇, A w2, A w3) with C = I_B11 + J and
-    A = I_B22 + I (gyrostat.py; docs/physics.md#gyrostat). Torque-free, in B,
+    A = I_B22 + I (symbolic/terms/gyrostat.py; docs/physics.md#gyrostat). Torque-free, in B,
     dH_B/dt = -w_B × H_B gives dH1/dt = 0 and
 
         dH2/dt = -(H1 - A w1)/A H3,    dH3/dt = +(H1 - A w1)/A H2,

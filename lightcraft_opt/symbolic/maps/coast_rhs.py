@@ -1,6 +1,6 @@
 """The continuous right-hand side between laser pulses: ``coast_rhs(t, x, u, p) -> xdot``.
 
-Assembles gravity and the rotating site frame (gravity.py), the standard atmosphere,
+Assembles gravity and the rotating site frame (symbolic/terms/gravity.py), the standard atmosphere,
 wind, aerodynamics (paper Eqs. 2-5 corrected; the seed paper,
 docs/references.md#paper-eq-2), spin decay (Eq. 6), RCS and the
 gyrostat (Eq. 1 corrected) into one casadi.Function over the state layout of

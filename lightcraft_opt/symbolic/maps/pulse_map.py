@@ -18,7 +18,7 @@ Structure (docs/architecture.md#rule-17): Φ is a short MX graph over named SX p
 
 Its generated C is about a megabyte and compiles in seconds (compiled/pulse_map.py), and its
 derivatives can be chained over the compiled pieces (pulse_map_derivatives.py). It
-evaluates the expressions of the flat construction (flat_pulse_map.py) in the same
+evaluates the expressions of the flat construction (reference_pulse_map.py) in the same
 order: the two agree to rounding (tests/symbolic/test_pulse_map_structure.py).
 
 The attitude quaternion is scaled to unit length on the way in and on the way out, so

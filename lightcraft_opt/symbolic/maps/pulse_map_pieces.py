@@ -22,7 +22,7 @@ The substep's inputs w by RCS profile
 - PHASE_LOCKED: the mean, cosine and sine amplitudes [N], the motor torque [N m], the
   coning rate ω [rad/s] and the pulse time t_k [s] (the phase is ω (t - t_k)).
 
-Every piece evaluates the expressions of the flat construction (flat_pulse_map.py) in the
+Every piece evaluates the expressions of the flat construction (reference_pulse_map.py) in the
 same order, so the composed Φ agrees with it to rounding.
 """
 
