@@ -16,10 +16,11 @@ Context keywords (what a figure or a file needs beyond the result):
   capture radius and the solve budget), or ``title``, ``capture_radius``, ``budget`` [s].
 * OcpResult: ``problem``, a ProblemFile (from :func:`~lightcraft_opt.files.load_problem`)
   or an OcpProblem (then ``options`` and ``title`` may be given too): required to save.
-* CalibrationResult: ``model`` (the report's model and hash; track_fit.png flies the
-  fitted and the starting flight on it), ``model_file`` (then the fitted model file is
-  written too), ``track_file`` (named in the report and the fitted file), ``flights``
-  (track_fit.png's flights, flown already: :func:`fit_flights`).
+* CalibrationResult: ``model`` (the report's model and hash), ``model_file`` (then the
+  fitted model file is written too), ``track_file`` (named in the report and the fitted
+  file), ``flights`` (track_fit.png's whole flights, flown by the caller:
+  :func:`~lightcraft_opt.calibration.flights.fit_flights`; without them track_fit.png
+  draws the fitted flight over the track's span). The plot flies nothing.
 * CampaignResult: none; the campaign's files are copied from its folder.
 """
 
@@ -49,20 +50,17 @@ from lightcraft_opt.files.simulation_outputs import (
 )
 from lightcraft_opt.layout import VectorLayout, parameter_values
 from lightcraft_opt.model import FlightRecord, Laser, Model
-from lightcraft_opt.model.checks import MAX_DURATION
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.result import OcpResult
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.presenters import register
 from lightcraft_opt.simulation.flight_log import beam_sides
 from lightcraft_opt.simulation.result import SimulationResult
-from lightcraft_opt.simulation.simulate import simulate
 
 if TYPE_CHECKING:  # the plots load matplotlib: only on the first plot or save
     from lightcraft_opt.plots.figures import MeasuredTrack
 
-__all__ = ["beam_size_of", "fit_flights", "save_figures"]
+__all__ = ["beam_size_of", "save_figures"]
 
 
 def beam_size_of(laser: Laser, p: np.ndarray) -> Callable[[np.ndarray, float], np.ndarray]:
@@ -245,39 +243,14 @@ def _ocp_save(
 
 
 # --------------------------------------------------------------------------- fits
-def fit_flights(
-    result: CalibrationResult,
-    model: Model,
-    *,
-    options: PulseMapOptions | None = None,
-    compiled: bool | None = None,
-) -> dict[str, SimulationResult]:
-    """The fitted flight and the flight before the fit, from launch to landing or to twice
-    the track's span (a track of a whole flight shows its landing; the cost stays
-    bounded): ``track_fit.png``'s lines. A flight whose parameters are not finite is left
-    out."""
-    whole = min(max(2.0 * float(result.t[-1]), 1.0), MAX_DURATION) if result.t.size else 1.0
-    return {
-        label: simulate(model, whole, x0=x0, p=p, options=options, compiled=compiled)
-        for label, p, x0 in (
-            ("fitted", result.p, result.x0),
-            ("before the fit", result.initial_p, result.initial_x0),
-        )
-        if p.size and np.all(np.isfinite(p)) and np.all(np.isfinite(x0))
-    }
-
-
 def _fit_plot(
     result: CalibrationResult,
     *,
-    model: Model | None = None,
     flights: Mapping[str, SimulationResult] | None = None,
     **_: Any,
 ) -> dict[str, Any]:
     from lightcraft_opt.plots.calibration import calibration_figures
 
-    if flights is None and model is not None:
-        flights = fit_flights(result, model)
     return calibration_figures(result, flights=flights)
 
 
@@ -302,7 +275,7 @@ def _fit_save(
         )
         extra = {"model_file": str(source), "fitted_model_file": fitted.name, **extra}
     write_calibration_report(result, model, folder / "fit_report.json", **extra)
-    _draw(figures, _fit_plot, folder, result, model=model, flights=flights)
+    _draw(figures, _fit_plot, folder, result, flights=flights)
     return folder
 
 

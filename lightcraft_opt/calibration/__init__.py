@@ -4,11 +4,13 @@
 - :mod:`.problem`: the least-squares problem on Φ (:class:`Track`,
   :func:`build_calibration_problem`);
 - :mod:`.fit`: :func:`calibrate` (Levenberg-Marquardt with bounds, :class:`CalibrationOptions`);
+- :mod:`.flights`: :func:`fit_flights`, the fitted flight and the one before the fit, whole;
 - :mod:`.statistics`: covariance, correlations and identifiability flags of a fit;
 - :mod:`.result`: :class:`CalibrationResult` with its :class:`CalibrationStatus`.
 """
 
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
+from lightcraft_opt.calibration.flights import fit_flights
 from lightcraft_opt.calibration.parameters import FIT_GROUPS, FitComponent, fit_components
 from lightcraft_opt.calibration.problem import (
     CalibrationProblem,
@@ -39,6 +41,7 @@ __all__ = [
     "build_calibration_problem",
     "calibrate",
     "fit_components",
+    "fit_flights",
     "fit_statistics",
     "identifiability_flags",
     "initial_values",

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
+from lightcraft_opt.calibration.flights import fit_flights
 from lightcraft_opt.calibration.parameters import FORMER_NAMES
 from lightcraft_opt.cli.args import integer, name_value, output_folder, substeps
 from lightcraft_opt.cli.file_kinds import check_kind
@@ -15,7 +16,6 @@ from lightcraft_opt.errors import renamed
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.track import read_track
 from lightcraft_opt.options import PulseMapOptions
-from lightcraft_opt.outputs import fit_flights
 
 
 def run(args: argparse.Namespace) -> int:

@@ -13,6 +13,7 @@ import pytest
 from support.models import table1_flight5
 from support.results import made_up_fit
 
+from lightcraft_opt.calibration import fit_flights
 from lightcraft_opt.layout import PARAMETERS, STATE, parameter_values
 from lightcraft_opt.plots.calibration import calibration_figures
 from lightcraft_opt.simulation.simulate import simulate
@@ -77,13 +78,14 @@ def test_without_flights_track_fit_draws_the_fit_over_the_track(fit):
     np.testing.assert_array_equal(line.get_ydata(), result.flight_x[:, R + 2])
 
 
-def test_plot_with_the_model_flies_the_whole_flights_itself(fit):
-    """``result.plot(model=...)`` gives the CLI's track_fit.png: outputs.fit_flights flies
-    both parameter sets to twice the track's span, at least 1 s (here 1 s), and over the
-    fixture's 0.6 s they are the fixture's flights."""
+def test_fit_flights_fly_the_whole_flights_the_plot_draws(fit):
+    """``result.plot(flights=fit_flights(result, model))`` gives the CLI's track_fit.png:
+    fit_flights flies both parameter sets to twice the track's span, at least 1 s (here
+    1 s), and over the fixture's 0.6 s they are the fixture's flights."""
     result, fitted, before = fit
     assert 2.0 * result.t[-1] < 1.0
-    ax = result.plot(model=table1_flight5())["track_fit.png"].axes[2]
+    flights = fit_flights(result, table1_flight5())
+    ax = result.plot(flights=flights)["track_fit.png"].axes[2]
     lines = {ln.get_label(): ln for ln in ax.get_lines()}
     for label, flight in (("fitted", fitted), ("before the fit", before)):
         t, z = lines[label].get_xdata(), lines[label].get_ydata()
@@ -92,3 +94,13 @@ def test_plot_with_the_model_flies_the_whole_flights_itself(fit):
         np.testing.assert_allclose(
             z[shared], np.interp(t[shared], flight.t, flight.x[:, R + 2]), atol=1e-6
         )
+
+
+def test_given_the_model_the_plot_still_flies_nothing(fit):
+    """The plot only draws: given the model but no flights, track_fit.png shows the fitted
+    flight the result holds (the track's span), not flights flown on the model."""
+    result, _, _ = fit
+    up = result.plot(model=table1_flight5())["track_fit.png"].axes[2]
+    (line,) = [ln for ln in up.get_lines() if ln.get_label() == "fitted"]
+    np.testing.assert_array_equal(line.get_xdata(), result.flight_t)
+    np.testing.assert_array_equal(line.get_ydata(), result.flight_x[:, R + 2])
