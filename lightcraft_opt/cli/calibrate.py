@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-import json
+import math
 from pathlib import Path
 
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
@@ -55,11 +55,13 @@ def run(args: argparse.Namespace) -> int:
     )
     # the files and figures below are written by the writers registered in outputs.py
     result.save(out, model=model, model_file=source, track_file=args.track, flights=flights)
-    report = json.loads((out / "fit_report.json").read_text())
-    for name, entry in report["parameters"].items():
-        std = "not identifiable" if entry["std"] is None else f"± {entry['std']:.3g}"
-        flags = f"  [{', '.join(entry['flags'])}]" if entry["flags"] else ""
-        print(f"  {name:15s} {entry['value']:.6g} {std} {entry['unit']}{flags}")
+    for name, value, sd, unit in zip(
+        result.names, result.values, result.std, result.units, strict=True
+    ):
+        std = "not identifiable" if not math.isfinite(sd) else f"± {sd:.3g}"
+        kinds = [f.kind.value for f in result.flags_of(name)]
+        flags = f"  [{', '.join(kinds)}]" if kinds else ""
+        print(f"  {name:15s} {value:.6g} {std} {unit}{flags}")
     for flag in result.flags:
         print(f"  {flag.parameter}: {flag.reason}")
     print(

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
+import math
 import time
 from pathlib import Path
+
+import numpy as np
 
 from lightcraft_opt.cli.args import output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
@@ -104,15 +106,19 @@ def _fly(
     )
     # the files and figures below are written by the writers registered in outputs.py
     result.save(out, problem=problem, inputs=plant.inputs)
-    summary = json.loads((out / "summary.json").read_text())
-    pulse = summary["coning_below_0.5deg_from_pulse"]
+    pulse = result.first_pulse_below(math.radians(0.5))
     settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
-    median = summary["solve_time_ms"]["median"]
-    solves = "no solves" if median is None else f"solve time median {median:.2f} ms"
+    median = result.log.solve_time_percentiles()["median"]
+    solves = (
+        "no solves" if not math.isfinite(median) else f"solve time median {median * 1e3:.2f} ms"
+    )
+    coning = math.degrees(result.coning[0]), math.degrees(result.coning[-1])
+    tilt = math.degrees(float(np.max(result.tilt)))
+    fallbacks = int(np.sum(result.log.fallbacks))
     print(
-        f"{name}: {summary['status']}: coning {summary['coning_initial_deg']:.2f} -> "
-        f"{summary['coning_final_deg']:.3f} deg ({settled}), max tilt "
-        f"{summary['max_tilt_deg']:.2f} deg, {summary['fallbacks']} fallbacks, {solves} "
+        f"{name}: {result.flight.status.value}: coning {coning[0]:.2f} -> "
+        f"{coning[1]:.3f} deg ({settled}), max tilt "
+        f"{tilt:.2f} deg, {fallbacks} fallbacks, {solves} "
         f"-> {out}/"
     )
     return result

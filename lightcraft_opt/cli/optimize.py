@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
 import warnings
 from pathlib import Path
@@ -13,6 +12,7 @@ from lightcraft_opt.cli.args import integer, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import HORIZON, ITERATION_LIMIT, TIME_LIMIT
 from lightcraft_opt.cli.progress import build_line, in_place, progress_line
+from lightcraft_opt.files.ocp_outputs import max_offset_over_capture_radius
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.ocp.options import OcpSolver
 from lightcraft_opt.ocp.replay import PlanWarning
@@ -56,12 +56,13 @@ def run(args: argparse.Namespace) -> int:
     )
     # the files and figures are written by the writers registered in outputs.py
     result.save(out, problem=pf)
-    summary = json.loads((out / "summary.json").read_text())
     if result.dynamics_closed:
+        altitude = float(result.state("r_L")[-1, 2])
+        offset = max_offset_over_capture_radius(result, problem)
         print(
-            f"laser energy {summary['laser_energy_J']:.1f} J, final altitude "
-            f"{summary['final_altitude_m']:.3f} m, largest beam offset "
-            f"{summary['max_offset_over_capture_radius']:.3f} of the capture radius -> {out}/"
+            f"laser energy {result.laser_energy:.1f} J, final altitude "
+            f"{altitude:.3f} m, largest beam offset "
+            f"{offset:.3f} of the capture radius -> {out}/"
         )
     else:  # the figures of an iterate that is no trajectory are no results
         print(f"no flyable plan: {result.open_dynamics()} -> {out}/")

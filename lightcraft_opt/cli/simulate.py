@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -74,10 +73,9 @@ def run(args: argparse.Namespace) -> int:
         track=track,
         launch_speed_mps=args.launch_speed or 0.0,
     )
-    summary = json.loads((out / "summary.json").read_text())
     print(
-        f"{summary['status']}: apogee {summary['apogee_m']:.2f} m, air time "
-        f"{summary['air_time_s']:.2f} s -> {out}/"
+        f"{result.status.value}: apogee {result.apogee:.2f} m, air time "
+        f"{result.air_time:.2f} s -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
 

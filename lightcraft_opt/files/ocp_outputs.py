@@ -92,6 +92,12 @@ def offsets_over_capture_radius(result: OcpResult, problem: OcpProblem) -> np.nd
     return np.hypot(*pulses.offset_L.T) / radius
 
 
+def max_offset_over_capture_radius(result: OcpResult, problem: OcpProblem) -> float:
+    """The largest of :func:`offsets_over_capture_radius` [-], 0 without a pulse."""
+    offsets = offsets_over_capture_radius(result, problem)
+    return float(np.max(offsets)) if offsets.size else 0.0
+
+
 def write_solution_csv(result: OcpResult, problem: OcpProblem, path: Path) -> None:
     """One row per node k = 0..N, columns :func:`solution_columns`: the state at node k
     (with mass, tilt and coning as in trajectory.csv), then pulse k's inputs and engine
@@ -230,7 +236,6 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
     how its plan flew when the simulator flew it again (:func:`replay_summary`). Beside it,
     result.json and result.npz: the exact result (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
-    offsets = offsets_over_capture_radius(result, problem)
     limits = [
         c.max_offset_over_capture_radius for c in problem.constraints if isinstance(c, OffsetLimit)
     ]
@@ -261,7 +266,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "final_altitude_m": float(r_L[-1, 2]),
         "final_position_m": r_L[-1].tolist(),
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),
-        "max_offset_over_capture_radius": float(np.max(offsets)) if offsets.size else 0.0,
+        "max_offset_over_capture_radius": max_offset_over_capture_radius(result, problem),
         "max_offset_over_capture_radius_limit": min(limits) if limits else None,
         "max_tilt_deg": math.degrees(float(np.max(node_tilt(result, problem)))),
         "propellant_used_kg": float(rcs[0] - rcs[-1]),
