@@ -258,7 +258,7 @@ def profile(problem: OcpProblem, options: OcpOptions, iterations: int) -> None:
         print(f"{name:12s} {calls:6d} {1e3 * wall / max(calls, 1):8.2f} {1e3 * wall / n:8.2f}")
     rest = result.solve_time - spent
     print(f"{'the rest':12s} {'':6s} {'':8s} {1e3 * rest / n:8.2f}  (IPOPT's own algebra)")
-    for shared in compiled.transcription.shared:
+    for shared in compiled.chain.shared:
         print(f"{shared.name()}: {shared.evaluations} evaluations for {shared.requests} requests")
 
 

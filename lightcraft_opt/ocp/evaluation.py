@@ -47,7 +47,7 @@ class SharedEvaluation(ca.Callback):
     name : the Callback's name (``ocp_pulse_values``, ``ocp_pulse_jacobians``).
     f : the Function evaluated on a miss; the Callback has its inputs and outputs
         (names and sparsity), and is not differentiable: the NLP's derivatives come
-        from Φ's chain (transcription.MultipleShooting.chain_derivatives), never from
+        from Φ's chain (ocp/chain.py), never from
         AD through this Callback.
 
     Attributes

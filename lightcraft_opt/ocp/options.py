@@ -147,7 +147,7 @@ class OcpOptions:
     prediction : which pulse map predicts: Φ or the reduced map Ψ (:class:`PredictionMap`).
     chain_derivatives : with IPOPT and the exact Hessian, take the NLP's gradient,
         Jacobian and Hessian from Φ's explicit-chain derivatives over compiled pieces
-        (symbolic/maps/pulse_map_derivatives.py; transcription.MultipleShooting.chain_derivatives)
+        (symbolic/maps/pulse_map_derivatives.py; ocp/chain.py)
         instead of casadi's AD through Φ: equal to rounding, faster to evaluate. False: AD.
     time_limit : wall-clock limit of a solve [s], > 0, or None for none (max_iter still
         bounds the iterations); default :data:`OCP_TIME_LIMIT`. A solve that reaches it

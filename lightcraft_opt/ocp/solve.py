@@ -26,7 +26,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Sequence
-from typing import Any, cast
+from typing import cast
 
 import casadi as ca
 import numpy as np
@@ -42,6 +42,14 @@ from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
+from lightcraft_opt.ocp.nlp_solver import (
+    CONVEX_PHASE_TOL,
+    QP_SOLVERS,
+    WARM_IPOPT,
+    solver_setup,
+    solver_status,
+    uses_chain,
+)
 from lightcraft_opt.ocp.options import (
     HessianApproximation,
     OcpOptions,
@@ -64,7 +72,6 @@ from lightcraft_opt.ocp.start import (
 from lightcraft_opt.ocp.time_limit import (
     Deadline,
     Progress,
-    SolverCall,
     call_forked,
     call_solver,
     can_fork,
@@ -76,188 +83,6 @@ from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_d
 from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, reduced_pulse_map
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
-
-#: QP solver of each SQP choice.
-_QP = {OcpSolver.SQP_QRQP: "qrqp", OcpSolver.SQP_HPIPM: "hpipm", OcpSolver.SQP_OSQP: "osqp"}
-
-
-def _uses_chain(opts: OcpOptions) -> bool:
-    """Whether the NLP's derivatives come from Φ's explicit chain (OcpOptions)."""
-    return (
-        opts.chain_derivatives
-        and opts.solver is OcpSolver.IPOPT
-        and opts.hessian in (HessianApproximation.EXACT, HessianApproximation.CONVEX)
-    )
-
-
-def _solver_options(
-    opts: OcpOptions,
-    tr: MultipleShooting,
-    deadline: Deadline | None,
-    report: BuildReport | None = None,
-) -> tuple[str, dict[str, Any], dict[str, ca.MX] | ca.Function]:
-    """nlpsol plugin name, options and NLP for ``opts``; ``deadline`` the iteration
-    callback that holds IPOPT and sqpmethod to the time limit (fatrop calls none). The NLP
-    is the transcription's expressions, or with the chain its Function that evaluates Φ
-    once per point (ocp/evaluation.py), whose build ``report`` hears about."""
-    quiet = opts.print_level == 0
-    # Trial points where Φ is not finite (IPOPT then shortens its step) are not warned about
-    # unless the solver is verbose.
-    common: dict[str, Any] = {
-        "print_time": not quiet,
-        "error_on_fail": False,
-        "show_eval_warnings": not quiet,
-    }
-    if deadline is not None:
-        common["iteration_callback"] = deadline
-    if opts.hessian is HessianApproximation.GAUSS_NEWTON:
-        common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
-    nlp: dict[str, ca.MX] | ca.Function = tr.nlp
-    if _uses_chain(opts) and tr.derivatives is not None:
-        convex = opts.hessian is HessianApproximation.CONVEX
-        chain = tr.chain_derivatives(upper=True, convex=convex, report=report)
-        nlp = chain.pop("nlp")
-        del chain["hess_lag_convex"]  # kept as tr.convex_hess_lag for the convex phase
-        # the NLP's Function is not differentiable (Φ's chain gives its derivatives):
-        # no multipliers of the parameters, which would need casadi's AD of it
-        common.update(chain, no_nlp_grad=True, calc_lam_p=False)
-    exact = opts.hessian is not HessianApproximation.LIMITED_MEMORY
-    equality = tr.equality
-    if opts.solver is OcpSolver.IPOPT:
-        ipopt: dict[str, Any] = {
-            "print_level": opts.print_level,
-            "sb": "yes",
-            "max_iter": opts.max_iter,
-            "tol": opts.tol,
-            "constr_viol_tol": opts.tol,
-            "bound_relax_factor": 0.0,
-            "linear_solver": opts.linear_solver.value,
-        }
-        if not exact:
-            ipopt["hessian_approximation"] = "limited-memory"
-        if opts.time_limit is not None:
-            ipopt["max_wall_time"] = float(opts.time_limit)
-        return "ipopt", {**common, "ipopt": ipopt}, nlp
-    if opts.solver is OcpSolver.FATROP:
-        fatrop = {
-            "print_level": opts.print_level,
-            "max_iter": opts.max_iter,
-            "tol": opts.tol,
-            "constr_viol_tol": opts.tol,
-        }
-        return (
-            "fatrop",
-            {**common, "structure_detection": "auto", "equality": equality, "fatrop": fatrop},
-            nlp,
-        )
-    qp = _QP[opts.solver]
-    qp_opts: dict[str, Any] = {"error_on_fail": False}
-    if qp == "qrqp":
-        qp_opts.update(print_iter=False, print_header=False, print_info=False)
-    elif qp == "osqp":
-        qp_opts["osqp"] = {
-            "verbose": False,
-            "eps_abs": opts.tol * 1e-2,
-            "eps_rel": opts.tol * 1e-2,
-            "max_iter": 20000,
-            "polish": True,
-        }
-    else:
-        qp_opts["hpipm"] = {
-            "mode": "robust",
-            "iter_max": 200,
-            "res_g_max": 1e-10,
-            "res_b_max": 1e-10,
-            "res_d_max": 1e-10,
-            "res_m_max": 1e-10,
-        }
-    return (
-        "sqpmethod",
-        {
-            **common,
-            "qpsol": qp,
-            "qpsol_options": qp_opts,
-            "hessian_approximation": "exact" if exact else "limited-memory",
-            "max_iter": opts.max_iter,
-            "tol_pr": opts.tol,
-            "tol_du": opts.tol,
-            "print_header": not quiet,
-            "print_iteration": not quiet,
-            "print_status": not quiet,
-        },
-        nlp,
-    )
-
-
-#: IPOPT started at a given point as from a warm start: small barrier, bounds barely pushed.
-_WARM_IPOPT: dict[str, Any] = {
-    "warm_start_init_point": "yes",
-    "mu_init": 1e-6,
-    "warm_start_bound_push": 1e-6,
-    "warm_start_mult_bound_push": 1e-6,
-    "warm_start_slack_bound_push": 1e-6,
-}
-
-#: Tolerance of the convex phase (OcpOptions.convex_iterations): near the optimum the
-#: exact Hessian takes over, where the convexified one would converge only linearly.
-CONVEX_PHASE_TOL = 1e-3
-
-#: IPOPT's words for its own wall-clock (and CPU-time) limit.
-_IPOPT_TIME_LIMIT = ("Maximum_WallTime_Exceeded", "Maximum_CpuTime_Exceeded")
-
-#: Solver returns that mean the constraints cannot be met when the returned iterate
-#: violates them: IPOPT's restoration phase found no less infeasible point, sqpmethod's QP
-#: of the linearised constraints gave no step (fatrop reports SOLVER_RET_INFEASIBLE).
-_INFEASIBLE_RETURNS = {
-    OcpSolver.IPOPT: ("Restoration_Failed",),
-    OcpSolver.SQP_QRQP: ("Search_Direction_Becomes_Too_Small",),
-    OcpSolver.SQP_HPIPM: ("Search_Direction_Becomes_Too_Small",),
-    OcpSolver.SQP_OSQP: ("Search_Direction_Becomes_Too_Small",),
-}
-
-
-def _status(call: SolverCall, opts: OcpOptions, violation: float) -> tuple[OcpStatus, str, int]:
-    """OcpStatus, message and iteration count of one solver call whose returned iterate
-    violates its constraints by ``violation`` (scaled units)."""
-    name = opts.solver.value
-    stats = call.stats
-    iterations = int(stats.get("iter_count", 0)) if stats else 0
-    raw = stats.get("return_status", "unknown") if stats else "unknown"
-    if call.stall is not None:
-        return OcpStatus.INFEASIBLE, f"{name}: {call.stall.describe()}", iterations
-    if call.deadline_reached or raw in _IPOPT_TIME_LIMIT:
-        if call.solution is None:  # fatrop's process, stopped mid-solve
-            return (
-                OcpStatus.TIME_LIMIT,
-                f"{name}: wall-clock limit {opts.time_limit:g} s reached; the solver was "
-                "stopped mid-solve and its iterate is lost",
-                0,
-            )
-        return (
-            OcpStatus.TIME_LIMIT,
-            f"{name}: wall-clock limit {opts.time_limit:g} s reached after {iterations} iterations",
-            iterations,
-        )
-    if call.solution is None:
-        return OcpStatus.FAILED, f"{name}: {call.error}", 0
-    if stats is None:  # sqpmethod leaves no status when its QP fails without raising
-        return OcpStatus.FAILED, f"{name}: the QP solver failed (no status reported)", 0
-    unified = str(stats.get("unified_return_status", ""))
-    low = str(raw).lower()
-    unmet = raw in _INFEASIBLE_RETURNS.get(opts.solver, ()) and violation > opts.tol
-    if "acceptable" in low:
-        status = OcpStatus.ACCEPTABLE
-    elif stats.get("success", False):
-        status = OcpStatus.SOLVED
-    elif "infeasib" in low or unified == "SOLVER_RET_INFEASIBLE" or unmet:
-        status = OcpStatus.INFEASIBLE
-    elif "maximum_iter" in low or unified == "SOLVER_RET_LIMITED" or iterations >= opts.max_iter:
-        status = OcpStatus.MAX_ITER
-    else:
-        status = OcpStatus.FAILED
-    if not isinstance(raw, str):  # fatrop reports a number
-        raw = f"return flag {raw}" + (" (converged)" if status is OcpStatus.SOLVED else "")
-    return status, f"{name}: {raw}", iterations
 
 
 class CompiledOcp:
@@ -283,6 +108,9 @@ class CompiledOcp:
     pulse_map : the prediction map Φ: re-simulate with it to reproduce the predicted
         trajectory.
     transcription : the :class:`~lightcraft_opt.ocp.transcription.MultipleShooting` NLP.
+    chain : its derivatives from Φ's chain (:class:`~lightcraft_opt.ocp.chain.ChainNlp`,
+        whose ``shared`` evaluations count Φ's evaluations), or None when casadi's AD
+        gives them.
     solver : the casadi nlpsol Function.
     function : casadi.Function ``ocp_solve(x0, p, t0, u_previous, reference, w0) ->
         (U, X, cost)``: the parametric solve in one Function (U (size, N) map inputs,
@@ -305,8 +133,9 @@ class CompiledOcp:
         if not isinstance(opts, OcpOptions):
             raise OptionError(f"options must be an OcpOptions, got {opts!r}")
         start = time.perf_counter()
-        plugin = "sqpmethod" if opts.solver in _QP else opts.solver.value
-        if not ca.has_nlpsol(plugin) or (opts.solver in _QP and not ca.has_conic(_QP[opts.solver])):
+        plugin = "sqpmethod" if opts.solver in QP_SOLVERS else opts.solver.value
+        qp = QP_SOLVERS.get(opts.solver)
+        if not ca.has_nlpsol(plugin) or (qp is not None and not ca.has_conic(qp)):
             raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
         self.problem, self.options = problem, opts
         # the interpreted map (the NLP differentiates it): the one derivatives_for builds on
@@ -336,7 +165,7 @@ class CompiledOcp:
             )
         blocks = opts.blocks(problem.horizon)
         derivatives = None
-        if _uses_chain(opts) and self.pulse_map.pieces is not None:
+        if uses_chain(opts) and self.pulse_map.pieces is not None:
             derivatives = (
                 derivatives_for(problem.model, map_options, report=build_progress)
                 if pulse_map is None and opts.prediction is PredictionMap.FULL
@@ -368,9 +197,10 @@ class CompiledOcp:
             and opts.solver is not OcpSolver.FATROP
             else None
         )
-        name, solver_opts, nlp = _solver_options(opts, tr, self._deadline, build_progress)
+        self._setup = setup = solver_setup(opts, tr, self._deadline, build_progress)
+        self.chain = setup.chain
         try:
-            self.solver = ca.nlpsol("ocp_nlp", name, nlp, solver_opts)
+            self.solver = ca.nlpsol("ocp_nlp", setup.plugin, setup.nlp, setup.options)
         except RuntimeError as err:
             raise OptionError(
                 f"OcpOptions.solver {opts.solver.value!r} cannot take this problem's NLP: "
@@ -390,7 +220,6 @@ class CompiledOcp:
         self._bounds = (lbx, ubx)
         self._warm_solver: ca.Function | None = None
         self._convex_solver: ca.Function | None = None
-        self._nlp_options = (name, solver_opts, nlp)
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
 
@@ -515,7 +344,7 @@ class CompiledOcp:
         w, lam_x, lam_g = call.solution or (w0, lam_x0, lam_g0)
         finite = bool(np.all(np.isfinite(w)))
         g, violation = self._violation(w if finite else w0, P)
-        status, message, iterations = _status(call, self.options, violation)
+        status, message, iterations = solver_status(call, self.options, violation)
         if not finite:
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
         if convex is not None:
@@ -571,29 +400,26 @@ class CompiledOcp:
         iterations of a cold solve from a start that flew, to :data:`CONVEX_PHASE_TOL`,
         started as a warm start (None when the options have no such phase: not IPOPT with
         the chain's exact Hessian, or 0 iterations). Built once, on first use."""
-        opts = self.options
-        tr = self.transcription
-        if (
-            not opts.convex_iterations
-            or opts.hessian is not HessianApproximation.EXACT
-            or not _uses_chain(opts)
-            or tr.convex_hess_lag is None
-        ):
+        opts, setup = self.options, self._setup
+        chain = setup.chain
+        if not opts.convex_iterations or opts.hessian is not HessianApproximation.EXACT:
+            return None
+        if chain is None:
             return None
         if self._convex_solver is None:
-            name, base, nlp = self._nlp_options
+            base = setup.options
             ipopt = {
                 **base["ipopt"],
                 "max_iter": opts.convex_iterations,
                 "tol": max(CONVEX_PHASE_TOL, opts.tol),
                 "constr_viol_tol": max(CONVEX_PHASE_TOL, opts.tol),
             }
-            ipopt.update(_WARM_IPOPT)
+            ipopt.update(WARM_IPOPT)
             self._convex_solver = ca.nlpsol(
                 "ocp_nlp_convex",
-                name,
-                nlp,
-                {**base, "hess_lag": tr.convex_hess_lag, "ipopt": ipopt},
+                setup.plugin,
+                setup.nlp,
+                {**base, "hess_lag": chain.hess_lag_convex, "ipopt": ipopt},
             )
         return self._convex_solver
 
@@ -604,9 +430,11 @@ class CompiledOcp:
         if self.options.solver is not OcpSolver.IPOPT:
             return self.solver
         if self._warm_solver is None:
-            name, opts, nlp = self._nlp_options
-            ipopt = {**opts["ipopt"], **_WARM_IPOPT}
-            self._warm_solver = ca.nlpsol("ocp_nlp_warm", name, nlp, {**opts, "ipopt": ipopt})
+            setup = self._setup
+            ipopt = {**setup.options["ipopt"], **WARM_IPOPT}
+            self._warm_solver = ca.nlpsol(
+                "ocp_nlp_warm", setup.plugin, setup.nlp, {**setup.options, "ipopt": ipopt}
+            )
         return self._warm_solver
 
     def _start(

@@ -26,19 +26,12 @@ m_i the mean level and c_i, s_i the cosine and sine amplitudes: the thrust then 
 [0, max_i] at every phase (the mean's own bounds keep it in [0, max_i]).
 
 Φ enters through one ``map`` over the horizon: the jump is exact and every derivative is
-an exact derivative of Φ (no finite differences). Given Φ's explicit-chain derivatives
-(symbolic/maps/pulse_map_derivatives.py, compiled pieces),
-:meth:`MultipleShooting.chain_derivatives`
-builds the NLP's gradient, constraint Jacobian and Lagrangian Hessian from them instead of
-casadi's AD through Φ: the NLP is written a second time with Φ's outputs as free symbols Y
-(ℓ(w, Y) = λ_f f + λ_gᵀ g, cheap to differentiate), and at the point w̄
-
-    L(w) ≈ ℓ(w, Y(w̄) + J(w̄) (z(w) - z(w̄))) + Σ_k ½ (z_k(w) - z_k(w̄))ᵀ H_k(w̄) (z_k(w) - z_k(w̄))
-
-(z_k = (x_k, u_k) the physical arguments of pulse k, affine in w; J the chain's Jacobian;
-H_k the chain's Hessian of μ_kᵀ Φ with μ_k = ∂ℓ/∂Y_k) has L's gradient and Hessian at w̄
-exactly; casadi differentiates that surrogate, never Φ. Variables are scaled (state slots by their
-natural size, inputs by their bounds) so the gaps have unit coefficients on x_{k+1}.
+an exact derivative of Φ (no finite differences). With Φ's explicit-chain derivatives,
+ocp/chain.py builds the NLP's gradient, constraint Jacobian and Lagrangian Hessian from
+them instead of casadi's AD through Φ, on this transcription's :meth:`~MultipleShooting.
+nlp_of_outputs` and :meth:`~MultipleShooting.pulse_arguments`. Variables are scaled (state
+slots by their natural size, inputs by their bounds) so the gaps have unit coefficients on
+x_{k+1}.
 
 The run-time inputs of the NLP, its parameter vector (:attr:`MultipleShooting.parameters`):
 ``x0`` (STATE.size,), ``p`` (PARAMETERS.size,), ``t0`` [s], ``u_previous`` and
@@ -48,25 +41,16 @@ The run-time inputs of the NLP, its parameter vector (:attr:`MultipleShooting.pa
 from __future__ import annotations
 
 import math
-import sys
-import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import assert_never
 
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.cache import (
-    BuildReport,
-    load_functions,
-    save_functions,
-    source_digest,
-    structure_key,
-)
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
-from lightcraft_opt.ocp.evaluation import ConvexBlocks, SharedEvaluation, horizon_map
+from lightcraft_opt.ocp.evaluation import horizon_map
 from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
@@ -89,7 +73,7 @@ from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import PulseMapDerivatives
 
-__all__ = ["SURROGATE_CACHE", "MultipleShooting", "Surrogate", "state_scale"]
+__all__ = ["MultipleShooting", "state_scale"]
 
 
 def _reciprocal_entries(problem: OcpProblem, free: np.ndarray) -> np.ndarray:
@@ -152,39 +136,6 @@ class _Stages:
     pulses: tuple[ca.MX, ...]  # offset_L, capture_use: (., N)
 
 
-@dataclass(frozen=True)
-class Surrogate:
-    """The SX Functions around Φ's shared evaluations in the chain's NLP
-    (:meth:`MultipleShooting.chain_derivatives`), pure structure.
-
-    Attributes
-    ----------
-    outputs_nlp : ``ocp_nlp_of_outputs(w, Y_x, Y_e, P) -> (f, g)``, the NLP with Φ's outputs
-        as symbols.
-    multipliers : ``ocp_output_multipliers(w, Y_x, Y_e, P, lam_f, lam_g) -> (mu_x, mu_e)``,
-        ∂ℓ/∂Y.
-    arguments : ``ocp_pulse_arguments(w, P) -> Z``, Φ's arguments (x_k, u_k) side by side.
-    grad_f, jac_g, hess : the surrogate's ``(w, P, z_bar, x_next_bar, engine_bar, dx_bar,
-        de_bar) -> (f, ∇f)``, ``-> (g, ∂g/∂w)`` and ``(..., hess_bar, lam_f, lam_g) -> H``.
-    """
-
-    outputs_nlp: ca.Function
-    multipliers: ca.Function
-    arguments: ca.Function
-    grad_f: ca.Function
-    jac_g: ca.Function
-    hess: ca.Function
-
-
-#: Name of the cache files of the surrogates (cache/functions.py).
-SURROGATE_CACHE = "ocp_surrogate"
-_THIS_MODULE = sys.modules[__name__]
-
-
-def _since(start: float) -> str:
-    return f"{time.perf_counter() - start:.1f} s"
-
-
 class MultipleShooting:
     """The multiple-shooting NLP of one problem (module docstring).
 
@@ -196,8 +147,8 @@ class MultipleShooting:
     phi : the pulse map Φ of ``problem.model``.
     blocks : move blocking, lengths [pulses] summing to the horizon; () or all 1: none.
     threads : evaluate Φ over the horizon on this many threads.
-    derivatives : Φ's explicit-chain derivatives, for :meth:`chain_derivatives` (None:
-        casadi's AD through Φ only).
+    derivatives : Φ's explicit-chain derivatives, for ocp/chain.py (None: casadi's AD
+        through Φ only).
 
     Attributes
     ----------
@@ -229,9 +180,7 @@ class MultipleShooting:
     ) -> None:
         self.problem, self.period = problem, phi.period
         self.derivatives, self.threads = derivatives, threads
-        self.convex_hess_lag: ca.Function | None = None  # set by chain_derivatives
-        self.shared: tuple[SharedEvaluation, ...] = ()  # likewise: Φ's shared evaluations
-        self._phi = phi
+        self.phi = phi
         N, nu = problem.horizon, problem.inputs.size
         free = np.flatnonzero(problem.free)
         self.free, nf = free, free.size
@@ -298,7 +247,7 @@ class MultipleShooting:
         outputs: tuple[ca.MX, ca.MX] | None = None,
     ) -> _Stages:
         """The stage quantities, Φ's outputs from ``phi`` over the horizon, or ``outputs``
-        (x_next, engine) given as symbols (:meth:`chain_derivatives`)."""
+        (x_next, engine) given as expressions (:meth:`nlp_of_outputs`)."""
         pr, P, N = self.problem, self.P, self.problem.horizon
         sx, su = ca.DM(self.x_scale), ca.DM(self.u_scale)
         p = self.parameters.get("p", P)
@@ -314,7 +263,7 @@ class MultipleShooting:
         U = ca.repmat(held, 1, N) + ca.mtimes(ca.DM(select), V_map)
         if outputs is None:
             assert phi is not None
-            x_next, engine = horizon_map(phi.step, N, threads)(X[:, :N], U, p, self._pulse_times())
+            x_next, engine = horizon_map(phi.step, N, threads)(X[:, :N], U, p, self.pulse_times())
         else:
             x_next, engine = outputs
         nodes = tuple(build_node_measures().map(N + 1)(X, p))
@@ -521,188 +470,26 @@ class MultipleShooting:
             ["hess_gamma_x_x"],
         )
 
-    def _pulse_times(self) -> ca.MX:
+    def pulse_times(self) -> ca.MX:
         """(1, N) t_k = t0 + k T [s]."""
         N = self.problem.horizon
         return self.parameters.get("t0", self.P) + ca.DM(self.period * np.arange(N)).T
 
-    def chain_derivatives(
-        self,
-        *,
-        upper: bool = True,
-        convex: bool = False,
-        report: BuildReport | None = None,
-    ) -> dict[str, ca.Function]:
-        """nlpsol's NLP and derivatives from Φ's explicit chain (module docstring):
-        ``nlp(x, p) -> (f, g)`` (pass it to nlpsol in place of :attr:`nlp`), ``grad_f``,
-        ``jac_g`` and ``hess_lag`` (upper triangle with ``upper``; with ``convex`` the
-        convexified one), and ``hess_lag_convex``: the Hessian with each pulse's block
-        μᵀ∇²Φ projected on the positive semidefinite cone (HessianApproximation.CONVEX,
-        also kept as :attr:`convex_hess_lag`). The exact ones equal casadi's AD of the NLP
-        to rounding (tests/ocp/test_chain_derivatives.py).
+    def nlp_of_outputs(self, x_next: ca.MX, engine: ca.MX) -> tuple[ca.MX, ca.MX]:
+        """(f, g) of the NLP written again with Φ's outputs over the horizon given as
+        expressions ``x_next`` (STATE.size, N) and ``engine`` (11, N) instead of Φ's
+        (ocp/chain.py: ℓ is cheap to differentiate in them)."""
+        xs, as_, vs, _ = self._symbols
+        st = self._stages(None, xs, as_, vs, 1, outputs=(x_next, engine))
+        g, _, _ = self._constraints(st)
+        terms, _ = self._objective(st)
+        return ca.sum1(terms), g
 
-        Φ over the horizon is evaluated once per primal point and shared
-        (ocp/evaluation.py): its values by f and g, its values and Jacobians by ∇f, ∂g/∂w
-        and the Hessian's multipliers; the chain's Hessian blocks once per iterate. Every
-        other piece is an SX Function (the NLP with Φ's outputs as symbols, and the
-        surrogate below), a few microseconds a pulse in casadi's SX machine; those are
-        pure structure, kept on disk (:meth:`surrogate`). ``report`` hears which.
-        """
-        der = self.derivatives
-        if der is None or der.hessian is None:
-            raise ParameterError(
-                "derivatives", "MultipleShooting needs Φ's chain derivatives with Hessians"
-            )
-        N, nx = self.problem.horizon, STATE.size
-        w, P = self.nlp["x"], self.P
-        p = self.parameters.get("p", P)
-        s = self.surrogate(upper=upper, report=report)
-        # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
-        values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, self.threads))
-        jacobians = SharedEvaluation(
-            "ocp_pulse_jacobians", horizon_map(der.jacobian, N, self.threads)
-        )
-        self.shared = (values, jacobians)  # the Callbacks must outlive the solver
-        times = self._pulse_times()
-        z = s.arguments(w, P)
-        nlp = ca.Function(
-            "ocp_nlp",
-            [w, P],
-            s.outputs_nlp(w, *values(z[:nx, :], z[nx:, :], p, times), P),
-            ["x", "p"],
-            ["f", "g"],
-        )
-        point = [z, *jacobians(z[:nx, :], z[nx:, :], p, times)]
-        grad_f = ca.Function(
-            "nlp_grad_f", [w, P], s.grad_f.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
-        )
-        jac_g = ca.Function(
-            "nlp_jac_g", [w, P], s.jac_g.call([w, P, *point]), ["x", "p"], ["g", "jac_g_x"]
-        )
-        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
-        _, xn, en, _, _ = point
-        mu_x, mu_e = s.multipliers(w, xn, en, P, lam_f, lam_g)
-        hessians = horizon_map(der.hessian, N, self.threads)
-        Hb = hessians(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
-        # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
-        psd = self.convex_blocks = ConvexBlocks("ocp_convex_blocks", der.n_v, N)  # kept alive
-        hess_lag, hess_convex = (
-            ca.Function(
-                name,
-                [w, P, lam_f, lam_g],
-                [s.hess(w, P, *point, blocks, lam_f, lam_g)],
-                ["x", "p", "lam_f", "lam_g"],
-                ["hess_gamma_x_x"],
-            )
-            for name, blocks in (("nlp_hess_l", Hb), ("nlp_hess_l_convex", psd(Hb)))
-        )
-        self.convex_hess_lag = hess_convex
-        return {
-            "nlp": nlp,
-            "grad_f": grad_f,
-            "jac_g": jac_g,
-            "hess_lag": hess_convex if convex else hess_lag,
-            "hess_lag_convex": hess_convex,
-        }
-
-    def surrogate(self, *, upper: bool = True, report: BuildReport | None = None) -> Surrogate:
-        """The SX Functions of :meth:`chain_derivatives` (module docstring), from the disk
-        cache (cache/functions.py) when this structure was built before, else built
-        (casadi's AD and expansion: seconds at a hundred pulses) and saved. The key is the
-        graph they are built from: the NLP with Φ's outputs as symbols and Φ's arguments
-        (both before expansion), Φ's sparsity patterns, the sizes, ``upper`` and the
-        source of this module; never run-time values."""
-        der = self.derivatives
-        assert der is not None
-        xs, as_, vs, st = self._symbols
-        N, nx = self.problem.horizon, STATE.size
-        ne = int(der.jacobian.size_out(1)[0])
-        nv = der.n_v
-        w, P = self.nlp["x"], self.P
-        # the NLP with Φ's outputs as symbols: ℓ is cheap to differentiate
-        Yx, Ye = ca.MX.sym("Y_x", nx, N), ca.MX.sym("Y_e", ne, N)
-        sy = self._stages(None, xs, as_, vs, 1, outputs=(Yx, Ye))
-        g_y, _, _ = self._constraints(sy)
-        terms_y, _ = self._objective(sy)
-        f_y = ca.sum1(terms_y)
-        tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y])
-        # Φ's arguments z_k = (x_k, u_k), affine in w
-        Z = ca.vertcat(st.X[:, :N], st.U)
-        z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z])
-        # Φ's structural zeros (casadi's sparsity propagation through Φ), so the NLP's
-        # Jacobian and Hessian keep the sparsity AD would give them
-        jac_sp, hess_sp = self._phi_sparsity(nx, ne, nv)
-        key = structure_key(
-            SURROGATE_CACHE,
-            tilde,
-            z_of,
-            jac_sp,
-            hess_sp,
-            repr((N, nx, ne, nv, upper)),
-            source_digest(_THIS_MODULE),
-        )
-        start = time.perf_counter()
-        loaded = load_functions(SURROGATE_CACHE, key)
-        if loaded is not None and len(loaded) == len(fields(Surrogate)):
-            if report is not None:
-                report(f"the NLP's derivatives: loaded from the cache in {_since(start)}")
-            return Surrogate(*loaded)
-        if report is not None:
-            report(f"building the NLP's derivatives ({N} pulses, {self.n_w} variables) ...")
-        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
-        ell_y = lam_f * f_y + ca.dot(lam_g, g_y)
-        multipliers = ca.Function(
-            "ocp_output_multipliers",
-            [w, Yx, Ye, P, lam_f, lam_g],
-            [ca.gradient(ell_y, Yx), ca.gradient(ell_y, Ye)],
-        ).expand()
-        tilde = tilde.expand()
-        # the surrogate at w̄, whose Φ quantities enter as symbols: casadi differentiates it
-        # in w without ever differentiating Φ or its chain
-        Zb = ca.MX.sym("z_bar", nv, N)
-        XN, EN = ca.MX.sym("x_next_bar", nx, N), ca.MX.sym("engine_bar", ne, N)
-        pattern = ca.DM(jac_sp, 1)
-        DX = ca.MX.sym("dx_bar", ca.repmat(pattern[:nx, :], 1, N).sparsity())
-        DE = ca.MX.sym("de_bar", ca.repmat(pattern[nx:, :], 1, N).sparsity())
-        HB = ca.MX.sym("hess_bar", ca.repmat(ca.DM(hess_sp, 1), 1, N).sparsity())
-        dz = Z - Zb
-        blocks = range(N)
-        lin_x = ca.horzcat(
-            *(XN[:, k] + ca.mtimes(DX[:, k * nv : (k + 1) * nv], dz[:, k]) for k in blocks)
-        )
-        lin_e = ca.horzcat(
-            *(EN[:, k] + ca.mtimes(DE[:, k * nv : (k + 1) * nv], dz[:, k]) for k in blocks)
-        )
-        f_lin, g_lin = tilde(w, lin_x, lin_e, P)
-        quad = sum(0.5 * ca.bilin(HB[:, k * nv : (k + 1) * nv], dz[:, k], dz[:, k]) for k in blocks)
-        H = ca.hessian(lam_f * f_lin + ca.dot(lam_g, g_lin) + quad, w)[0]
-        H = ca.triu(H) if upper else H
-        first = [w, P, Zb, XN, EN, DX, DE]
-        built = Surrogate(
-            outputs_nlp=tilde,
-            multipliers=multipliers,
-            arguments=z_of.expand(),
-            grad_f=ca.Function(
-                "ocp_surrogate_grad_f", first, [f_lin, ca.gradient(f_lin, w)]
-            ).expand(),
-            jac_g=ca.Function(
-                "ocp_surrogate_jac_g", first, [g_lin, ca.jacobian(g_lin, w)]
-            ).expand(),
-            hess=ca.Function("ocp_surrogate_hess", [*first, HB, lam_f, lam_g], [H]).expand(),
-        )
-        save_functions(SURROGATE_CACHE, key, [getattr(built, f.name) for f in fields(Surrogate)])
-        return built
-
-    def _phi_sparsity(self, nx: int, ne: int, nv: int) -> tuple[ca.Sparsity, ca.Sparsity]:
-        """Structural patterns of Φ's Jacobian in v = (x, u), (nx + ne, nv), and of the
-        Hessian of any λᵀ(x_next, engine), (nv, nv), by sparsity propagation through Φ."""
-        v = ca.MX.sym("v", nv)
-        p, t = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
-        out = ca.vertcat(*self._phi.step(v[:nx], v[nx:], p, t))
-        lam = ca.MX.sym("lam", nx + ne)
-        return ca.jacobian_sparsity(out, v), ca.jacobian_sparsity(
-            ca.gradient(ca.dot(lam, out), v), v
-        )
+    def pulse_arguments(self) -> ca.MX:
+        """(STATE.size + map-input size, N) Φ's arguments z_k = (x_k, u_k) side by side in
+        physical units, affine in w."""
+        st = self._symbols[3]
+        return ca.vertcat(st.X[:, : self.problem.horizon], st.U)
 
     # ----------------------------------------------------------------- numbers
     def parameter_vector(

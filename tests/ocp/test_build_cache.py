@@ -26,10 +26,11 @@ from support.models import table1_flight5
 from lightcraft_opt.cache import CacheWarning
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model import Engine
+from lightcraft_opt.ocp.chain import SURROGATE_CACHE, Surrogate, build_surrogate
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.ocp.transcription import SURROGATE_CACHE, MultipleShooting, Surrogate
+from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 
@@ -56,7 +57,7 @@ def _surrogate(lateral, problem=None) -> tuple[Surrogate, list[str]]:
     base, phi, derivatives = lateral
     said: list[str] = []
     tr = MultipleShooting(problem or base, phi, derivatives=derivatives)
-    return tr.surrogate(report=said.append), said
+    return build_surrogate(tr, report=said.append), said
 
 
 def _files(cache) -> list:

@@ -1,4 +1,4 @@
-"""The NLP's derivatives from Φ's explicit chain (MultipleShooting.chain_derivatives) against
+"""The NLP's derivatives from Φ's explicit chain (ocp/chain.py) against
 casadi's AD through Φ, and the optimum either reaches.
 
 References:
@@ -35,6 +35,7 @@ from support.paths import MODELS
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model import BeamSizeModel, Engine
+from lightcraft_opt.ocp.chain import chain_nlp
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import (
     ControlBound,
@@ -127,19 +128,19 @@ def test_chain_gradient_jacobian_and_hessian_equal_casadi_ad(nlp):
         ],
     )
     f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
-    chain = tr.chain_derivatives(upper=True)
-    f_n, g_n = chain["nlp"](w, P)
+    chain = chain_nlp(tr, upper=True)
+    f_n, g_n = chain.nlp(w, P)
     assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL
-    f_c, grad_c = chain["grad_f"](w, P)
-    g_c, jac_c = chain["jac_g"](w, P)
-    hess_c = chain["hess_lag"](w, P, lam_f, lam_g)
+    f_c, grad_c = chain.grad_f(w, P)
+    g_c, jac_c = chain.jac_g(w, P)
+    hess_c = chain.hess_lag(w, P, lam_f, lam_g)
     assert _rel(f_c, f) < RTOL and _rel(g_c, g) < RTOL
     assert _rel(grad_c, grad) < RTOL
     assert _rel(jac_c, jac) < RTOL
     assert _rel(hess_c, hess) < RTOL
     # the sparsity casadi hands IPOPT: no entry outside AD's pattern
-    assert chain["hess_lag"].sparsity_out(0).nnz() <= hess.sparsity().nnz() + tr.n_w
-    assert chain["jac_g"].sparsity_out(1).nnz() <= jac.sparsity().nnz() + tr.lbg.size
+    assert chain.hess_lag.sparsity_out(0).nnz() <= hess.sparsity().nnz() + tr.n_w
+    assert chain.jac_g.sparsity_out(1).nnz() <= jac.sparsity().nnz() + tr.lbg.size
 
 
 @pytest.mark.slow
@@ -168,7 +169,7 @@ def test_each_point_evaluates_phi_once():
     result = compiled.solve()
     assert result.status is OcpStatus.SOLVED
     stats = compiled.solver.stats()
-    values, jacobians = compiled.transcription.shared
+    values, jacobians = compiled.chain.shared
     # the Jacobian chain at most once per point IPOPT differentiates at (∇f, ∂g/∂w and
     # the Hessian's multipliers there share it; IPOPT asks for ∇f twice at one point),
     # at least once per iterate

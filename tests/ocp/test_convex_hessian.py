@@ -25,6 +25,7 @@ from ocp.test_ocp import TOL
 from support.nlp_points import off_optimum
 
 from lightcraft_opt.errors import OptionError
+from lightcraft_opt.ocp.chain import chain_nlp
 from lightcraft_opt.ocp.evaluation import ConvexBlocks
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.result import OcpStatus
@@ -58,9 +59,9 @@ def test_the_convexified_hessian_drops_only_negative_curvature():
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
     tr, w, P, rng = off_optimum(problem, phi)
     lam_g = 10 * rng.normal(size=tr.lbg.size)
-    chain = tr.chain_derivatives(upper=False)
-    exact = np.asarray(ca.densify(chain["hess_lag"](w, P, 1.0, lam_g)))
-    convex = np.asarray(ca.densify(chain["hess_lag_convex"](w, P, 1.0, lam_g)))
+    chain = chain_nlp(tr, upper=False)
+    exact = np.asarray(ca.densify(chain.hess_lag(w, P, 1.0, lam_g)))
+    convex = np.asarray(ca.densify(chain.hess_lag_convex(w, P, 1.0, lam_g)))
     assert np.abs(convex - exact).max() > 1e-8 * np.abs(exact).max()  # something was clipped
     assert np.linalg.eigvalsh(exact - convex).max() < 1e-8 * np.abs(exact).max()
 
