@@ -5,7 +5,8 @@ files, the pulse map Φ, simulation, optimal control, control (MPC, LQR, closed 
 linearisation, calibration and Monte Carlo campaigns, and every result type: each has
 ``summary()``, ``plot()`` and ``save(folder)``, and :func:`load_result` reads a run folder
 back (lightcraft_opt/outputs.py registers their figures and files). The
-controllers and linearisation load on first use (python-control takes ~2 s to import).
+controllers and linearisation load on first use (python-control is slow to import:
+bench/README.md#importing-python-control).
 Frames and units: docs/frames.md; the physics: docs/physics.md; the house:
 docs/architecture.md. Everything inside is SI.
 """

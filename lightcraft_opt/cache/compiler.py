@@ -58,8 +58,9 @@ DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
 
 #: Flags of derivative pieces (symbolic/maps/pulse_map_derivatives.py). Their SX is long
 #: straight-line code (the jump's Hessian for a 4 x 16 optic: 106k instructions, 2.9 MB of
-#: C) on which gcc -O2 spends minutes; -O1 compiles it in 27 s and runs it 9x faster than
-#: casadi's interpreter (-O0: 9 s, 2.6x). Same IEEE semantics as -O2.
+#: C) on which gcc -O2 spends minutes; -O1 compiles it far sooner and runs it several times
+#: faster than casadi's interpreter (-O0 compiles sooner still but gains much less; figures:
+#: bench/README.md#compile-cost-and-compiler-flags). Same IEEE semantics as -O2.
 DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
 
 #: A Function to compile and its flags.

@@ -8,17 +8,18 @@ entry by structure, verified before it is loaded); this module knows Φ's struct
 own library, and chains them (symbolic/maps/pulse_map_derivatives.py), never casadi's AD through
 the whole graph (docs/architecture.md#rule-17); :func:`saved_pulse_map_derivatives` keeps
 that chain on disk (cache/functions.py), so a later build of the same structure loads it in
-milliseconds instead of redoing casadi's AD of every piece (4 s for the OCP's map of problem
-(a), 10 s for problem (b)'s).
+milliseconds instead of redoing casadi's AD of every piece (seconds; figures:
+bench/README.md#build-time-a-new-structure-and-the-same-structure-again).
 
-Cost, measured for Flight 5 with the default options (Φ composed of named pieces,
-symbolic/maps/pulse_map.py; 0.65 MB of C; gcc 12 on 2 cores): gcc -O2 takes 5-14 s (idle to
-loaded) and under 0.3 GB once per model structure; a cache hit costs a few ms (serialising
-and hashing the Function, verifying the library); a pulse then takes 0.15-0.4 ms instead
-of 0.9-2 ms, with results identical here to the last bit (promised: to round-off). The
-flat SX construction of before (symbolic/maps/reference_pulse_map.py) took 3 min and 2.8 GB to
-compile and gained 1.6x. -O0 compiles faster but runs slower than casadi's interpreter; -O1 took
-longer and more memory than -O2 on straight-line code.
+Cost, for Flight 5 with the default options (Φ composed of named pieces,
+symbolic/maps/pulse_map.py; 0.65 MB of C): gcc -O2 compiles it in seconds, once per model
+structure; a cache hit costs milliseconds (serialising and hashing the Function, verifying
+the library); a pulse then runs several times faster than interpreted, with results
+identical here to the last bit (promised: to round-off). The flat SX construction of before
+(symbolic/maps/reference_pulse_map.py) took minutes and gigabytes to compile and gained
+far less. -O0 compiles faster but runs slower than casadi's interpreter; -O1 took longer and
+more memory than -O2 on straight-line code. Figures: bench/README.md#compile-cost-and-compiler-flags
+and the table of the `pulse_map.py` section there.
 """
 
 from __future__ import annotations

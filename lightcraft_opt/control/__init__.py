@@ -62,10 +62,11 @@ if TYPE_CHECKING:
     from lightcraft_opt.control.prediction_model import ConingModel, coning_model, turn
 
 #: The controllers and the MPC load on first use: their prediction model linearises Φ
-#: through linearize/, which imports python-control (~2 s); a file reader that needs only
-#: the options, or a campaign that flies open loop, stays quick. (The closed loop is
-#: imported above: a lazy name that is also a submodule's name would be shadowed by the
-#: submodule once anything imports it.)
+#: through linearize/, which imports python-control (seconds:
+#: bench/README.md#importing-python-control); a file reader that needs only the options, or a
+#: campaign that flies open loop, stays quick. (The closed loop is imported above: a lazy
+#: name that is also a submodule's name would be shadowed by the submodule once anything
+#: imports it.)
 _LAZY = {
     **dict.fromkeys(
         (

@@ -464,8 +464,9 @@ class DirectorController:
 
     def _vergence_table(self, top: float = 400.0, step: float = 0.25) -> None:
         """The schedule's vergence every ``step`` m up to ``top`` m (linearize.beam_riding
-        evaluates the beam's side through casadi: 0.4 ms a call, 4 ms a pulse for a
-        horizon's stages; the table answers in microseconds)."""
+        evaluates the beam's side through casadi, too dear for a horizon's stages every
+        pulse; the table answers in microseconds; figures:
+        bench/README.md#where-a-steps-time-goes-and-the-other-flights)."""
         self._h_table = np.arange(0.0, top + step / 2, step)
         self._kappa_table = np.array(
             [
@@ -553,7 +554,7 @@ def _shifted(a: np.ndarray) -> np.ndarray:
 
 def _dcm(q: np.ndarray) -> np.ndarray:
     """R_LB of the unit quaternion q_LB (w, x, y, z), as symbolic/terms/rotation.dcm (which, fed a
-    DM, costs 0.8 ms a call: too dear every pulse)."""
+    DM, is too dear every pulse: bench/README.md#where-a-steps-time-goes-and-the-other-flights)."""
     w, x, y, z = q
     return np.array(
         [

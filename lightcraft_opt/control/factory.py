@@ -9,13 +9,14 @@ budget), the factory how each kind is put together:
 - ``NONE``: :class:`~.controllers.OpenLoopController`, the nominal input every pulse;
 - ``MPC``: :class:`~.mpc.MpcController` on the linear prediction model in coning
   coordinates (:func:`~.prediction_model.coning_model`, linearised from ``plant`` once
-  per model and cached on disk: ~25 s the first time);
+  per model and cached on disk: tens of seconds the first time,
+  bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp);
 - ``LQR``: :class:`~.controllers.LqrController` on the same model, with the MPC's weights;
 - ``DIRECTOR``: :class:`~.director.DirectorController`; on a craft with RCS whose
   ``DirectorOptions.rcs`` is ``NUTATION``, with the nutation MPC alongside.
 
-The controllers are imported when built: they load python-control (~2 s) through
-linearize/, which an open loop never needs.
+The controllers are imported when built: they load python-control (slow to import,
+bench/README.md#importing-python-control) through linearize/, which an open loop never needs.
 """
 
 from __future__ import annotations
@@ -75,7 +76,7 @@ def build_controller(
     mpc = MpcOptions() if mpc is None else mpc
     director = DirectorOptions() if director is None else director
     assert plant.inputs is not None  # build_pulse_map always records it
-    # here, not at the top: python-control (~2 s) loads with the controllers
+    # here, not at the top: python-control (seconds to import) loads with the controllers
     from lightcraft_opt.control.controllers import LqrController, OpenLoopController
 
     if kind is ControllerKind.NONE:

@@ -159,7 +159,8 @@ class MpcController:
     model : the controller's model of the craft (its numbers are what it believes).
     options : horizon, weights, solver, budget (:class:`.options.MpcOptions`).
     prediction : the scheduled linear model (``prediction_model.coning_model``); built from
-        ``pulse_map`` when not given (~15 s for the Jacobian Function at 32 substeps).
+        ``pulse_map`` when not given (seconds for the Jacobian Function at 32 substeps;
+        figures: bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp).
     pulse_map : Φ with the PHASE_LOCKED profile, or its Jacobian Function.
     p : the controller's parameter vector (default the model's).
     terminal_altitude : altitude [m] of the model whose Riccati solution weighs the last
@@ -218,7 +219,9 @@ class MpcController:
             cost.Q, cost.R, cost.S, cost.g, P, basis, Cz, C, lo, hi, v_lo, v_hi, soft, slack_cost
         )
         self.qp = NutationQp(data, opts.horizon, opts.solver, opts.max_iter, opts.tol)
-        # the first call allocates the solver's memory (~5 ms): pay it here, not in flight
+        # the first call allocates the solver's memory (milliseconds; figures:
+        # bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp):
+        # pay it here, not in flight
         A_h, B_h = pred.horizon(spin, omega, terminal_altitude, 0.0, opts.horizon)
         self.qp.solve(np.zeros(CONING.size), A_h, B_h)
         self.build_time = self.qp.build_time

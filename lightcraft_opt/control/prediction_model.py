@@ -281,8 +281,9 @@ def coning_model(
     ----------
     model : the controller's model (its numbers are the controller's belief).
     pulse_map : Φ with the PHASE_LOCKED RCS profile, or its
-        :func:`~.operating_points.pulse_map_jacobian` (the Jacobian Function takes ~15 s to
-        build at 32 substeps; each grid point then ~20 ms).
+        :func:`~.operating_points.pulse_map_jacobian` (the Jacobian Function takes seconds to
+        build at 32 substeps, each grid point then tens of milliseconds; figures:
+        bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp).
     options : to build Φ when ``pulse_map`` is None (its RCS profile must be
         PHASE_LOCKED).
     spins : grid of rotor spin [rad/s] (default :data:`DEFAULT_SPINS` times the craft's).
@@ -294,7 +295,7 @@ def coning_model(
         :func:`~lightcraft_opt.cache.cache_dir` (True) or the folder given, under the
         sha256 of Φ's expression graph, the model's parameter vector, the grid and the
         coordinates' Functions, and read it back instead of linearising again (a hit costs
-        Φ's build and serialisation, ~3 s, instead of ~25 s).
+        Φ's build and serialisation, a fraction of the whole build).
 
     Raises
     ------

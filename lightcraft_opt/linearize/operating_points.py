@@ -75,7 +75,8 @@ class PulseMapJacobian:
 def pulse_map_jacobian(pulse_map: PulseMap) -> PulseMapJacobian:
     """Φ's value and Jacobians in one casadi.Function: the explicit chain over Φ's pieces
     (symbolic/maps/pulse_map_derivatives.py; a few seconds to build at the default 32 substeps,
-    3x faster to evaluate than AD through Φ) when the map has them, else casadi's AD.
+    faster to evaluate than AD through Φ: bench/README.md#compile-cost-and-compiler-flags) when
+    the map has them, else casadi's AD.
     Build once, pass it as ``pulse_map`` to the functions here."""
     if pulse_map.pieces is None:
         f = pulse_map.step.factory(

@@ -107,8 +107,9 @@ def stability_map(
 ) -> StabilityMap:
     """Beam-riding multipliers over spin rate [rad/s] × beam offset [m] (east).
 
-    One Jacobian of Φ per cell (milliseconds at 8 substeps, ~0.1 s at 32, after the
-    Jacobian Function is built once). ``progress(done, total)`` is called after each cell.
+    One Jacobian of Φ per cell (its cost grows with the substeps, figures:
+    bench/README.md#compile-cost-and-compiler-flags; after the Jacobian Function is built
+    once). ``progress(done, total)`` is called after each cell.
     """
     jac = jacobian_for(model, pulse_map, options)
     s = np.asarray(spins, dtype=float).ravel()

@@ -103,15 +103,17 @@ class HessianApproximation(Enum):
 
 
 #: Pulse map of an OCP prediction unless told otherwise: Φ's 4th-order splitting with 8
-#: substeps (~150k instructions) instead of 32 (~510k): the exact-Hessian build takes
-#: ~30 s instead of minutes, for a coast error ~1e2 times Φ's default (still ~1e-5 m in
-#: position over one pulse of Flight 5).
+#: substeps (~150k instructions) instead of 32 (~510k): the exact-Hessian build takes a
+#: fraction of 32 substeps' time, for a coast error ~1e2 times Φ's default (still ~1e-5 m
+#: in position over one pulse of Flight 5). Figures:
+#: bench/README.md#the-shipped-problems-solved-by-lightcraft-optimize.
 OCP_PULSE_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT4, substeps=8, dense=8)
 
 #: Wall-clock limit of a solve unless told otherwise [s]: 30 minutes, about 3 times the
-#: longest solve bench/README.md measures (IPOPT converging at 260 pulses in 665 s, with the
-#: wind ramp), so no solve that converges today is cut short, while a solve that cannot end
-#: (fatrop spinning in its restoration phase on an infeasible problem) still does.
+#: longest converging solve measured (IPOPT at 260 pulses in a 1 m/s wind, with the wind ramp:
+#: bench/README.md#ocppy-problem-a-cold-and-warm-solve-per-solver), so no solve that
+#: converges today is cut short, while a solve that cannot end (fatrop spinning in its
+#: restoration phase on an infeasible problem) still does.
 OCP_TIME_LIMIT = 1800.0
 
 #: Window of the stall rule unless told otherwise [iterations] (ocp/stall.py): problem (b)
@@ -166,13 +168,14 @@ class OcpOptions:
         director's flight (``start``) first runs up to this many iterations with the
         convexified Hessian (``CONVEX``) to a tolerance of 1e-3, then goes on with the exact
         Hessian from there, warm, for up to ``max_iter`` more (0: none). From the nominal
-        rollout or the calm flight it does not help (problem (a) from the calm flight: 143
-        iterations, 12.7 s, against 97 and 8.2 s with the exact Hessian alone; an
-        infeasible problem wanders further before the stall rule stops it), so none there.
-        Far from the optimum the exact Hessian is indefinite and IPOPT regularises it as a
-        whole, crawling; near it the convexified one converges only linearly. Measured on
-        problems/beam_tracking_focus.toml (docs/ocp.md): 595 iterations, 60 s, with the
-        exact Hessian alone; 80 + 73, 17 s, in two phases.
+        rollout or the calm flight it does not help (problem (a) from the calm flight: more
+        iterations and a longer solve than with the exact Hessian alone; an infeasible
+        problem wanders further before the stall rule stops it), so none there. Far from
+        the optimum the exact Hessian is indefinite and IPOPT regularises it as a whole,
+        crawling; near it the convexified one converges only linearly: on
+        problems/beam_tracking_focus.toml (docs/ocp.md) the two phases took far fewer
+        iterations than the exact Hessian alone. Figures:
+        bench/README.md#after-issue-27-shared-evaluation-flown-starts-two-hessians-2026-12-03.
     linear_solver : IPOPT's linear solver (:class:`LinearSolver`).
     start : where a cold solve starts without an initial guess (:class:`OcpStart`).
     replay : fly every solve's plan again through the simulator's Φ at full accuracy and

@@ -23,9 +23,10 @@ altitude, the largest drift from the pad), for the result's message. A near-feas
 (``Start.flown``: the director's or the calm flight) is handed to IPOPT as a warm start:
 its barrier parameter starts small and the bounds push it barely (CompiledOcp), since
 IPOPT's default first iterations (barrier 0.1, bounds pushed 1 %) throw such a start away
-(measured on problems/beam_tracking_focus.toml: the violation rose from 0.05 to 25 in one
-step and the solve never recovered; on problems/crosswind_climb.toml from the calm flight:
-273 iterations, 23.5 s, against 97 and 8.2 s; docs/ocp.md).
+(on problems/beam_tracking_focus.toml the violation rose from 0.05 to 25 in one step and
+the solve never recovered; on problems/crosswind_climb.toml from the calm flight it took
+far more iterations and time; docs/ocp.md, figures:
+bench/README.md#after-issue-27-shared-evaluation-flown-starts-two-hessians-2026-12-03).
 """
 
 from __future__ import annotations

@@ -2,9 +2,9 @@
 
 The director (control/director.py) linearises the reduced map Ψ (reduced_map.py) along its
 plan every pulse. AD through Ψ's MX composition (the jump, then ``substeps`` coast steps) is
-slow to run and to compile (a 10-stage map of it: 86 ms a call interpreted, 11 minutes of
-gcc). Here each piece differentiates itself in SX (``cse``), and a short MX graph chains
-them:
+slow to run and to compile (minutes of gcc for a 10-stage map of it; figures:
+bench/README.md#where-a-steps-time-goes-and-the-other-flights). Here each piece
+differentiates itself in SX (``cse``), and a short MX graph chains them:
 
     z⁺ = jump(z, pulse),  z_{i+1} = substep(z_i, w),
     A = S_n ... S_1 J_z,  B = [S_n ... S_1 J_pulse,  Σ_i S_n ... S_{i+1} S_w,i]
