@@ -31,7 +31,7 @@ from lightcraft_opt.layout import (
     map_input_layout,
     substep_input_layout,
 )
-from lightcraft_opt.linearize.signal_names import entry_names
+from lightcraft_opt.linear.signal_names import entry_names
 from lightcraft_opt.options import RcsProfile
 
 #: The fixed layouts: every VectorLayout the layout package exports.

@@ -26,7 +26,7 @@ from lightcraft_opt.control.prediction_model import ConingModel, turn
 from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import CONING, STATE, VectorLayout, nominal_inputs, parameter_values
-from lightcraft_opt.linearize import dlqr_gain
+from lightcraft_opt.linear.riccati import dlqr_gain
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 
@@ -284,7 +284,7 @@ class LqrController:
     At each pulse the model at the measured spin, coning rate and altitude
     (:meth:`ConingModel.at`) and the weights of :func:`stage_weights` (the propellant's
     linear term has no LQR counterpart and is left out) give the gain K by the discrete
-    Riccati equation (``linearize.dlqr_gain``); du = -K z, mapped to Φ's input and
+    Riccati equation (``linear.dlqr_gain``); du = -K z, mapped to Φ's input and
     projected onto the thrust envelope (:meth:`ConingFrame.project`): the LQR knows no
     constraint, the projection is its saturation.
     """

@@ -13,7 +13,7 @@ Every pulse, ``u = director.step(x)`` (docs/director.md):
 3. solve one QP on the stage structure (director_qp.py, HPIPM), warm-started by shifting:
    Gauss-Newton least squares on the beam offset (the optic at the mass centre), the drift
    from the pad axis, the lateral velocity, the coning, the tilt of H, the pointing, the
-   focus's vergence 1/f against the focus schedule (linearize.beam_riding.scheduled_focus:
+   focus's vergence 1/f against the focus schedule (linear.focus.scheduled_focus:
    by default the launch side matched at the craft's height, tabulated at build), the pulse
    energy against the flight's and the RCS's torque; the pointing inside ±pointing_limit,
    the focus inside the laser's range, the energy inside ``energy_range``, the torque inside
@@ -83,7 +83,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.linearize.beam_riding import scheduled_focus
+from lightcraft_opt.linear.focus import scheduled_focus
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 
@@ -463,7 +463,7 @@ class DirectorController:
         return np.interp(altitude, self._h_table, self._kappa_table)
 
     def _vergence_table(self, top: float = 400.0, step: float = 0.25) -> None:
-        """The schedule's vergence every ``step`` m up to ``top`` m (linearize.beam_riding
+        """The schedule's vergence every ``step`` m up to ``top`` m (linear.focus
         evaluates the beam's side through casadi, too dear for a horizon's stages every
         pulse; the table answers in microseconds; figures:
         bench/README.md#where-a-steps-time-goes-and-the-other-flights)."""

@@ -62,7 +62,8 @@ from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import CONING
-from lightcraft_opt.linearize import PulseMapJacobian, dlqr_gain
+from lightcraft_opt.linear.operating_points import PulseMapJacobian
+from lightcraft_opt.linear.riccati import dlqr_gain
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 

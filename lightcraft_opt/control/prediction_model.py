@@ -8,9 +8,9 @@ beam pointing and the phase-locked RCS slots of the map input
 (:func:`~lightcraft_opt.layout.coning_input_layout`: ``pointing_L``, ``rcs_thrust``,
 ``rcs_cos``, ``rcs_sin``: 2 + 3 n).
 
-Each grid point is a climb point (:func:`~.operating_points.climb_point`: upright, centred,
+Each grid point is a climb point (:func:`~lightcraft_opt.linear.climb_point`: upright, centred,
 climbing at the nominal climb's speed at that altitude, spinning at that spin) and its
-linear model (:func:`~.state_space.linearize` in the error-state entries of
+linear model (:func:`~lightcraft_opt.linear.linear_model` in the error-state entries of
 :data:`~lightcraft_opt.layout.CONING_ERROR_STATE`: r, v, theta_B[b2, b3], w_B[b2, b3])
 mapped into z by the exact Jacobians of the coordinates before and after the pulse:
 A_z = T1 A T0^-1, B_z = T1 B.
@@ -59,13 +59,13 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.linearize.operating_points import (
+from lightcraft_opt.linear.linear_model import linear_model
+from lightcraft_opt.linear.operating_points import (
     PulseMapJacobian,
     climb_point,
     pulse_map_jacobian,
 )
-from lightcraft_opt.linearize.signal_names import entry_names, select_entries
-from lightcraft_opt.linearize.state_space import linearize
+from lightcraft_opt.linear.signal_names import entry_names, select_entries
 from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
@@ -281,8 +281,8 @@ def coning_model(
     ----------
     model : the controller's model (its numbers are the controller's belief).
     pulse_map : Φ with the PHASE_LOCKED RCS profile, or its
-        :func:`~.operating_points.pulse_map_jacobian` (the Jacobian Function takes seconds to
-        build at 32 substeps, each grid point then tens of milliseconds; figures:
+        :func:`~lightcraft_opt.linear.pulse_map_jacobian` (the Jacobian Function takes seconds
+        to build at 32 substeps, each grid point then tens of milliseconds; figures:
         bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp).
     options : to build Φ when ``pulse_map`` is None (its RCS profile must be
         PHASE_LOCKED).
@@ -371,11 +371,11 @@ def _linearise_grid(
     for i, s in enumerate(s_grid):
         for j, (alt, speed) in enumerate(zip(a_grid, v_grid, strict=True)):
             pt = climb_point(model, float(alt), float(speed), spin=float(s), pulse_map=jac)
-            sys = linearize(model, pt, states=_LINEARISED, inputs=inputs, pulse_map=jac)
+            lin = linear_model(model, pt, states=_LINEARISED, inputs=inputs, pulse_map=jac)
             T0 = np.asarray(tjac(pt.x, pt.p))[:, keep]
             T1 = np.asarray(tjac(pt.x_next, pt.p))[:, keep]
-            Az = T1 @ np.asarray(sys.A) @ np.linalg.inv(T0)
-            Bz = T1 @ np.asarray(sys.B)
+            Az = T1 @ lin.A @ np.linalg.inv(T0)
+            Bz = T1 @ lin.B
             omega = float(coords(pt.x, pt.p)[2])
             back = turn(-omega * phi.period)
             Az[_C] = back @ Az[_C]

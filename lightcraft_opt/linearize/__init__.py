@@ -1,4 +1,4 @@
-"""Linearisation of the pulse map Φ: pulse-to-pulse multipliers, controllability, LQR.
+"""Linearisation of the pulse map Φ with python-control: multipliers, controllability, LQR.
 
 One step of Φ (``x[k+1] = Φ(x[k], u[k], p, t_k)``, symbolic/maps/pulse_map.py) about an
 operating point (x_op, u_op) gives the discrete-time linear model
@@ -9,11 +9,11 @@ sampled at the pulse period T = 1 / pulse_rate, returned as a ``control.StateSpa
 with ``dt = T`` and the layout's names. Its eigenvalues are the pulse-to-pulse
 multipliers (Floquet multipliers of the hybrid flow): |λ| > 1 grows by |λ| a pulse.
 
-The modules, in the order they build on each other:
+The numbers underneath (operating points, Φ's Jacobians, A and B as arrays, the discrete
+Riccati gain, the focus schedule) are :mod:`lightcraft_opt.linear`, which imports no
+python-control; they are re-exported here. The modules here, in the order they build on
+each other:
 
-- :mod:`.operating_points`: points to linearise about (:func:`trim_hover`,
-  :func:`climb_point`), Φ's Jacobians (:func:`pulse_map_jacobian`) and the error state
-  of a point (:func:`error_state`);
 - :mod:`.state_space`: the linear model (:func:`linearize`) in :class:`Coordinates`
   ``FULL`` or ``ERROR_STATE``, by default on :data:`REDUCED_STATES`;
 - :mod:`.modes`: multipliers and the kind of each mode (:func:`multipliers`,
@@ -24,23 +24,33 @@ The modules, in the order they build on each other:
   (:func:`stability_map`);
 - :mod:`.beam_riding`: multipliers over altitude × focus schedule × offset
   (:func:`altitude_stability`) and over the beam's side at the craft
-  (:func:`side_stability`), the focus that makes a side (:func:`focus_for_side`);
-- :mod:`.signal_names`: the names of layout entries, shared by the above.
+  (:func:`side_stability`).
 
-The nutation MPC's prediction model, linear models in coning coordinates scheduled on
-spin and altitude, is :mod:`lightcraft_opt.control.prediction_model`.
+Only :mod:`.state_space`, :mod:`.modes` and :mod:`.state_feedback` import python-control
+(an import-linter contract), and ``import lightcraft_opt`` reaches this package on first use
+of ``lc.linearize``. The nutation MPC's prediction model, linear models in coning
+coordinates scheduled on spin and altitude, is :mod:`lightcraft_opt.control.prediction_model`.
 
 Everything public is re-exported here: ``from lightcraft_opt.linearize import ...``.
 """
 
+from lightcraft_opt.linear.focus import focus_for_side, reachable_sides, scheduled_focus
+from lightcraft_opt.linear.linear_model import REDUCED_STATES, Coordinates
+from lightcraft_opt.linear.operating_points import (
+    OperatingPoint,
+    PointStatus,
+    PulseMapJacobian,
+    climb_point,
+    error_state,
+    pulse_map_jacobian,
+    trim_hover,
+)
+from lightcraft_opt.linear.riccati import dlqr_gain
 from lightcraft_opt.linearize.beam_riding import (
     AltitudeStability,
     FocusSchedule,
     SideStability,
     altitude_stability,
-    focus_for_side,
-    reachable_sides,
-    scheduled_focus,
     side_stability,
 )
 from lightcraft_opt.linearize.modes import (
@@ -51,18 +61,9 @@ from lightcraft_opt.linearize.modes import (
     controllability,
     multipliers,
 )
-from lightcraft_opt.linearize.operating_points import (
-    OperatingPoint,
-    PointStatus,
-    PulseMapJacobian,
-    climb_point,
-    error_state,
-    pulse_map_jacobian,
-    trim_hover,
-)
 from lightcraft_opt.linearize.stability_grid import StabilityMap, stability_map
-from lightcraft_opt.linearize.state_feedback import LqrResult, dlqr_gain, lqr, lqr_policy
-from lightcraft_opt.linearize.state_space import REDUCED_STATES, Coordinates, linearize
+from lightcraft_opt.linearize.state_feedback import LqrResult, lqr, lqr_policy
+from lightcraft_opt.linearize.state_space import linearize
 
 __all__ = [
     "REDUCED_STATES",

@@ -1,6 +1,6 @@
 """Beam riding against altitude, focus and offset: how high the beam can hold the craft.
 
-Each cell is a climb point (:func:`~.operating_points.climb_point`: the craft upright,
+Each cell is a climb point (:func:`~lightcraft_opt.linear.climb_point`: the craft upright,
 ``speed`` up, ``offset`` east of the beam axis, at ``altitude``), Φ linearised there
 (:func:`~.state_space.linearize`) and its pulse-to-pulse multipliers
 (:func:`~.modes.multipliers`): the Floquet multipliers of the hybrid flow, frozen in time. A
@@ -23,8 +23,9 @@ so a focus *schedule* f(h) is a lever:
   the nearest the director gets, the focus at the craft.
 
 Each schedule is clipped into the director's ``focus_range`` (the cell records the focus
-flown). Under the ``linear`` size model (a = a0 + θ h) the focus does nothing: every
-schedule gives the same cell.
+flown; :func:`lightcraft_opt.linear.scheduled_focus`, the director's schedule too). Under the
+``linear`` size model (a = a0 + θ h) the focus does nothing: every schedule gives the same
+cell.
 
 Since the multipliers depend on the altitude mostly through the beam's side at the craft,
 :func:`side_stability` scans that side directly at one altitude (the focus that makes it,
@@ -37,64 +38,24 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.linearize.operating_points import PulseMapJacobian, jacobian_for
+from lightcraft_opt.layout import parameter_values
+from lightcraft_opt.linear.focus import focus_for_side, require_waist, scheduled_focus, side_at
+from lightcraft_opt.linear.operating_points import PulseMapJacobian, jacobian_for
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
-from lightcraft_opt.model import BeamSizeModel, Laser, Model
+from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.options import FocusSchedule, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
-from lightcraft_opt.symbolic.terms.beam import beam_side
 
 __all__ = [
     "AltitudeStability",
     "FocusSchedule",
     "SideStability",
     "altitude_stability",
-    "focus_for_side",
-    "reachable_sides",
-    "scheduled_focus",
     "side_stability",
 ]
-
-
-def scheduled_focus(
-    schedule: FocusSchedule,
-    altitude: float,
-    laser: Laser,
-    p: np.ndarray,
-    matched_side: float | None = None,
-) -> float:
-    """The focus distance [m] of ``schedule`` for a craft at ``altitude`` [m] above the
-    director, inside ``laser.focus_range``. MATCHED puts a beam of ``matched_side`` [m] at
-    the craft (default: the launch side a0); where the director cannot make that side there,
-    the focus of the nearest side it can make."""
-    near, far = laser.focus_range
-    schedule = FocusSchedule(schedule)
-    if schedule is FocusSchedule.FAR:
-        return float(far)
-    if schedule is FocusSchedule.AT_CRAFT:
-        return float(min(max(altitude, near), far))
-    if laser.size_model is not BeamSizeModel.WAIST:
-        return float(min(max(0.5 * altitude, near), far))  # the focus does nothing here
-    if matched_side is None:
-        matched_side = float(PARAMETERS.get("beam_side", p))
-    f = focus_for_side(laser, p, altitude, matched_side)
-    if np.isfinite(f):
-        return f
-    smallest, _ = reachable_sides(laser, p, altitude)
-    if matched_side <= smallest:  # as small as it gets: the waist at (or nearest) the craft
-        return float(min(max(altitude, near), far))
-    wide = [near, far]  # as wide as it gets: whichever end of the range is wider there
-    return float(max(wide, key=lambda focus: side_at(laser, p, altitude, focus)))
-
-
-def side_at(laser: Laser, p: np.ndarray, altitude: float, focus: float) -> float:
-    """The beam's outer side (diameter for a disc) at ``altitude`` [m] for ``focus`` [m]."""
-    return float(beam_side(ca.DM(altitude), ca.DM(focus), ca.DM(p), laser))
 
 
 @dataclass(frozen=True)
@@ -161,7 +122,7 @@ def altitude_stability(
 
     One Jacobian of Φ per cell (``options`` default: :class:`PulseMapOptions`, Φ's
     Jacobian chained over its pieces, built once per call; pass a
-    :class:`~.operating_points.PulseMapJacobian` to reuse it across calls).
+    :class:`~lightcraft_opt.linear.PulseMapJacobian` to reuse it across calls).
     ``progress(done, total)`` after each cell.
     """
     h = grid(altitudes, "altitudes", positive=True)
@@ -206,51 +167,6 @@ def altitude_stability(
     )
 
 
-def _waist_laser(laser: Laser, argument: str) -> None:
-    if laser.size_model is not BeamSizeModel.WAIST:
-        raise ParameterError(
-            argument,
-            f"the focus sets the beam's size only under the 'waist' size model; the laser "
-            f"{laser.name!r} uses {laser.size_model.value!r}",
-        )
-
-
-def reachable_sides(laser: Laser, p: np.ndarray, altitude: float) -> tuple[float, float]:
-    """(smallest, largest) beam side [m] the director can put at ``altitude`` [m] with a
-    focus in its ``focus_range`` (``waist`` size model): the smallest with the waist at the
-    craft (or the nearest reachable focus to it), the largest with the nearest focus."""
-    _waist_laser(laser, "laser")
-    near, far = laser.focus_range
-    smallest = side_at(laser, p, altitude, min(max(altitude, near), far))
-    largest = max(side_at(laser, p, altitude, near), side_at(laser, p, altitude, far))
-    return smallest, largest
-
-
-def focus_for_side(laser: Laser, p: np.ndarray, altitude: float, side: float) -> float:
-    """The geometric focus [m] that puts a beam of ``side`` [m] at ``altitude`` [m]
-    (``waist`` size model), inside the focus range: preferably the focus before the craft
-    (f <= h, the beam diverging past it), else the one beyond it; NaN when no focus in the
-    range makes that side there.
-
-    From (1 - h/f)^2 + (h/z_R)^2 = (side/a0)^2: 1 - h/f = ±q, q = sqrt((side/a0)^2 -
-    (h/z_R)^2), so f = h / (1 + q) or h / (1 - q).
-    """
-    _waist_laser(laser, "laser")
-    a0 = float(PARAMETERS.get("beam_side", p))
-    z_r = float(PARAMETERS.get("beam_rayleigh_range", p))
-    h = float(altitude)
-    q2 = (float(side) / a0) ** 2 - (h / z_r) ** 2
-    if q2 < 0:
-        return float("nan")
-    q = float(np.sqrt(q2))
-    near, far = laser.focus_range
-    candidates = [h / (1 + q)] + ([h / (1 - q)] if q < 1 else [])
-    for f in candidates:
-        if near <= f <= far:
-            return f
-    return float("nan")
-
-
 @dataclass(frozen=True)
 class SideStability:
     """Largest pulse-to-pulse multipliers over the beam's side at the craft × offset, at one
@@ -293,7 +209,7 @@ def side_stability(
     """Beam-riding and coning multipliers over the beam's ``sides`` at the craft [m] ×
     ``offsets`` [m] (east) at ``altitude`` [m], climbing at ``speed`` [m/s] with ``energy``
     [J] pulses (default the flight's). The laser must use the ``waist`` size model."""
-    _waist_laser(model.laser, "model.laser")
+    require_waist(model.laser, "model.laser")
     a = grid(sides, "sides", positive=True)
     d = grid(offsets, "offsets")
     jac = jacobian_for(model, pulse_map, options)

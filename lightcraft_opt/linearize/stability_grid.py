@@ -1,6 +1,6 @@
 """Beam-riding and coning multipliers over a grid of spin rate and beam offset.
 
-Each cell is a climb point (:mod:`.operating_points`), its linear model
+Each cell is a climb point (:mod:`lightcraft_opt.linear.operating_points`), its linear model
 (:mod:`.state_space`) and its multipliers (:mod:`.modes`).
 """
 
@@ -12,8 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.linear.operating_points import PulseMapJacobian, climb_point, jacobian_for
 from lightcraft_opt.linearize.modes import ModeKind, multipliers
-from lightcraft_opt.linearize.operating_points import PulseMapJacobian, climb_point, jacobian_for
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.model import Model
 from lightcraft_opt.options import PulseMapOptions

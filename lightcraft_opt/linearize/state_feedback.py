@@ -1,9 +1,10 @@
 """Discrete LQR on a linear model of Φ and the state feedback it gives.
 
-:func:`lqr` designs the gain K (``control.dlqr``) on a model of :mod:`.state_space`;
+:func:`lqr` designs the gain K on a model of :mod:`.state_space` by the discrete Riccati
+equation (:func:`lightcraft_opt.linear.dlqr_gain`, scipy; the same design on bare matrices
+with a cross weight serves the controllers that schedule their own model);
 :func:`lqr_policy` turns it into the per-pulse input policy ``u = u_op - K (x ⊖ x_op)``
-for :func:`lightcraft_opt.simulate`. :func:`dlqr_gain` is the same design on bare matrices
-with a cross weight, for controllers that schedule their own model (controllers.py).
+for :func:`lightcraft_opt.simulate`.
 """
 
 from __future__ import annotations
@@ -15,14 +16,15 @@ import control
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.linear.operating_points import OperatingPoint, error_state
+from lightcraft_opt.linear.riccati import checked_weight, dlqr_gain
+from lightcraft_opt.linear.signal_names import select_entries
 from lightcraft_opt.linearize.modes import (
     Multipliers,
     controllability,
     multipliers,
     state_space_matrices,
 )
-from lightcraft_opt.linearize.operating_points import OperatingPoint, error_state
-from lightcraft_opt.linearize.signal_names import select_entries
 from lightcraft_opt.model import Model
 
 
@@ -45,28 +47,13 @@ class LqrResult:
     inputs: tuple[str, ...]
 
 
-def _weight(name: str, w: np.ndarray | Sequence[float], n: int, definite: bool) -> np.ndarray:
-    """(n, n) symmetric weight from a matrix or its diagonal; positive (semi)definite."""
-    W = np.asarray(w, dtype=float)
-    if W.ndim == 1:
-        W = np.diag(W)
-    if W.shape != (n, n) or not np.all(np.isfinite(W)):
-        raise ParameterError(name, f"must be a finite ({n}, {n}) matrix or {n} diagonal entries")
-    if not np.allclose(W, W.T, rtol=1e-12, atol=0.0):
-        raise ParameterError(name, "must be symmetric")
-    low = float(np.min(np.linalg.eigvalsh(W)))
-    if low < 0.0 or (definite and low <= 0.0):
-        kind = "definite" if definite else "semidefinite"
-        raise ParameterError(name, f"must be positive {kind}; smallest eigenvalue {low:.3g}")
-    return W
-
-
 def lqr(
     sys: control.StateSpace,
     Q: np.ndarray | Sequence[float],
     R: np.ndarray | Sequence[float],
 ) -> LqrResult:
-    """Discrete LQR (``control.dlqr``): minimise Σ δ'Qδ + δu'Rδu over pulses.
+    """Discrete LQR (:func:`~lightcraft_opt.linear.dlqr_gain`): minimise Σ δ'Qδ + δu'Rδu
+    over pulses.
 
     Parameters
     ----------
@@ -79,11 +66,12 @@ def lqr(
     ------
     ParameterError naming the multipliers and states the inputs cannot reach when
     (A, B) is not stabilisable (e.g. a neutral consumable or the gauge w_B[b1] kept in
-    the states), when a weight has the wrong shape or sign, or when control.dlqr fails.
+    the states), when a weight has the wrong shape or sign, or when the Riccati equation
+    has no stabilising solution.
     """
     A, B = state_space_matrices(sys)
     n, m = B.shape
-    Qm, Rm = _weight("Q", Q, n, definite=False), _weight("R", R, m, definite=True)
+    Qm, Rm = checked_weight("Q", Q, n, definite=False), checked_weight("R", R, m, definite=True)
     c = controllability(sys)
     if not c.stabilisable:
         lam = ", ".join(f"{v:.6g}" for v in c.modes if abs(v) >= 1.0)
@@ -93,10 +81,7 @@ def lqr(
             f"circle and no input reaches them (directions: {c.describe()}); keep fewer "
             "states (linearize(states=...)) or add inputs",
         )
-    try:
-        K, S, _ = control.dlqr(A, B, Qm, Rm)
-    except (ValueError, np.linalg.LinAlgError, control.ControlArgument) as err:
-        raise ParameterError("Q, R", f"control.dlqr failed: {err}") from err
+    K, S = dlqr_gain(A, B, Qm, Rm)
     closed = control.ss(A - B @ K, B, sys.C, sys.D, sys.dt, states=list(sys.state_labels))
     return LqrResult(
         np.asarray(K),
@@ -124,36 +109,3 @@ def lqr_policy(
         return u
 
     return policy
-
-
-def dlqr_gain(
-    A: np.ndarray,
-    B: np.ndarray,
-    Q: np.ndarray,
-    R: np.ndarray,
-    N: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Discrete LQR on matrices (``control.dlqr``): minimise Σ x'Qx + u'Ru + 2 x'N u.
-
-    Parameters
-    ----------
-    A : (n, n), B : (n, m) the model x[k+1] = A x[k] + B u[k].
-    Q : (n, n), R : (m, m), N : (n, m) weights; [[Q, N], [N', R]] positive semidefinite,
-        R positive definite.
-
-    Returns
-    -------
-    K : (m, n) the gain of u = -K x; S : (n, n) the Riccati solution (cost-to-go x'Sx).
-
-    Raises
-    ------
-    ParameterError when control.dlqr fails (e.g. (A, B) not stabilisable).
-    """
-    n, m = np.shape(B)
-    Nm = np.zeros((n, m)) if N is None else np.asarray(N, dtype=float)
-    _weight("R", R, m, definite=True)
-    try:
-        K, S, _ = control.dlqr(A, B, Q, R, Nm)
-    except (ValueError, np.linalg.LinAlgError, control.ControlArgument) as err:
-        raise ParameterError("Q, R", f"control.dlqr failed: {err}") from err
-    return np.asarray(K, dtype=float), np.asarray(S, dtype=float)

@@ -14,6 +14,8 @@ References:
 - dynamic programming: with its constraints inactive and the Riccati solution as the
   terminal weight, the QP's first input is the discrete LQR's, -K z, for two QP solvers
   (HPIPM, qrqp);
+- python-control's ``control.dlqr``: the LQR controller's gain and the MPC's terminal weight,
+  which come from scipy's Riccati solver (linear/riccati.py), agree with it to rounding;
 - the thrust envelope sampled over a coning period, and the fallback's definition (the
   previous plan's next input).
 
@@ -28,6 +30,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+import control
 import numpy as np
 import pytest
 from support.jacobian_check import assert_jacobians_match_finite_differences, state_step_scale
@@ -35,7 +38,7 @@ from support.models import torque_free
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.control.closed_loop import PLANT_MAP
-from lightcraft_opt.control.controllers import stage_weights
+from lightcraft_opt.control.controllers import LqrController, stage_weights
 from lightcraft_opt.control.mpc import MpcController, input_basis
 from lightcraft_opt.control.mpc_qp import NutationQp, QpData, QpStatus
 from lightcraft_opt.control.options import (
@@ -310,7 +313,7 @@ def test_prediction_error_is_second_order_and_measured_at_5_degrees(mpc):
 def test_qp_with_inactive_constraints_gives_the_lqr_gain(prediction):
     """With constant A, B (one scheduled model), the Riccati solution as terminal weight,
     no linear term and bounds far away, the QP's first input is the LQR's -K z for any
-    horizon (dynamic programming): HPIPM, qrqp, OSQP and IPOPT all give control.dlqr's
+    horizon (dynamic programming): HPIPM, qrqp, OSQP and IPOPT all give the LQR's
     to 1e-8 of the input's size (measured 2e-11 and less)."""
     s0 = MODEL.craft.spin
     omega = prediction.omega_per_spin[-2, 0] * s0
@@ -333,6 +336,28 @@ def test_qp_with_inactive_constraints_gives_the_lqr_gain(prediction):
         sol = qp.solve(z0, np.repeat(A[None], N, 0), np.repeat(B[None], N, 0))
         assert sol.status is QpStatus.SOLVED, sol.message
         assert np.max(np.abs(sol.du[0] - expected)) < 1e-8 * np.max(np.abs(expected))
+
+
+@pytest.mark.parametrize(("spin_fraction", "altitude"), [(1.0, 2.0), (0.9, 7.0), (0.85, 16.0)])
+def test_lqr_and_terminal_gains_are_python_controls_dlqr(prediction, spin_fraction, altitude):
+    """The LQR controller's design (:meth:`LqrController.gain`: the scheduled model at this
+    spin, coning rate and altitude, the stage weights with their cross term) and the MPC's
+    terminal design (the same on the input basis) with linear.dlqr_gain (scipy) give
+    control.dlqr's K and S to 1e-10 relative (rounding; tests/linear/test_riccati.py)."""
+    spin = spin_fraction * MODEL.craft.spin
+    omega = float(np.interp(spin, prediction.spins, prediction.omega_per_spin[:, 0])) * spin
+    lqr_controller = LqrController(MODEL, prediction, ControlWeights())
+    K, A, B = lqr_controller.gain(spin, omega, altitude)
+    c = lqr_controller.cost
+    M = input_basis(prediction)
+    designs = [
+        (B, c.R, c.S, K, dlqr_gain(A, B, c.Q, c.R, c.S)[1]),
+        (B @ M, M.T @ c.R @ M, c.S @ M, *dlqr_gain(A, B @ M, c.Q, M.T @ c.R @ M, c.S @ M)),
+    ]
+    for B_d, R_d, S_d, K_d, P_d in designs:
+        K_ref, P_ref, _ = control.dlqr(A, B_d, c.Q, R_d, S_d)
+        assert np.linalg.norm(K_d - K_ref) <= 1e-10 * np.linalg.norm(K_ref)
+        assert np.linalg.norm(P_d - P_ref) <= 1e-10 * np.linalg.norm(P_ref)
 
 
 def test_planned_thrust_stays_in_range_at_every_phase_and_the_beam_in_reach(mpc):

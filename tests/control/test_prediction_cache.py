@@ -27,7 +27,7 @@ from lightcraft_opt.cache import CacheWarning, EntryStatus, check_entry, write_e
 from lightcraft_opt.control import prediction_model
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.linearize.operating_points import pulse_map_jacobian
+from lightcraft_opt.linear.operating_points import pulse_map_jacobian
 from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 

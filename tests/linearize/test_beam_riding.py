@@ -21,16 +21,9 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, parameter_values
+from lightcraft_opt.linear.focus import focus_for_side, reachable_sides, scheduled_focus, side_at
 from lightcraft_opt.linearize import error_state, pulse_map_jacobian, trim_hover
-from lightcraft_opt.linearize.beam_riding import (
-    FocusSchedule,
-    altitude_stability,
-    focus_for_side,
-    reachable_sides,
-    scheduled_focus,
-    side_at,
-    side_stability,
-)
+from lightcraft_opt.linearize.beam_riding import FocusSchedule, altitude_stability, side_stability
 from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.plots import plot_altitude_stability, plot_side_stability

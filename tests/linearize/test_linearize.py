@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import control
 import numpy as np
 import pytest
 from matplotlib.collections import QuadMesh
@@ -305,14 +306,19 @@ def test_pointing_reaches_every_state_but_the_altitude(f5):
 
 def test_lqr_on_beam_pointing_and_energy_holds_the_hover(f5):
     """Reduced model, pointing and energy: every closed-loop multiplier inside the unit
-    circle (the coning pair only just: 0.9999, pointing barely reaches it). The full
-    17-state model is refused, naming what no input can move; so are weights of the wrong
-    shape or sign (python-control's dlqr accepts R < 0 with Q < 0 silently)."""
+    circle (the coning pair only just: 0.9999, pointing barely reaches it), with
+    python-control's dlqr gain and Riccati solution to 1e-10 relative (rounding: lqr takes
+    them from scipy, linear/riccati.py). The full 17-state model is refused, naming what
+    no input can move; so are weights of the wrong shape or sign (python-control's dlqr
+    accepts R < 0 with Q < 0 silently)."""
     point = trim_hover(FLIGHT5, 2.0, pulse_map=f5)
     sys = linearize(FLIGHT5, point, inputs=("pointing_L", "energy"), pulse_map=f5)
     assert tuple(sys.state_labels)[:3] == ("r_L[east]", "r_L[north]", "r_L[up]")
     gains = lqr(sys, Q_BRYSON, R_POINTING_ENERGY)
     assert gains.K.shape == (3, 10)
+    K_ref, S_ref, _ = control.dlqr(sys, np.diag(Q_BRYSON), np.diag(R_POINTING_ENERGY))
+    assert np.linalg.norm(gains.K - K_ref) <= 1e-10 * np.linalg.norm(K_ref)
+    assert np.linalg.norm(gains.S - S_ref) <= 1e-10 * np.linalg.norm(S_ref)
     assert gains.closed_loop.largest() < 1.0
     open_riding = beam_riding_modes(sys).largest()
     assert gains.closed_loop.of_kind(ModeKind.BEAM_RIDING).largest() < open_riding

@@ -10,7 +10,7 @@ changes little over the modes' time scale (a few pulses).
 
 Error state. :func:`error_state` gives δ = x ⊖ x_op, the minimal error state of
 :mod:`lightcraft_opt.symbolic.maps.error_state` (the chart the linear models of
-:mod:`.state_space` are written in).
+:mod:`.linear_model` are written in).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.linearize.signal_names import select_entries
+from lightcraft_opt.linear.signal_names import select_entries
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.options import PulseMapOptions

@@ -1,7 +1,9 @@
 """Signal names of layout entries (``slot[component]``) and selecting entries by name.
 
-Shared by the linear models (:mod:`.state_space`), the error state of a point
-(:mod:`.operating_points`) and the LQR policy (:mod:`.state_feedback`).
+Shared by the linear models (:mod:`.linear_model`, and python-control's in
+:mod:`lightcraft_opt.linearize.state_space`), the error state of a point
+(:mod:`.operating_points`), the LQR policy (:mod:`lightcraft_opt.linearize.state_feedback`)
+and the nutation MPC's prediction model (:mod:`lightcraft_opt.control.prediction_model`).
 """
 
 from __future__ import annotations
