@@ -4,19 +4,18 @@
 files, the pulse map Φ, simulation, optimal control, control (MPC, LQR, closed loop),
 linearisation, calibration and Monte Carlo campaigns, and every result type: each has
 ``summary()``, ``plot()`` and ``save(folder)``, and :func:`load_result` reads a run folder
-back (lightcraft_opt/outputs.py registers their figures and files). The
-controllers and linearisation load on first use (python-control is slow to import:
-bench/README.md#importing-python-control).
-Frames and units: docs/frames.md; the physics: docs/physics.md; the house:
-docs/architecture.md. Everything inside is SI.
+back (lightcraft_opt/outputs.py registers their figures and files). One name loads on
+first use: ``lc.linearize``, the python-control models (python-control is slow to import,
+bench/README.md#importing-python-control, and nothing else here needs it;
+docs/architecture.md#contracts). Frames and units: docs/frames.md; the physics:
+docs/physics.md; the house: docs/architecture.md. Everything inside is SI.
 """
 
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from lightcraft_opt import control
 from lightcraft_opt import outputs as _outputs  # noqa: F401  (registers plot() and save())
 from lightcraft_opt.calibration import (
     CalibrationOptions,
@@ -30,9 +29,13 @@ from lightcraft_opt.control import (
     ClosedLoopOptions,
     ClosedLoopResult,
     ControllerKind,
+    LqrController,
+    MpcController,
     MpcOptions,
+    OpenLoopController,
     build_controller,
     closed_loop,
+    coning_model,
 )
 from lightcraft_opt.errors import (
     LightcraftError,
@@ -89,24 +92,13 @@ from lightcraft_opt.symbolic.maps.reduced_map import (
 
 if TYPE_CHECKING:
     from lightcraft_opt import linearize
-    from lightcraft_opt.control import (
-        LqrController,
-        MpcController,
-        OpenLoopController,
-        coning_model,
-    )
-
-#: Controller names that control/ itself loads on first use.
-_FROM_CONTROL = frozenset(("LqrController", "MpcController", "OpenLoopController", "coning_model"))
 
 
-def __getattr__(name: str) -> Any:
-    """The controllers (from :mod:`lightcraft_opt.control`) and the ``linearize`` package,
-    imported when first asked for."""
+def __getattr__(name: str) -> object:
+    """``lc.linearize``, the one name imported on first use (PEP 562): its models are
+    python-control's, which takes seconds to import (docs/architecture.md#contracts)."""
     if name == "linearize":
         return importlib.import_module("lightcraft_opt.linearize")
-    if name in _FROM_CONTROL:
-        return getattr(control, name)
     raise AttributeError(f"module 'lightcraft_opt' has no attribute {name!r}")
 
 

@@ -29,7 +29,7 @@ import threading
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -43,6 +43,7 @@ from lightcraft_opt.campaign.spec import (
 )
 from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
+from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.factory import build_controller
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import (
@@ -52,9 +53,6 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
-
-if TYPE_CHECKING:
-    from lightcraft_opt.control.controllers import Controller
 
 __all__ = ["RunOutcome", "row_problem", "run_one"]
 

@@ -16,16 +16,26 @@ and the closed loop that flies them on the full pulse map Φ.
 - :mod:`.closed_loop`: :func:`closed_loop`, ``u = controller.step(x); x = Φ(x, u, p)``;
 - :mod:`.result`: :class:`ClosedLoopResult` with the controller's log and step statistics.
 
-The what (options, result) never imports the how (an import-linter contract).
+The what (options, result) never imports the how (an import-linter contract). Nothing
+here imports python-control: the linear models, the Riccati gain and the focus schedule
+come from :mod:`lightcraft_opt.linear` (docs/architecture.md#contracts).
 """
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
-
 from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
+from lightcraft_opt.control.controllers import (
+    Controller,
+    LqrController,
+    Measurement,
+    OpenLoopController,
+    StageWeights,
+    stage_weights,
+)
+from lightcraft_opt.control.director import DirectorController
 from lightcraft_opt.control.factory import build_controller
+from lightcraft_opt.control.mpc import MpcController
+from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
@@ -40,64 +50,13 @@ from lightcraft_opt.control.options import (
     MpcSolver,
     PlantDispersion,
 )
+from lightcraft_opt.control.prediction_model import ConingModel, coning_model, turn
 from lightcraft_opt.control.result import (
     ClosedLoopResult,
     ControllerLog,
     ControllerStatus,
     StepStats,
 )
-
-if TYPE_CHECKING:
-    from lightcraft_opt.control.controllers import (
-        Controller,
-        LqrController,
-        Measurement,
-        OpenLoopController,
-        StageWeights,
-        stage_weights,
-    )
-    from lightcraft_opt.control.director import DirectorController
-    from lightcraft_opt.control.mpc import MpcController
-    from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
-    from lightcraft_opt.control.prediction_model import ConingModel, coning_model, turn
-
-#: The controllers and the MPC load on first use: their prediction model linearises Φ
-#: through linearize/, which imports python-control (seconds:
-#: bench/README.md#importing-python-control); a file reader that needs only the options, or a
-#: campaign that flies open loop, stays quick. (The closed loop is imported above: a lazy
-#: name that is also a submodule's name would be shadowed by the submodule once anything
-#: imports it.)
-_LAZY = {
-    **dict.fromkeys(
-        (
-            "Controller",
-            "LqrController",
-            "Measurement",
-            "OpenLoopController",
-            "StageWeights",
-            "stage_weights",
-        ),
-        "controllers",
-    ),
-    "DirectorController": "director",
-    "MpcController": "mpc",
-    "NutationQp": "mpc_qp",
-    "QpStatus": "mpc_qp",
-    **dict.fromkeys(
-        ("ConingModel", "coning_model", "turn"),
-        "prediction_model",
-    ),
-}
-
-
-def __getattr__(name: str) -> Any:
-    """A controller or MPC name, imported from its module when first asked for."""
-    if name not in _LAZY:
-        raise AttributeError(f"module 'lightcraft_opt.control' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"lightcraft_opt.control.{_LAZY[name]}"), name)
-    globals()[name] = value
-    return value
-
 
 __all__ = [
     "ClosedLoopOptions",

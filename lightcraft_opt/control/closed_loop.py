@@ -28,12 +28,12 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
 from lightcraft_opt.compiled import pulse_map_for
+from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.options import ClosedLoopOptions, MeasurementNoise, PlantDispersion
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerLog, StepStats
 from lightcraft_opt.errors import ParameterError
@@ -55,9 +55,6 @@ from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.maps.error_state import build_error_state
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
-
-if TYPE_CHECKING:  # controllers import python-control (through linearize): ~1 s
-    from lightcraft_opt.control.controllers import Controller
 
 __all__ = ["closed_loop", "disperse", "measured", "plant_options"]
 

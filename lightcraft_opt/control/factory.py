@@ -14,22 +14,18 @@ budget), the factory how each kind is put together:
 - ``LQR``: :class:`~.controllers.LqrController` on the same model, with the MPC's weights;
 - ``DIRECTOR``: :class:`~.director.DirectorController`; on a craft with RCS whose
   ``DirectorOptions.rcs`` is ``NUTATION``, with the nutation MPC alongside.
-
-The controllers are imported when built: they load python-control (slow to import,
-bench/README.md#importing-python-control) through linearize/, which an open loop never needs.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
+from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
+from lightcraft_opt.control.director import DirectorController
+from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.options import ControllerKind, DirectorOptions, DirectorRcs, MpcOptions
+from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
-
-if TYPE_CHECKING:
-    from lightcraft_opt.control.controllers import Controller
 
 __all__ = ["build_controller", "controller_kind"]
 
@@ -76,17 +72,9 @@ def build_controller(
     mpc = MpcOptions() if mpc is None else mpc
     director = DirectorOptions() if director is None else director
     assert plant.inputs is not None  # build_pulse_map always records it
-    # here, not at the top: python-control (seconds to import) loads with the controllers
-    from lightcraft_opt.control.controllers import LqrController, OpenLoopController
-
     if kind is ControllerKind.NONE:
         return OpenLoopController(model, plant.inputs)
-    from lightcraft_opt.control.mpc import MpcController
-    from lightcraft_opt.control.prediction_model import coning_model
-
     if kind is ControllerKind.DIRECTOR:
-        from lightcraft_opt.control.director import DirectorController
-
         nutation = None
         if model.craft.rcs is not None and director.rcs is DirectorRcs.NUTATION:
             prediction = coning_model(model, pulse_map=plant, cache=True)

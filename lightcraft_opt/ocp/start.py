@@ -38,6 +38,8 @@ from typing import cast
 
 import numpy as np
 
+from lightcraft_opt.control.director import DirectorController
+from lightcraft_opt.control.options import DirectorOptions, DirectorRcs
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
 from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.ocp.problem import OcpProblem
@@ -127,11 +129,6 @@ def director_start(
     x0 : (STATE.size,) state at the first pulse; p : (PARAMETERS.size,) parameters (the
         director is told the same wind); t0 : first pulse time [s].
     """
-    # imported here: the director's QP and Ψ load python-control's neighbours, which
-    # `import lightcraft_opt` must not (tests/test_public_api.py)
-    from lightcraft_opt.control.director import DirectorController
-    from lightcraft_opt.control.options import DirectorOptions, DirectorRcs
-
     start = time.perf_counter()
     lay, N = problem.inputs, problem.horizon
     e = lay.index("energy")

@@ -88,9 +88,7 @@ def test_the_time_budget_comes_from_the_file_or_the_flags(tmp_path, monkeypatch)
     assert problem.mpc.time_budget is None and problem.director.time_budget == 7e-3
 
     import lightcraft_opt.cli.closed_loop as cli
-    import lightcraft_opt.control.director as director
-    import lightcraft_opt.control.mpc as mpc
-    import lightcraft_opt.control.prediction_model as prediction_model
+    import lightcraft_opt.control.factory as factory  # the names it builds with
 
     built: dict[str, float | None] = {}
 
@@ -103,9 +101,9 @@ def test_the_time_budget_comes_from_the_file_or_the_flags(tmp_path, monkeypatch)
         return build
 
     monkeypatch.setattr(cli, "build_pulse_map", lambda model, options: SimpleNamespace(inputs=1))
-    monkeypatch.setattr(prediction_model, "coning_model", lambda *args, **kw: None)
-    monkeypatch.setattr(director, "DirectorController", stand_in("director"))
-    monkeypatch.setattr(mpc, "MpcController", stand_in("mpc"))
+    monkeypatch.setattr(factory, "coning_model", lambda *args, **kw: None)
+    monkeypatch.setattr(factory, "DirectorController", stand_in("director"))
+    monkeypatch.setattr(factory, "MpcController", stand_in("mpc"))
     out = str(tmp_path / "o")
     for controller, flags, budget in [
         ("mpc", [], None),
@@ -254,7 +252,7 @@ def test_several_controllers_fly_into_one_folder_each_and_overlay(tmp_path, monk
     "lqr"), so no linear model is built. Each folder reads back as its controller's
     result, the same flight as the one printed."""
     import lightcraft_opt.control.controllers as controllers
-    import lightcraft_opt.control.prediction_model as prediction_model
+    import lightcraft_opt.control.factory as factory  # the names it builds with
     from lightcraft_opt import load_result
 
     class StandIn(controllers.OpenLoopController):
@@ -269,8 +267,8 @@ def test_several_controllers_fly_into_one_folder_each_and_overlay(tmp_path, monk
             lay = map_input_layout(rcs, model.craft.has_carrier, opts.rcs_profile)
             super().__init__(model, lay)
 
-    monkeypatch.setattr(prediction_model, "coning_model", lambda *args, **kw: None)
-    monkeypatch.setattr(controllers, "LqrController", StandIn)
+    monkeypatch.setattr(factory, "coning_model", lambda *args, **kw: None)
+    monkeypatch.setattr(factory, "LqrController", StandIn)
     out = tmp_path / "cmp"
     argv = ["closed-loop", str(NUTATION), "--controller", "none,lqr", "--duration", "0.2"]
     assert main([*argv, "--out", str(out)]) == 0
@@ -396,12 +394,12 @@ def test_director_crosswind_without_a_flag_flies_the_director(tmp_path, monkeypa
 def test_the_flag_overrides_the_files_controller(tmp_path, monkeypatch):
     """--controller none on the director's file flies the fixed beam instead, into
     runs/<file>-none; nothing of the director is built."""
-    import lightcraft_opt.control.director as director
+    import lightcraft_opt.control.factory as factory  # the names it builds with
 
     def refuse(*args, **kw):  # type: ignore[no-untyped-def]
         raise AssertionError("the director was built")
 
-    monkeypatch.setattr(director, "DirectorController", refuse)
+    monkeypatch.setattr(factory, "DirectorController", refuse)
     monkeypatch.chdir(tmp_path)
     argv = ["closed-loop", str(DIRECTOR_CROSSWIND), "--controller", "none", "--duration", "0.1"]
     assert main(argv) == 0

@@ -14,11 +14,9 @@ from types import SimpleNamespace
 import pytest
 from support.paths import MODELS
 
-import lightcraft_opt.control.controllers as controllers
-import lightcraft_opt.control.director as director
-import lightcraft_opt.control.mpc as mpc
-import lightcraft_opt.control.prediction_model as prediction_model
+import lightcraft_opt.control.factory as factory
 from lightcraft_opt.control.closed_loop import plant_options
+from lightcraft_opt.control.controllers import OpenLoopController
 from lightcraft_opt.control.factory import build_controller
 from lightcraft_opt.control.options import (
     ControllerKind,
@@ -57,13 +55,12 @@ def built(monkeypatch):  # type: ignore[no-untyped-def]
 
         return build
 
-    monkeypatch.setattr(prediction_model, "coning_model", lambda model, **kw: ("model", model))
-    monkeypatch.setattr(mpc, "MpcController", stand_in("mpc", "model", "options"))
+    # the names the factory builds with (imported at its top)
+    monkeypatch.setattr(factory, "coning_model", lambda model, **kw: ("model", model))
+    monkeypatch.setattr(factory, "MpcController", stand_in("mpc", "model", "options"))
+    monkeypatch.setattr(factory, "LqrController", stand_in("lqr", "model", "prediction", "weights"))
     monkeypatch.setattr(
-        controllers, "LqrController", stand_in("lqr", "model", "prediction", "weights")
-    )
-    monkeypatch.setattr(
-        director, "DirectorController", stand_in("director", "model", "inputs", "options")
+        factory, "DirectorController", stand_in("director", "model", "inputs", "options")
     )
     return log
 
@@ -91,7 +88,7 @@ def test_each_kind_builds_its_controller_with_the_options_given(built):
     assert made.nutation is None  # rcs = "tilt": the director fires the thrusters itself
 
     made = build_controller(ControllerKind.NONE, RCS, plant, **kw)
-    assert isinstance(made, controllers.OpenLoopController) and made.name == "none"
+    assert isinstance(made, OpenLoopController) and made.name == "none"
     assert [name for name, _ in built] == ["mpc", "lqr", "director"]
 
 
