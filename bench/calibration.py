@@ -37,8 +37,8 @@ from lightcraft_opt.calibration.problem import Track, build_calibration_problem,
 from lightcraft_opt.compiled import dense_sensitivity_for, pulse_map_for
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import build_dense_sensitivity
 

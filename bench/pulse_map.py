@@ -56,8 +56,8 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.model import Engine, Model
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,

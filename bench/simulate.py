@@ -54,10 +54,10 @@ from lightcraft_opt.layout import (
     parameter_values,
 )
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 

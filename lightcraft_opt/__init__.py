@@ -4,7 +4,7 @@
 files, the pulse map Φ, simulation, optimal control, control (MPC, LQR, closed loop),
 linearisation, calibration and Monte Carlo campaigns, and every result type: each has
 ``summary()``, ``plot()`` and ``save(folder)``, and :func:`load_result` reads a run folder
-back (lightcraft_opt/outputs.py registers their figures and files). One name loads on
+back (lightcraft_opt/files/outputs.py registers their figures and files). One name loads on
 first use: ``lc.linearize``, the python-control models (python-control is slow to import,
 bench/README.md#importing-python-control, and nothing else here needs it;
 docs/architecture.md#contracts). Frames and units: docs/frames.md; the physics:
@@ -16,7 +16,6 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-from lightcraft_opt import outputs as _outputs  # noqa: F401  (registers plot() and save())
 from lightcraft_opt.calibration import (
     CalibrationOptions,
     CalibrationResult,
@@ -54,12 +53,14 @@ from lightcraft_opt.files import (
     load_result,
     read_track,
 )
+from lightcraft_opt.files import outputs as _outputs  # noqa: F401  (registers plot() and save())
 from lightcraft_opt.layout import (
     CONING,
     ENGINE,
     PARAMETERS,
     REDUCED_STATE,
     STATE,
+    RcsProfile,
     initial_state,
     nominal_inputs,
     parameter_values,
@@ -76,13 +77,13 @@ from lightcraft_opt.ocp import (
     replay_plan,
     rollout,
 )
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.simulation import (
     SimulationOptions,
     SimulationResult,
     SimulationStatus,
     simulate,
 )
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.reduced_map import (
     ReducedMap,

@@ -4,7 +4,7 @@ Results live in the capability layers (simulation, ocp, control, calibration, ca
 which must not import the edges that write files and draw figures (files/, plots/). The
 edges register, per result type, a ``plot`` and a ``save`` function here (dependency
 inversion); a result's :meth:`Presentable.plot` and :meth:`Presentable.save` look theirs
-up. ``import lightcraft_opt`` fills the registry (lightcraft_opt/outputs.py).
+up. ``import lightcraft_opt`` fills the registry (lightcraft_opt/files/outputs.py).
 """
 
 from __future__ import annotations

@@ -13,8 +13,8 @@ from lightcraft_opt.cli import main
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import STATE, initial_state
 from lightcraft_opt.model import Craft, Site
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 
 
 def test_nan_initial_state_names_the_field():

@@ -25,15 +25,6 @@ import pytest
 from support.models import table1_flight5
 
 from lightcraft_opt import compiled
-from lightcraft_opt.cache import (
-    CacheWarning,
-    CompilationWarning,
-    cache_path,
-    compile_function,
-    library_path,
-    load_functions,
-)
-from lightcraft_opt.cache import compiler as cache_compiler
 from lightcraft_opt.compiled import (
     DERIVATIVES_CACHE,
     compile_pulse_map,
@@ -43,12 +34,21 @@ from lightcraft_opt.compiled import (
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.compiled import pulse_map as compiled_pulse_map
+from lightcraft_opt.compiled.cache import (
+    CacheWarning,
+    CompilationWarning,
+    cache_path,
+    compile_function,
+    library_path,
+    load_functions,
+)
+from lightcraft_opt.compiled.cache import compiler as cache_compiler
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
 from lightcraft_opt.model import Engine
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 
@@ -135,7 +135,7 @@ def test_a_new_process_finds_the_same_library(small):
     code = (
         "import sys; sys.path.insert(0, sys.argv[1]);"
         "from test_compiled import SMALL, _small_model;"
-        "from lightcraft_opt.cache import library_path;"
+        "from lightcraft_opt.compiled.cache import library_path;"
         "from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map;"
         "print(library_path(build_pulse_map(_small_model(), SMALL).dense))"
     )

@@ -25,6 +25,7 @@ from lightcraft_opt.layout import (
     DIRECTOR_TERMINAL_OUTPUT,
     ERROR_STATE,
     REDUCED_STATE,
+    RcsProfile,
     VectorLayout,
     coning_input_layout,
     input_layout,
@@ -32,7 +33,6 @@ from lightcraft_opt.layout import (
     substep_input_layout,
 )
 from lightcraft_opt.linear.signal_names import entry_names
-from lightcraft_opt.options import RcsProfile
 
 #: The fixed layouts: every VectorLayout the layout package exports.
 FIXED = {name: v for name, v in vars(layout).items() if isinstance(v, VectorLayout)}

@@ -88,7 +88,7 @@ def test_the_package_and_its_controllers_leave_python_control_unloaded() -> None
 
 def test_every_result_type_summarises_plots_and_saves_itself() -> None:
     """Each result type has summary(), plot() and save() (issue 19), its plot and save
-    registered by lightcraft_opt/outputs.py when the package is imported, and
+    registered by lightcraft_opt/files/outputs.py when the package is imported, and
     load_result reads a folder back."""
     lc = importlib.import_module("lightcraft_opt")
     presenters = importlib.import_module("lightcraft_opt.presenters")

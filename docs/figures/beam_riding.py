@@ -16,8 +16,8 @@ from matplotlib.figure import Figure
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.linearize import altitude_stability, side_stability
 from lightcraft_opt.model import BeamSizeModel, Model
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.plots import plot_altitude_stability, plot_side_stability
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 OPTIONS = PulseMapOptions(substeps=8, dense=8)

@@ -39,7 +39,7 @@ from lightcraft_opt.calibration.statistics import fit_statistics, identifiabilit
 from lightcraft_opt.compiled import dense_sensitivity_for, pulse_map_for
 from lightcraft_opt.errors import OptionError, ParameterError, renamed
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import build_dense_sensitivity
 

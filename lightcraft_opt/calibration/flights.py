@@ -9,9 +9,9 @@ import numpy as np
 from lightcraft_opt.calibration.result import CalibrationResult
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import MAX_DURATION
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationResult
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = ["fit_flights"]
 

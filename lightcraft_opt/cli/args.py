@@ -16,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
     "finite",

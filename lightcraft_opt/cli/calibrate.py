@@ -15,7 +15,7 @@ from lightcraft_opt.cli.flags import ITERATION_LIMIT, TIME_LIMIT
 from lightcraft_opt.errors import renamed
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.track import read_track
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
         options=options.pulse_map,
         compiled=False if args.interpreted else None,
     )
-    # the files and figures below are written by the writers registered in outputs.py
+    # the files and figures below are written by the writers registered in files/outputs.py
     result.save(out, model=model, model_file=source, track_file=args.track, flights=flights)
     for name, value, sd, unit in zip(
         result.names, result.values, result.std, result.units, strict=True

@@ -104,7 +104,7 @@ def _fly(
         pulse_map=plant,
         options=problem.loop,
     )
-    # the files and figures below are written by the writers registered in outputs.py
+    # the files and figures below are written by the writers registered in files/outputs.py
     result.save(out, problem=problem, inputs=plant.inputs)
     pulse = result.first_pulse_below(math.radians(0.5))
     settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"

@@ -34,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         progress=not args.quiet,
     )
-    # the figures (and result.json/npz) are written by the writers registered in outputs.py
+    # the figures (and result.json/npz) are written by the writers registered in files/outputs.py
     result.save(out, title=campaign.title)
     s = result.summary
     apogee, beam = s["apogee_m"], s["left_beam"]

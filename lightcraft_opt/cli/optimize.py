@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         f"{result.status.value}: cost {result.cost:.6g}, {result.iterations} iterations, "
         f"{result.solve_time:.2f} s ({result.message})"
     )
-    # the files and figures are written by the writers registered in outputs.py
+    # the files and figures are written by the writers registered in files/outputs.py
     result.save(out, problem=pf)
     if result.dynamics_closed:
         altitude = float(result.state("r_L")[-1, 2])

@@ -65,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             compiled=False if args.interpreted else None,
         )
-    # the files and figures are written by the writers registered in outputs.py
+    # the files and figures are written by the writers registered in files/outputs.py
     result.save(
         out,
         model=model,

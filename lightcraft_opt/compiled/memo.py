@@ -7,7 +7,7 @@ equal model and options) and compile once per structure (the disk cache, cache/)
 ``simulate``, the closed loop and Monte Carlo get Φ through :func:`pulse_map_for`,
 compiled by default; ``LIGHTCRAFT_COMPILE=0`` in the environment, or ``compiled=False``,
 keeps the interpreted map; without a C compiler the interpreted map comes with one
-:class:`~lightcraft_opt.cache.CompilationWarning` per process.
+:class:`~lightcraft_opt.compiled.cache.CompilationWarning` per process.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from typing import TypeVar
 
 import casadi as ca
 
-from lightcraft_opt.cache import (
+from lightcraft_opt.compiled.cache import (
     DEFAULT_FLAGS,
     DERIVATIVE_FLAGS,
     BuildReport,
@@ -36,7 +36,7 @@ from lightcraft_opt.compiled.pulse_map import (
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
@@ -89,7 +89,7 @@ def pulse_map_for(
     Parameters
     ----------
     model : the model; its numbers go in through p, so one map serves every p.
-    options : Φ's options (default :class:`~lightcraft_opt.options.PulseMapOptions`).
+    options : Φ's options (default :class:`~lightcraft_opt.symbolic.maps.options.PulseMapOptions`).
     compiled : True or False to choose; None (default) for :func:`compile_by_default`.
 
     Returns
@@ -188,7 +188,7 @@ def dense_sensitivity_for(
     """``pulse_map_dense_sensitivity(x, u, p, t, dx, dp) -> (X, dX)`` of ``model``'s Φ
     (:func:`~lightcraft_opt.symbolic.maps.pulse_map_sensitivities.build_dense_sensitivity`) in
     ``n_directions`` directions, chained over pieces compiled
-    (:data:`~lightcraft_opt.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is False or
+    (:data:`~lightcraft_opt.compiled.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is False or
     :func:`compile_by_default` says no. The pieces are built once per process for equal
     models, options and directions and compiled once per structure (the disk cache); the
     chain itself, a short MX graph, is assembled on each call."""
@@ -219,8 +219,8 @@ def reduced_derivatives_for(
 ) -> ReducedMapDerivatives:
     """The reduced map Ψ's value and Jacobian chains for ``model``
     (:func:`~lightcraft_opt.symbolic.maps.reduced_map_derivatives.build_reduced_map_derivatives`),
-    over pieces compiled (values with :data:`~lightcraft_opt.cache.DEFAULT_FLAGS`,
-    Jacobians with :data:`~lightcraft_opt.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is
+    over pieces compiled (values with :data:`~lightcraft_opt.compiled.cache.DEFAULT_FLAGS`,
+    Jacobians with :data:`~lightcraft_opt.compiled.cache.DERIVATIVE_FLAGS`) unless ``compiled`` is
     False or :func:`compile_by_default` says no; built once per process for equal models
     and options, compiled once per structure (Flight 5 with a 4 x 16 optic: about a minute
     on 2 cores, then the disk cache)."""

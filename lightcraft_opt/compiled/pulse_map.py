@@ -1,13 +1,13 @@
 """Φ compiled: its dense Function, and its derivative chains over compiled pieces, kept
 on disk by structure.
 
-What runs often is compiled to C (cache/compiler.py: one library per Function, a cache
+What runs often is compiled to C (compiled/cache/compiler.py: one library per Function, a cache
 entry by structure, verified before it is loaded); this module knows Φ's structure.
 :func:`compile_pulse_map` compiles Φ's dense Function and takes its step from it;
 :func:`compile_pulse_map_derivatives` compiles Φ's pieces and their derivatives, each its
 own library, and chains them (symbolic/maps/pulse_map_derivatives.py), never casadi's AD through
 the whole graph (docs/architecture.md#rule-17); :func:`saved_pulse_map_derivatives` keeps
-that chain on disk (cache/functions.py), so a later build of the same structure loads it in
+that chain on disk (compiled/cache/functions.py), so a later build of the same structure loads it in
 milliseconds instead of redoing casadi's AD of every piece (seconds; figures:
 bench/README.md#build-time-a-new-structure-and-the-same-structure-again).
 
@@ -33,7 +33,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from lightcraft_opt.cache import (
+from lightcraft_opt.compiled.cache import (
     DEFAULT_FLAGS,
     DERIVATIVE_FLAGS,
     BuildReport,
@@ -83,7 +83,7 @@ def compile_pulse_map(
     phi: PulseMap, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
 ) -> PulseMap:
     """The pulse map with its dense Function compiled
-    (:func:`~lightcraft_opt.cache.compile_function`).
+    (:func:`~lightcraft_opt.compiled.cache.compile_function`).
 
     ``step`` is taken from the compiled ``dense`` (its last column is ``x_next``, the
     same expression), so one library serves both and gcc runs once. If compiling fails,
@@ -115,7 +115,7 @@ def compile_pulse_map_derivatives(
 ) -> PulseMapDerivatives:
     """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) over compiled
     pieces: each value piece (``DEFAULT_FLAGS``) and derivative piece (``DERIVATIVE_FLAGS``,
-    cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
+    compiled/cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
     cached like any other, compiled ``workers`` at a time (default: the cores); bigger
     pieces stay interpreted. A piece that does not compile stays interpreted (with the
     warning of ``compile_function``). ``report`` is told what is being built and how many
@@ -177,7 +177,7 @@ def compile_pieces(
     return fast, done[4:], libraries
 
 
-#: Name of the cache entries of Φ's compiled derivatives (cache/functions.py).
+#: Name of the cache entries of Φ's compiled derivatives (compiled/cache/functions.py).
 DERIVATIVES_CACHE = "pulse_map_derivatives"
 
 
@@ -188,11 +188,11 @@ def saved_pulse_map_derivatives(
     report: BuildReport | None = None,
 ) -> PulseMapDerivatives:
     """:func:`compile_pulse_map_derivatives` of ``phi``, kept on disk by structure
-    (cache/functions.py): the chain's Functions over the compiled pieces, serialised with
+    (compiled/cache/functions.py): the chain's Functions over the compiled pieces, serialised with
     the libraries they call (verified before loading), under the key
     :func:`derivatives_key`. A hit loads in milliseconds instead of seconds of casadi's AD
     on each piece; a damaged entry, or one whose library is damaged, is built again with a
-    :class:`~lightcraft_opt.cache.CacheWarning`. Derivatives with a piece that failed to
+    :class:`~lightcraft_opt.compiled.cache.CacheWarning`. Derivatives with a piece that failed to
     compile (no compiler ...) are used, never saved.
     ``max_instructions`` as in :func:`compile_pulse_map_derivatives`."""
     start = time.perf_counter()

@@ -42,17 +42,18 @@ from lightcraft_opt.layout import (
     ERROR_STATE,
     PARAMETERS,
     STATE,
+    RcsProfile,
     initial_state,
     parameter_values,
 )
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import checked_duration, checked_vector
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.maps.error_state import build_error_state
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
 

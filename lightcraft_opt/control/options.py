@@ -8,13 +8,13 @@ from dataclasses import dataclass
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
+from lightcraft_opt.model import FocusSchedule
 from lightcraft_opt.model.checks import (
     checked_choice,
     checked_int,
     checked_nonnegative,
     checked_number,
 )
-from lightcraft_opt.options import FocusSchedule
 
 __all__ = [
     "MAX_CONTROL_HORIZON",
@@ -265,7 +265,7 @@ class DirectorOptions:
         the first (at the measured state), the new last one and the others in turn; the
         rest are the previous pulses' Jacobians, shifted (a multi-level real-time
         iteration). ``horizon``: all, the plain real-time iteration.
-    focus_schedule : the focus reference (:class:`~lightcraft_opt.options.FocusSchedule`).
+    focus_schedule : the focus reference (:class:`~lightcraft_opt.model.FocusSchedule`).
     matched_side : the beam's side the "matched" schedule puts at the craft [m], > 0; None
         (default) the launch side a0 (docs/beam_riding.md: 8.5 cm for the record craft).
     energy_range : (lowest, highest) pulse energy as fractions of the flight's, 0 <= low

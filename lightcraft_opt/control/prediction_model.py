@@ -46,13 +46,14 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.cache import cache_dir, load_entry, structure_key, write_entry
+from lightcraft_opt.compiled.cache import cache_dir, load_entry, structure_key, write_entry
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     CONING,
     CONING_ERROR_STATE,
     ERROR_STATE,
     STATE,
+    RcsProfile,
     VectorLayout,
     coning_input_layout,
     initial_state,
@@ -67,9 +68,9 @@ from lightcraft_opt.linear.operating_points import (
 )
 from lightcraft_opt.linear.signal_names import entry_names, select_entries
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 from lightcraft_opt.symbolic.maps.error_state import build_error_state
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 __all__ = [
@@ -290,9 +291,9 @@ def coning_model(
     altitudes : grid of altitudes [m] (increasing).
     speeds : vertical speed at each altitude [m/s] (default: the nominal flight's from
         the pad when it passes that altitude).
-    cache : keep the model on disk as a cache entry (cache/entries.py: checksummed,
+    cache : keep the model on disk as a cache entry (compiled/cache/entries.py: checksummed,
         verified before use, built again with a warning when damaged), in
-        :func:`~lightcraft_opt.cache.cache_dir` (True) or the folder given, under the
+        :func:`~lightcraft_opt.compiled.cache.cache_dir` (True) or the folder given, under the
         sha256 of Φ's expression graph, the model's parameter vector, the grid and the
         coordinates' Functions, and read it back instead of linearising again (a hit costs
         Φ's build and serialisation, a fraction of the whole build).

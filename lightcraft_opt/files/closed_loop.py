@@ -43,8 +43,7 @@ from lightcraft_opt.files.problem import (
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import PARAMETERS, STATE
-from lightcraft_opt.model import Model, Wind
-from lightcraft_opt.options import FocusSchedule
+from lightcraft_opt.model import FocusSchedule, Model, Wind
 
 __all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 

@@ -40,7 +40,7 @@ from lightcraft_opt.files.problem_tables import (
     si_note,
 )
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
-from lightcraft_opt.layout import initial_state
+from lightcraft_opt.layout import RcsProfile, initial_state
 from lightcraft_opt.model import Model
 from lightcraft_opt.ocp.options import (
     OCP_PULSE_MAP,
@@ -59,7 +59,7 @@ from lightcraft_opt.ocp.problem import (
     TrackReference,
     check_horizon,
 )
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
     "ProblemFile",

@@ -17,9 +17,9 @@ from lightcraft_opt.layout.vectors import (
     EAST_NORTH,
     PULSE_INPUT,
     REDUCED_STATE,
+    RcsProfile,
     map_input_layout,
 )
-from lightcraft_opt.options import RcsProfile
 
 __all__ = [
     "CONING_ERROR_STATE",

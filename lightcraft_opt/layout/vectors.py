@@ -24,15 +24,16 @@ Per-pulse inputs (:data:`PULSE_INPUT`): ``pointing_L`` (2) [m], lateral offset o
 vertical beam axis from the pad, east and north; ``focus`` [m], focus distance (waist
 beam model); ``energy`` [J], pulse energy.
 
-The RCS inputs of the pulse map depend on :class:`~lightcraft_opt.options.RcsProfile`
+The RCS inputs of the pulse map depend on :class:`RcsProfile`
 (:func:`map_input_layout`; docs/frames.md, "RCS thrust over a pulse interval").
 """
 
 from __future__ import annotations
 
+from enum import Enum
+
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout.vector_layout import VectorLayout
-from lightcraft_opt.options import RcsProfile
 
 __all__ = [
     "B123",
@@ -45,6 +46,7 @@ __all__ = [
     "PULSE_INPUT",
     "REDUCED_STATE",
     "STATE",
+    "RcsProfile",
     "input_layout",
     "map_input_layout",
     "rcs_levels",
@@ -143,6 +145,21 @@ PULSE_INPUT = VectorLayout(
         ("energy", 1, "J", "", ()),
     ],
 )
+
+
+class RcsProfile(Enum):
+    """How the RCS thrust varies over one pulse interval (layout.map_input_layout).
+
+    ``HOLD``: one level per thruster, held from pulse to pulse. ``SUBINTERVALS``: one
+    level per thruster on each of ``rcs_subintervals`` equal sub-intervals of the
+    interval. ``PHASE_LOCKED``: a mean level plus a cosine and a sine at the coning
+    (nutation) rate seen in B, so the torque can turn with the ~216 Hz coning mode
+    (docs/frames.md, "RCS thrust over a pulse interval").
+    """
+
+    HOLD = "hold"
+    SUBINTERVALS = "subintervals"
+    PHASE_LOCKED = "phase_locked"
 
 
 def map_input_layout(

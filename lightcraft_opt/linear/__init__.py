@@ -11,7 +11,7 @@ exact casadi AD). The modules, in the order they build on each other:
 - :mod:`.linear_model`: A and B at a point as numpy arrays (:func:`linear_model`), in
   :class:`Coordinates` ``FULL`` or ``ERROR_STATE``, by default on :data:`REDUCED_STATES`;
 - :mod:`.riccati`: the discrete LQR gain on matrices (:func:`dlqr_gain`, scipy);
-- :mod:`.focus`: the focus of a :class:`~lightcraft_opt.options.FocusSchedule` at a
+- :mod:`.focus`: the focus of a :class:`~lightcraft_opt.model.FocusSchedule` at a
   height (:func:`scheduled_focus`) and the beam's side it makes there.
 
 numpy, scipy and casadi only: the nutation MPC, the LQR controller and the director

@@ -5,7 +5,7 @@ quality) the director's geometric focus f sets the beam's size at height h,
 
     a(h; f) = a0 sqrt((1 - h/f)^2 + (h/z_R)^2),
 
-so a focus schedule f(h) (:class:`~lightcraft_opt.options.FocusSchedule`) is a lever:
+so a focus schedule f(h) (:class:`FocusSchedule`) is a lever:
 ``FAR``, the farthest focus the director reaches; ``AT_CRAFT``, f = h; ``MATCHED``, a chosen
 side at the craft (docs/beam_riding.md). :func:`scheduled_focus` is the focus of a schedule
 at a height, shared by the beam-riding study (:mod:`lightcraft_opt.linearize.beam_riding`)
@@ -21,11 +21,16 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS
-from lightcraft_opt.model import BeamSizeModel, Laser
-from lightcraft_opt.options import FocusSchedule
+from lightcraft_opt.model import BeamSizeModel, FocusSchedule, Laser
 from lightcraft_opt.symbolic.terms.beam import beam_side
 
-__all__ = ["focus_for_side", "reachable_sides", "require_waist", "scheduled_focus", "side_at"]
+__all__ = [
+    "focus_for_side",
+    "reachable_sides",
+    "require_waist",
+    "scheduled_focus",
+    "side_at",
+]
 
 
 def scheduled_focus(

@@ -40,8 +40,8 @@ from lightcraft_opt.linear.operating_points import (
 )
 from lightcraft_opt.linear.signal_names import entry_names, select_entries
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 #: Error-state entries kept by default: the beam-riding and vertical channels.

@@ -35,8 +35,8 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.linear.signal_names import select_entries
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import checked_vector
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE, build_error_state
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 

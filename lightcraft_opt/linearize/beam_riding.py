@@ -42,11 +42,17 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import parameter_values
-from lightcraft_opt.linear.focus import focus_for_side, require_waist, scheduled_focus, side_at
+from lightcraft_opt.linear.focus import (
+    FocusSchedule,
+    focus_for_side,
+    require_waist,
+    scheduled_focus,
+    side_at,
+)
 from lightcraft_opt.linear.operating_points import PulseMapJacobian, jacobian_for
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
 from lightcraft_opt.model import BeamSizeModel, Model
-from lightcraft_opt.options import FocusSchedule, PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = [

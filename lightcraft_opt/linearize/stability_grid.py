@@ -16,7 +16,7 @@ from lightcraft_opt.linear.operating_points import PulseMapJacobian, climb_point
 from lightcraft_opt.linearize.modes import ModeKind, multipliers
 from lightcraft_opt.linearize.state_space import linearize
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 

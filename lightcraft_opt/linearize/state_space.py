@@ -25,7 +25,7 @@ from lightcraft_opt.linear.linear_model import (
 )
 from lightcraft_opt.linear.operating_points import OperatingPoint, PulseMapJacobian
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["REDUCED_STATES", "Coordinates", "linearize"]

@@ -10,7 +10,7 @@ P (a point on the spin axis, the rotor's dry mass centre).
   :mod:`.aero` (:class:`Aerodynamics`, :class:`SpinDecay`), :mod:`.engine`
   (:class:`Engine`), :mod:`.mass` (:class:`Liner`, :class:`Carrier`, their mass properties)
   and :mod:`.rcs` (:class:`Rcs`, :class:`Thruster`);
-- :mod:`.laser`: :class:`Laser`, the beam's profile and size;
+- :mod:`.laser`: :class:`Laser`, the beam's profile and size, the :class:`FocusSchedule`;
 - :mod:`.site`: :class:`Site`, :class:`Environment` and its :class:`Wind`;
 - :mod:`.flight`: :class:`Flight` (the conditions of one flight), :class:`FlightRecord`;
 - :mod:`.model`: :class:`Model`, the whole;
@@ -27,7 +27,7 @@ from lightcraft_opt.model.aero import Aerodynamics, AeroModel, SpinDecay, SpinDe
 from lightcraft_opt.model.craft import Craft, Propellant
 from lightcraft_opt.model.engine import Engine, ImpulseModel
 from lightcraft_opt.model.flight import Flight, FlightRecord
-from lightcraft_opt.model.laser import BeamProfile, BeamSizeModel, Laser
+from lightcraft_opt.model.laser import BeamProfile, BeamSizeModel, FocusSchedule, Laser
 from lightcraft_opt.model.mass import Carrier, Liner
 from lightcraft_opt.model.model import Model
 from lightcraft_opt.model.rcs import Rcs, Thruster
@@ -44,6 +44,7 @@ __all__ = [
     "Environment",
     "Flight",
     "FlightRecord",
+    "FocusSchedule",
     "ImpulseModel",
     "Laser",
     "Liner",

@@ -17,7 +17,7 @@ from lightcraft_opt.model.checks import (
 )
 from lightcraft_opt.model.limits import MAX_PULSE_RATE, WHY_MAX_PULSE_RATE
 
-__all__ = ["BeamProfile", "BeamSizeModel", "Laser"]
+__all__ = ["BeamProfile", "BeamSizeModel", "FocusSchedule", "Laser"]
 
 
 class BeamSizeModel(Enum):
@@ -33,6 +33,21 @@ class BeamProfile(Enum):
     HOLLOW_SQUARE = "hollow_square"
     TOP_HAT = "top_hat"
     GAUSSIAN = "gaussian"
+
+
+class FocusSchedule(Enum):
+    """Where the laser is focused for a craft at height h, a way of running the laser
+    (linear/focus.py sets the focus; the beam-riding study, linearize/beam_riding.py, and
+    the director, control/director.py, use it; docs/beam_riding.md).
+
+    ``FAR``: the far end of the laser's focus range (nearly collimated). ``AT_CRAFT``:
+    f = h, the smallest beam the director can put there. ``MATCHED``: a chosen side at the
+    craft, by default the launch side a0.
+    """
+
+    FAR = "far"
+    AT_CRAFT = "at_craft"
+    MATCHED = "matched"
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, fields
 
 import casadi as ca
 
-from lightcraft_opt.cache import (
+from lightcraft_opt.compiled.cache import (
     BuildReport,
     load_functions,
     save_functions,
@@ -44,7 +44,7 @@ from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["SURROGATE_CACHE", "ChainNlp", "Surrogate", "build_surrogate", "chain_nlp"]
 
-#: Name of the cache files of the surrogates (cache/functions.py).
+#: Name of the cache files of the surrogates (compiled/cache/functions.py).
 SURROGATE_CACHE = "ocp_surrogate"
 _THIS_MODULE = sys.modules[__name__]
 
@@ -170,7 +170,7 @@ def build_surrogate(
     tr: MultipleShooting, *, upper: bool = True, report: BuildReport | None = None
 ) -> Surrogate:
     """The SX Functions of :func:`chain_nlp` (module docstring), from the disk cache
-    (cache/functions.py) when this structure was built before, else built (casadi's AD and
+    (compiled/cache/functions.py) when this structure was built before, else built (casadi's AD and
     expansion: seconds at a hundred pulses) and saved. The key is the graph they are built
     from: the NLP with Φ's outputs as symbols and Φ's arguments (both before expansion),
     Φ's sparsity patterns, the sizes, ``upper`` and the source of this module and of the

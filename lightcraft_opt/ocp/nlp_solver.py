@@ -14,7 +14,7 @@ from typing import Any
 
 import casadi as ca
 
-from lightcraft_opt.cache import BuildReport
+from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.ocp.chain import ChainNlp, chain_nlp
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.result import OcpStatus

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 
 __all__ = [
     "OCP_PULSE_MAP",

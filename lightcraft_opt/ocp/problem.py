@@ -16,7 +16,7 @@ x_k to x_{k+1}. x_0 is given; node terms and constraints apply at k = 1..N, puls
 and constraints at k = 0..N-1.
 
 How the RCS thrust varies over a pulse interval is part of what the problem asks
-(``rcs_profile``, ``rcs_subintervals``; :class:`~lightcraft_opt.options.RcsProfile`): it
+(``rcs_profile``, ``rcs_subintervals``; :class:`~lightcraft_opt.layout.RcsProfile`): it
 fixes the decision variables. ``HOLD``: one level per thruster; ``SUBINTERVALS``: one per
 thruster and sub-interval; ``PHASE_LOCKED``: mean levels ``rcs_thrust`` with cosine and
 sine amplitudes ``rcs_cos``, ``rcs_sin`` at the coning rate. Φ does not clip the thrust:
@@ -42,6 +42,7 @@ import numpy as np
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import (
     STATE,
+    RcsProfile,
     VectorLayout,
     initial_state,
     map_input_layout,
@@ -50,7 +51,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.model.checks import checked_vector, number, numbers, set_frozen
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
     "MAX_HORIZON",

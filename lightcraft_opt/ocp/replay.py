@@ -6,8 +6,8 @@ problem's model (problem files cut it to 4 x 16 with ``[model_overrides]`` to ma
 solve cheaper). :func:`replay_plan` flies the plan's inputs u, held pulse by pulse from the
 result's x0 at its t0, at full accuracy: the simulator's own Φ
 (:func:`~lightcraft_opt.simulation.simulate.simulate` with the default
-:class:`~lightcraft_opt.options.PulseMapOptions` and the problem's RCS profile, compiled
-where a compiler works) of the problem's model with its optic quadrature raised to at
+:class:`~lightcraft_opt.symbolic.maps.options.PulseMapOptions` and the problem's RCS profile,
+compiled where a compiler works) of the problem's model with its optic quadrature raised to at
 least the model files' :data:`REPLAY_QUADRATURE` (:func:`replay_model`), under the
 simulator's end-of-flight rules (leaving the beam, landing: simulation/flight_log.py), and
 compares the flight with the predicted nodes (:class:`~lightcraft_opt.ocp.result.PlanReplay`).
@@ -32,9 +32,9 @@ from lightcraft_opt.model import Engine, Model
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult, PlanReplay
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = [

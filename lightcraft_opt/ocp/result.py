@@ -15,9 +15,9 @@ from enum import Enum
 import numpy as np
 
 from lightcraft_opt.layout import STATE, VectorLayout
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.presenters import Presentable
 from lightcraft_opt.simulation.result import SimulationStatus
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = ["OcpResult", "OcpStatus", "PlanReplay"]
 

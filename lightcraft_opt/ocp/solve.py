@@ -31,15 +31,15 @@ from typing import cast
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.cache import BuildReport
 from lightcraft_opt.compiled import (
     compile_by_default,
     derivatives_for,
     pulse_map_for,
     saved_pulse_map_derivatives,
 )
+from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.errors import OptionError, ParameterError
-from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.nlp_solver import (
@@ -77,7 +77,6 @@ from lightcraft_opt.ocp.time_limit import (
     can_fork,
 )
 from lightcraft_opt.ocp.transcription import MultipleShooting
-from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, reduced_pulse_map

@@ -48,7 +48,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
+from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.evaluation import horizon_map
 from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
@@ -69,7 +69,6 @@ from lightcraft_opt.ocp.problem import (
     TiltLimit,
     TrackReference,
 )
-from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import PulseMapDerivatives
 

@@ -27,7 +27,8 @@ __all__ = ["SimulationOptions", "coast_integrator", "simulate_coast"]
 @dataclass(frozen=True)
 class SimulationOptions:
     """How :func:`simulate_coast` and :func:`coast_integrator` integrate the coast (the
-    pulse map's coasts are fixed-step: :class:`~lightcraft_opt.options.PulseMapOptions`).
+    pulse map's coasts are fixed-step:
+    :class:`~lightcraft_opt.symbolic.maps.options.PulseMapOptions`).
 
     Attributes
     ----------

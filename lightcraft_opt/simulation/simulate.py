@@ -30,11 +30,11 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import checked_duration, checked_vector
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.chunks import step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["InputPolicy", "simulate"]

@@ -28,8 +28,8 @@ import numpy as np
 
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 HERE = Path(__file__).resolve().parent
 MODEL_FILE = HERE.parents[1] / "models" / "flight5.toml"

@@ -28,8 +28,8 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.track import read_track
 from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import build_dense_sensitivity
 

@@ -17,8 +17,8 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.cli import main
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 MODEL_FILE = REPO_ROOT / "models" / "flight5.toml"
 

@@ -19,9 +19,9 @@ from support.paths import MODELS, PROBLEMS
 from lightcraft_opt.cli import main
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.track import read_track
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.plots.figures import altitude_figure, track_figure
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 SAMPLE = PROBLEMS / "tracks" / "flight5_synthetic.csv"
 MODEL_FILE = MODELS / "flight5.toml"

@@ -49,7 +49,7 @@ from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.model import BeamSizeModel
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 

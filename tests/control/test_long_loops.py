@@ -46,10 +46,10 @@ from lightcraft_opt.control.options import DirectorOptions, MpcOptions
 from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import STATE, initial_state
+from lightcraft_opt.layout import STATE, RcsProfile, initial_state
 from lightcraft_opt.linear.operating_points import pulse_map_jacobian
 from lightcraft_opt.model import BeamSizeModel, Model
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 MALLOC_GROWTH = 128 << 10  # bytes (module docstring)

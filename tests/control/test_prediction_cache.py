@@ -23,12 +23,13 @@ import pytest
 from support.damage import DAMAGES
 from support.paths import MODELS
 
-from lightcraft_opt.cache import CacheWarning, EntryStatus, check_entry, write_entry
+from lightcraft_opt.compiled.cache import CacheWarning, EntryStatus, check_entry, write_entry
 from lightcraft_opt.control import prediction_model
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.files.model import load_model
+from lightcraft_opt.layout import RcsProfile
 from lightcraft_opt.linear.operating_points import pulse_map_jacobian
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 TABLES = ("spins", "altitudes", "speeds", "A", "B", "omega_per_spin", "spin_decay")

@@ -19,7 +19,7 @@ from lightcraft_opt import load_problem
 from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.problem import objective_names
-from lightcraft_opt.layout import PARAMETERS, STATE, initial_state
+from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile, initial_state
 from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
@@ -32,7 +32,7 @@ from lightcraft_opt.ocp.problem import (
     TiltLimit,
     TrackReference,
 )
-from lightcraft_opt.options import CoastScheme, RcsProfile
+from lightcraft_opt.symbolic.maps.options import CoastScheme
 
 MODELS = REPO_ROOT / "models"
 RPM = 2 * math.pi / 60

@@ -25,7 +25,14 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.ocp_outputs import constraint_margins
 from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.files.simulation_outputs import PULSE_COLUMNS
-from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE, initial_state, parameter_values
+from lightcraft_opt.layout import (
+    ENGINE,
+    PARAMETERS,
+    STATE,
+    RcsProfile,
+    initial_state,
+    parameter_values,
+)
 from lightcraft_opt.ocp.problem import (
     EnergyBudget,
     LaserEnergy,
@@ -34,7 +41,6 @@ from lightcraft_opt.ocp.problem import (
     RcsEnvelope,
     TiltLimit,
 )
-from lightcraft_opt.options import RcsProfile
 from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.flight_log import beam_gap
 from lightcraft_opt.symbolic.terms.beam import beam_side

@@ -25,8 +25,8 @@ from lightcraft_opt.linear.focus import focus_for_side, reachable_sides, schedul
 from lightcraft_opt.linearize import error_state, pulse_map_jacobian, trim_hover
 from lightcraft_opt.linearize.beam_riding import FocusSchedule, altitude_stability, side_stability
 from lightcraft_opt.model import BeamSizeModel, Model
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.plots import plot_altitude_stability, plot_side_stability
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 OPTIONS = PulseMapOptions(substeps=8, dense=8)

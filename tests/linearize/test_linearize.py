@@ -46,11 +46,11 @@ from lightcraft_opt.linearize import (
     trim_hover,
 )
 from lightcraft_opt.model import Engine, Model, Rcs, SpinDecay, Thruster
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.plots import plot_multipliers, plot_stability_map
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE, build_error_state
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, build_gravity
 

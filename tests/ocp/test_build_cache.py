@@ -23,7 +23,7 @@ import pytest
 from ocp.test_ocp import CHEAP_MAP, QUADRATURE, TOL, lateral_problem
 from support.models import table1_flight5
 
-from lightcraft_opt.cache import CacheWarning
+from lightcraft_opt.compiled.cache import CacheWarning
 from lightcraft_opt.layout import initial_state
 from lightcraft_opt.model import Engine
 from lightcraft_opt.ocp.chain import SURROGATE_CACHE, Surrogate, build_surrogate

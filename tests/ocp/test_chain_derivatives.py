@@ -33,7 +33,7 @@ from support.nlp_points import off_optimum
 from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import initial_state
+from lightcraft_opt.layout import RcsProfile, initial_state
 from lightcraft_opt.model import BeamSizeModel, Engine
 from lightcraft_opt.ocp.chain import chain_nlp
 from lightcraft_opt.ocp.options import OcpOptions
@@ -47,7 +47,7 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 RTOL = 1e-12

@@ -59,8 +59,8 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, solve
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.simulation.simulate import simulate
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.terms.gravity import EARTH_GM, WGS84_A, WGS84_F
 

@@ -20,11 +20,11 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.files.problem import load_problem
-from lightcraft_opt.layout import ENGINE, STATE
+from lightcraft_opt.layout import ENGINE, STATE, RcsProfile
 from lightcraft_opt.ocp.options import OcpOptions, PredictionMap
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 PULSES = 20

@@ -52,8 +52,8 @@ from lightcraft_opt.ocp.replay import (
     simulator_map_options,
 )
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.simulation.result import SimulationStatus
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 CHEAP_MAP = PulseMapOptions(scheme=CoastScheme.SPLIT, substeps=1, dense=1)

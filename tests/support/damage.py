@@ -11,7 +11,7 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from lightcraft_opt.cache import checksum_path
+from lightcraft_opt.compiled.cache import checksum_path
 
 
 def _rewritten(path: Path, data: bytes) -> None:

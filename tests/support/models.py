@@ -7,6 +7,7 @@ import math
 from dataclasses import replace
 
 from lightcraft_opt.files.model import load_model
+from lightcraft_opt.layout import RcsProfile
 from lightcraft_opt.model import (
     Aerodynamics,
     Carrier,
@@ -19,7 +20,7 @@ from lightcraft_opt.model import (
     Site,
     SpinDecay,
 )
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from support.paths import MODELS
 
 RPM = 2 * math.pi / 60

@@ -16,8 +16,8 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.cli import main
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import STATE, initial_state, nominal_inputs, parameter_values
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.simulation.coast_reference import SimulationOptions, simulate_coast
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 

@@ -28,7 +28,7 @@ from support.models import (
 
 from lightcraft_opt.errors import LightcraftError
 from lightcraft_opt.layout import ENGINE, STATE, initial_state, nominal_inputs, parameter_values
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map

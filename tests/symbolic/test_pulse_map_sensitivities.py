@@ -26,7 +26,7 @@ from support.models import (
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, nominal_inputs, parameter_values
-from lightcraft_opt.options import PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import (
     build_dense_sensitivity,

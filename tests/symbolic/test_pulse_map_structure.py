@@ -25,12 +25,13 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
+    RcsProfile,
     initial_state,
     nominal_inputs,
     parameter_values,
 )
 from lightcraft_opt.model import Carrier
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.reference_pulse_map import build_flat_pulse_map
 

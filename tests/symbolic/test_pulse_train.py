@@ -53,8 +53,8 @@ from lightcraft_opt.model import (
     SpinDecayModel,
     Wind,
 )
-from lightcraft_opt.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.terms.gravity import (

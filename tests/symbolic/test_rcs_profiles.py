@@ -41,6 +41,7 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import (
     PARAMETERS,
     STATE,
+    RcsProfile,
     initial_state,
     map_input_layout,
     parameter_values,
@@ -57,7 +58,6 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.simulation.coast_reference import (
     SimulationOptions,
     coast_integrator,
@@ -65,6 +65,7 @@ from lightcraft_opt.simulation.coast_reference import (
 )
 from lightcraft_opt.symbolic.maps.coast import coning_rate_B
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum
 from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
@@ -175,7 +176,7 @@ def test_layouts_per_profile_and_the_map_exposes_its_own(rcs_model):
         assert phi.inputs == map_input_layout(N_THR, False, profile, m)
         assert phi.step.size1_in(1) == phi.inputs.size
         assert phi.options is not None and phi.options.rcs_profile is profile
-        serialized.add(phi.dense.serialize())  # what cache/compiler.py hashes
+        serialized.add(phi.dense.serialize())  # what compiled/cache/compiler.py hashes
     assert len(serialized) == 3
 
 

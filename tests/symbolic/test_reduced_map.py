@@ -34,7 +34,7 @@ from lightcraft_opt.layout import (
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.options import CoastScheme, PulseMapOptions
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
 from lightcraft_opt.symbolic.maps.reduced_map import (

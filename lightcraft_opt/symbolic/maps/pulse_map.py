@@ -42,12 +42,13 @@ from lightcraft_opt.layout import (
     PARAMETERS,
     PULSE_INPUT,
     STATE,
+    RcsProfile,
     VectorLayout,
     map_input_layout,
     rcs_levels,
 )
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces, build_pulse_map_pieces
 
 __all__ = [

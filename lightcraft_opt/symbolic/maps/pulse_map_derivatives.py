@@ -39,8 +39,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import ENGINE, PARAMETERS, PULSE_INPUT, STATE
-from lightcraft_opt.options import RcsProfile
+from lightcraft_opt.layout import ENGINE, PARAMETERS, PULSE_INPUT, STATE, RcsProfile
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, substep_inputs
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 

@@ -37,14 +37,15 @@ from lightcraft_opt.layout import (
     PARAMETERS,
     PULSE_INPUT,
     STATE,
+    RcsProfile,
     VectorLayout,
     substep_input_layout,
 )
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import CoastScheme, PulseMapOptions, RcsProfile
 from lightcraft_opt.symbolic.maps.assemble import assemble
 from lightcraft_opt.symbolic.maps.coast import Rhs, coning_rate_B, rk4_coast, split_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import build_coast_rhs
+from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.terms.rcs import phase_locked_thrust
 

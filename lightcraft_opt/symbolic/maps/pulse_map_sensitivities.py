@@ -29,8 +29,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
-from lightcraft_opt.options import RcsProfile
+from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, RcsProfile
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, substep_inputs
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 

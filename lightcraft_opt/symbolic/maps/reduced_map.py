@@ -49,15 +49,16 @@ from lightcraft_opt.layout import (
     PULSE_INPUT,
     REDUCED_STATE,
     STATE,
+    RcsProfile,
     VectorLayout,
     input_layout,
     map_input_layout,
 )
 from lightcraft_opt.model import Model
-from lightcraft_opt.options import PulseMapOptions, RcsProfile
 from lightcraft_opt.symbolic.maps.assemble import assemble
 from lightcraft_opt.symbolic.maps.coast import coning_rate_B, rk4_coast
 from lightcraft_opt.symbolic.maps.coast_rhs import coast_terms
+from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, compose_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces

@@ -1,5 +1,7 @@
-"""Options every capability shares (docs/architecture.md#rule-7): the coast scheme, the RCS
-profile, the focus schedule and how the pulse map integrates (frozen dataclasses, Enums)."""
+"""How Φ integrates one pulse interval (docs/architecture.md#rule-7): the coast scheme and
+:class:`PulseMapOptions`, which every capability that builds Φ takes. The RCS profile it
+names shapes Φ's input vector and lives with the layouts
+(:class:`~lightcraft_opt.layout.RcsProfile`)."""
 
 from __future__ import annotations
 
@@ -7,13 +9,9 @@ from dataclasses import dataclass
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
+from lightcraft_opt.layout.vectors import RcsProfile
 
-__all__ = [
-    "CoastScheme",
-    "FocusSchedule",
-    "PulseMapOptions",
-    "RcsProfile",
-]
+__all__ = ["CoastScheme", "PulseMapOptions"]
 
 
 class CoastScheme(Enum):
@@ -26,36 +24,6 @@ class CoastScheme(Enum):
     RK4 = "rk4"  # classical Runge-Kutta, fixed steps
     SPLIT = "split"  # Strang splitting, exact spinning-body rotation (2nd order)
     SPLIT4 = "split4"  # Yoshida composition of SPLIT (4th order)
-
-
-class RcsProfile(Enum):
-    """How the RCS thrust varies over one pulse interval (layout.map_input_layout).
-
-    ``HOLD``: one level per thruster, held from pulse to pulse. ``SUBINTERVALS``: one
-    level per thruster on each of ``rcs_subintervals`` equal sub-intervals of the
-    interval. ``PHASE_LOCKED``: a mean level plus a cosine and a sine at the coning
-    (nutation) rate seen in B, so the torque can turn with the ~216 Hz coning mode
-    (docs/frames.md, "RCS thrust over a pulse interval").
-    """
-
-    HOLD = "hold"
-    SUBINTERVALS = "subintervals"
-    PHASE_LOCKED = "phase_locked"
-
-
-class FocusSchedule(Enum):
-    """Where the director focuses the beam for a craft at height h (shared by the
-    beam-riding study, linearize/beam_riding.py, and the director, control/director.py;
-    docs/beam_riding.md).
-
-    ``FAR``: the far end of the laser's focus range (nearly collimated). ``AT_CRAFT``:
-    f = h, the smallest beam the director can put there. ``MATCHED``: a chosen side at the
-    craft, by default the launch side a0.
-    """
-
-    FAR = "far"
-    AT_CRAFT = "at_craft"
-    MATCHED = "matched"
 
 
 @dataclass(frozen=True)

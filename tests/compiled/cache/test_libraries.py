@@ -1,4 +1,4 @@
-"""Compiled libraries as cache entries (cache/compiler.py, docs/architecture.md#rule-18).
+"""Compiled libraries as cache entries (compiled/cache/compiler.py, docs/architecture.md#rule-18).
 
 Reference: the interpreted Function, and the process that loads a library. Before the
 check, a library cut to half in the cache (an interrupted copy, a full disk) killed every
@@ -24,7 +24,7 @@ import pytest
 from support.damage import DAMAGES
 from support.paths import REPO_ROOT
 
-from lightcraft_opt.cache import (
+from lightcraft_opt.compiled.cache import (
     CacheWarning,
     CompilationWarning,
     EntryStatus,
@@ -39,7 +39,7 @@ pytestmark = pytest.mark.skipif(shutil.which("gcc") is None, reason="needs a C c
 #: Compiles the Function of _square() from the cache and prints its value at (1, 2, 3).
 LOAD = """
 import casadi as ca
-from lightcraft_opt.cache import compile_function
+from lightcraft_opt.compiled.cache import compile_function
 x = ca.SX.sym("x", 3)
 f = ca.Function("square", [x], [ca.sin(x) * ca.dot(x, x)], ["x"], ["s"])
 g = compile_function(f)
@@ -120,7 +120,7 @@ def test_a_damaged_library_that_cannot_be_built_again_is_never_loaded(cache, mon
     compile_function(f)
     path = library_path(f)
     DAMAGES["half"][0](path)
-    monkeypatch.setattr("lightcraft_opt.cache.compiler._build", _no_compiler)
+    monkeypatch.setattr("lightcraft_opt.compiled.cache.compiler._build", _no_compiler)
     with warnings.catch_warnings(record=True) as record:
         warnings.simplefilter("always")
         out = compile_function(f)

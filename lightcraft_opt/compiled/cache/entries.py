@@ -66,7 +66,7 @@ __all__ = [
 BuildReport = Callable[[str], None]
 
 #: Format of the entries; part of every key, so entries of another format are never read.
-_FORMAT = b"lightcraft_opt.cache 2"
+_FORMAT = b"lightcraft_opt.compiled.cache 2"
 _T = TypeVar("_T")
 
 

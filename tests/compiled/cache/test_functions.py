@@ -1,4 +1,4 @@
-"""Functions kept on disk by structure (cache/functions.py, docs/architecture.md#rule-18).
+"""Functions kept on disk by structure (compiled/cache/functions.py, docs/architecture.md#rule-18).
 
 Reference: the Functions that were saved. A loaded Function is the same graph, so it gives
 the same numbers to the last bit; an entry that is not exactly what was written (cut to
@@ -21,7 +21,7 @@ import pytest
 from support.damage import DAMAGES, half
 from support.paths import REPO_ROOT
 
-from lightcraft_opt.cache import (
+from lightcraft_opt.compiled.cache import (
     CacheWarning,
     cache_path,
     checksum_path,
@@ -110,7 +110,7 @@ def test_an_entry_whose_compiled_library_is_not_whole_is_refused_before_loading(
     else:
         half(library)
     code = (
-        "from lightcraft_opt.cache import load_functions\n"
+        "from lightcraft_opt.compiled.cache import load_functions\n"
         "print(load_functions('uses_library', 'k1'))"
     )
     run = subprocess.run(

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from lightcraft_opt.cache.entries import (
+from lightcraft_opt.compiled.cache.entries import (
     BuildReport,
     EntryStatus,
     cache_dir,

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from lightcraft_opt.cache.entries import (
+from lightcraft_opt.compiled.cache.entries import (
     EntryStatus,
     cache_dir,
     check_entry,

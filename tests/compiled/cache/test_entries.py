@@ -1,4 +1,4 @@
-"""Cache entries on disk (cache/entries.py, docs/architecture.md#rule-18).
+"""Cache entries on disk (compiled/cache/entries.py, docs/architecture.md#rule-18).
 
 References: the bytes that were written and sha256sum. An entry reads back exactly as it
 was written, its checksum is sha256sum's line for it, and nothing else is ever handed
@@ -19,7 +19,7 @@ import warnings
 import pytest
 from support.damage import DAMAGES
 
-from lightcraft_opt.cache import (
+from lightcraft_opt.compiled.cache import (
     CacheWarning,
     EntryStatus,
     cache_dir,
@@ -30,7 +30,7 @@ from lightcraft_opt.cache import (
     read_entry,
     write_entry,
 )
-from lightcraft_opt.cache import entries as entries_module
+from lightcraft_opt.compiled.cache import entries as entries_module
 
 DATA = bytes(range(256)) * 40
 

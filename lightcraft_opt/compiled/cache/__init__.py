@@ -8,7 +8,7 @@
 The MPC's scheduled models (control/prediction_model.py) are entries too.
 """
 
-from lightcraft_opt.cache.compiler import (
+from lightcraft_opt.compiled.cache.compiler import (
     DEFAULT_FLAGS,
     DERIVATIVE_FLAGS,
     CompilationWarning,
@@ -18,7 +18,7 @@ from lightcraft_opt.cache.compiler import (
     compiler_version,
     library_path,
 )
-from lightcraft_opt.cache.entries import (
+from lightcraft_opt.compiled.cache.entries import (
     BuildReport,
     CacheWarning,
     EntryCheck,
@@ -34,7 +34,7 @@ from lightcraft_opt.cache.entries import (
     structure_key,
     write_entry,
 )
-from lightcraft_opt.cache.functions import cache_path, load_functions, save_functions
+from lightcraft_opt.compiled.cache.functions import cache_path, load_functions, save_functions
 
 __all__ = [
     "DEFAULT_FLAGS",
