@@ -146,7 +146,7 @@ def input_constraints(
         a[ip] = n
         add(a, zero, -k * pointing_limit, k * pointing_limit, 0.0)
         zrow = np.zeros(CONING.size)
-        zrow[0:2] = n  # r_Y
+        zrow[CONING.index("r_Y")] = n
         add(-a, zrow, -np.inf, k * max_offset, -1.0)
         add(-a, zrow, -k * max_offset, np.inf, 1.0)
     return np.array(zrows), np.array(rows), np.array(lo), np.array(hi), np.array(soft)
