@@ -45,19 +45,8 @@ def linearize(
 
     Parameters
     ----------
-    model : the model Φ was (or is to be) built for.
-    point : operating point (:func:`trim_hover`, :func:`climb_point`).
-    coordinates : ``ERROR_STATE`` (minimal coordinates about the point, docstring of
-        :mod:`lightcraft_opt.linear.linear_model`) or ``FULL`` (A = ∂Φ/∂x on the 17 raw
-        states).
-    states : entries kept, as slot names or ``slot[component]`` (default
-        :data:`REDUCED_STATES` for the error state, every state for ``FULL``). A
-        truncation: the others are held at zero, and their effect is dropped.
-    inputs : map-input entries kept (default all: pointing_L [m], focus [m], energy [J],
-        the RCS slots of the map's profile (``rcs_thrust`` [N] per thruster, and
-        ``rcs_cos``, ``rcs_sin`` [N] for PHASE_LOCKED), motor_torque [N m] with a carrier).
-        The layout is the pulse map's own (``pulse_map.inputs``), so any RCS profile works.
-    pulse_map : Φ, or better its :func:`pulse_map_jacobian` to reuse across points.
+    model, point, coordinates, states, inputs, pulse_map, options : as for
+        :func:`lightcraft_opt.linear.linear_model.linear_model`, whose A and B this wraps.
 
     Returns
     -------
