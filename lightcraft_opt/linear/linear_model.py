@@ -104,6 +104,7 @@ def linear_model(
         ``rcs_cos``, ``rcs_sin`` [N] for PHASE_LOCKED), motor_torque [N m] with a carrier).
         The layout is the pulse map's own (``pulse_map.inputs``), so any RCS profile works.
     pulse_map : Φ, or better its :func:`pulse_map_jacobian` to reuse across points.
+    options : how Φ is built when ``pulse_map`` is None (default: PulseMapOptions()).
 
     Returns
     -------
