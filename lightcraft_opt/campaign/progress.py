@@ -1,11 +1,13 @@
 """A progress line on stderr: done/total, runs per minute, time left.
 
 On a terminal the line overwrites itself (carriage return); otherwise (a log file, a
-pipe) a plain line is printed every ``every`` runs and at the end.
+pipe) a few plain lines: one every tenth of the runs left (by default), one at least every
+minute when runs are slow, and one at the end.
 """
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from typing import TextIO
@@ -22,7 +24,10 @@ class Progress:
     done : runs already made (a resumed campaign); not counted in the rate.
     enabled : False: show nothing.
     stream : default sys.stderr.
-    every : runs between plain lines when ``stream`` is not a terminal.
+    every : runs between plain lines when ``stream`` is not a terminal (default: a tenth of
+        the runs left, so a campaign prints about ten lines to a log however long it is).
+    quiet_for : seconds after which a plain line is printed anyway, so a log of slow runs
+        still shows the campaign alive.
     """
 
     def __init__(
@@ -32,14 +37,16 @@ class Progress:
         *,
         enabled: bool = True,
         stream: TextIO | None = None,
-        every: int = 10,
+        every: int | None = None,
+        quiet_for: float = 60.0,
     ) -> None:
         self.total, self.done, self.start_done = total, done, done
         self.enabled = enabled
         self.stream = stream or sys.stderr
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.every = max(1, every)
-        self.t0 = time.perf_counter()
+        self.every = max(1, every if every is not None else math.ceil((total - done) / 10))
+        self.quiet_for = quiet_for
+        self.t0 = self.last_line = time.perf_counter()
 
     @property
     def rate(self) -> float:
@@ -61,8 +68,15 @@ class Progress:
         if self.tty:
             self.stream.write("\r" + self.line() + "\x1b[K")
             self.stream.flush()
-        elif (self.done - self.start_done) % self.every == 0 or self.done == self.total:
+            return
+        now = time.perf_counter()
+        if (
+            (self.done - self.start_done) % self.every == 0
+            or self.done == self.total
+            or now - self.last_line >= self.quiet_for
+        ):
             print(self.line(), file=self.stream, flush=True)
+            self.last_line = now
 
     def close(self) -> None:
         if self.enabled and self.tty:
