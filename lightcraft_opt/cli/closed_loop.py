@@ -134,8 +134,8 @@ def add(sub: argparse._SubParsersAction) -> None:
         "controller.step(x); x = plant(x, u), and write trajectory.csv, "
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
-        "model is built once per model and cached in $LIGHTCRAFT_CACHE or "
-        "~/.cache/lightcraft_opt (~25 s the first time). A solve over its wall-clock "
+        "model is built once per model and kept in the cache folder (~25 s the first time; "
+        "lightcraft --help: LIGHTCRAFT_CACHE). A solve over its wall-clock "
         "budget is discarded (the shifted plan flies), so results depend on the machine's "
         "load unless --deterministic. Exit status 0: the flight reached its duration; 1: it "
         "ended early (left the beam, landed) or no pulse fired; 2: bad input.",

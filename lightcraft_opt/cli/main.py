@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import textwrap
 import traceback
 import warnings
 from collections.abc import Sequence
@@ -27,10 +28,26 @@ DESCRIPTION = (
     "not converged or ended early (files still written); 2: bad input."
 )
 
+#: The environment variables the package reads, for ``lightcraft --help``
+#: (tests/cli/test_cli_usability.py checks it names every one the code reads).
+ENVIRONMENT = """environment:
+  LIGHTCRAFT_CACHE     the cache folder: compiled pulse maps, the NLP's derivatives, the
+                       MPC's models (default $XDG_CACHE_HOME/lightcraft_opt, else
+                       ~/.cache/lightcraft_opt); delete it to rebuild everything
+  XDG_CACHE_HOME       the base of the default cache folder
+  LIGHTCRAFT_COMPILE   0, false, no or off: step interpreted pulse maps, compile nothing
+  CC                   the C compiler (default gcc)
+  LIGHTCRAFT_DEBUG     1: an internal error prints its traceback"""
+
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``lightcraft`` parser: each command module adds its subcommand."""
-    parser = argparse.ArgumentParser(prog="lightcraft", description=DESCRIPTION)
+    parser = argparse.ArgumentParser(
+        prog="lightcraft",
+        description=textwrap.fill(DESCRIPTION, 79),
+        epilog=ENVIRONMENT,
+        formatter_class=argparse.RawDescriptionHelpFormatter,  # the table as written
+    )
     parser.add_argument("--version", action="version", version=f"lightcraft {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     for command in (simulate, optimize, closed_loop, montecarlo, calibrate):

@@ -200,9 +200,9 @@ def add(sub: argparse._SubParsersAction) -> None:
     sim.add_argument(
         "--interpreted",
         action="store_true",
-        help="step the interpreted pulse map; by default it is compiled to C with gcc, cached "
-        "in $LIGHTCRAFT_CACHE or ~/.cache/lightcraft_opt (the first run of a model structure "
-        "compiles for 5-15 s; LIGHTCRAFT_COMPILE=0 also turns it off)",
+        help="step the interpreted pulse map; by default it is compiled to C with gcc, kept "
+        "in the cache folder (lightcraft --help: LIGHTCRAFT_CACHE; the first run of a model "
+        "structure compiles for 5-15 s; LIGHTCRAFT_COMPILE=0 also turns it off)",
     )
     flown = sim.add_mutually_exclusive_group()
     flown.add_argument(

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import shutil
 
 import pytest
@@ -33,6 +34,19 @@ def test_version_and_top_level_help(capsys):
     assert "Exit status 0: done; 1:" in " ".join(out.split())
     for command in COMMANDS:
         assert command in out
+
+
+def test_top_level_help_names_every_environment_variable_the_code_reads(capsys):
+    """Every ``os.environ.get("NAME")`` in the package (the cache folder and its base, the
+    compiler, compile on or off, tracebacks) is in ``lightcraft --help``."""
+    read = set()
+    for path in (REPO_ROOT / "lightcraft_opt").rglob("*.py"):
+        read |= set(re.findall(r"environ\.get\(\"([A-Z_]+)\"", path.read_text(encoding="utf-8")))
+    assert {"LIGHTCRAFT_CACHE", "XDG_CACHE_HOME"} <= read  # the search finds them
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    listed = set(re.findall(r"^  ([A-Z_]+) ", out[out.index("environment:") :], re.MULTILINE))
+    assert listed == read
 
 
 @pytest.mark.parametrize("command", COMMANDS)
