@@ -52,11 +52,7 @@ from lightcraft_opt.ocp.options import (
     PredictionMap,
 )
 from lightcraft_opt.ocp.problem import (
-    ControlEffort,
-    ControlRate,
-    LateralOffset,
     OcpProblem,
-    TrackReference,
     check_horizon,
 )
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -235,20 +231,9 @@ def load_problem(
 
 
 def objective_names(problem: OcpProblem) -> tuple[str, ...]:
-    """A name per objective term, in order: the file's term name, its slot or reference
-    in brackets (``control_effort[pointing_L]``, ``lateral_offset[beam]``), then ``#2`` ...
-    for repeats. For the cost terms of a result (``OcpResult.cost_terms``)."""
-    by_class = {kind.cls: name for name, kind in OBJECTIVES.items()}
-    names: list[str] = []
-    for term in problem.objective:
-        name = by_class[type(term)]
-        if isinstance(term, ControlEffort | ControlRate | TrackReference):
-            name += f"[{term.slot}]"
-        elif isinstance(term, LateralOffset):
-            name += f"[{term.relative_to.value}]"
-        repeat = sum(n == name or n.startswith(name + "#") for n in names)
-        names.append(f"{name}#{repeat + 1}" if repeat else name)
-    return tuple(names)
+    """A name per objective term, in order (:meth:`OcpProblem.term_names`): the file's term
+    name, its slot or reference in brackets, ``#2`` ... for repeats."""
+    return problem.term_names()
 
 
 # --------------------------------------------------------------------------- the file

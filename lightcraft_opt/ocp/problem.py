@@ -32,6 +32,7 @@ east at the reference height.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from enum import Enum
@@ -479,6 +480,22 @@ class OcpProblem:
         """(n_thrusters,) each thruster's max_thrust [N]."""
         rcs = self.model.craft.rcs
         return np.array([t.max_thrust for t in rcs.thrusters] if rcs else [], dtype=float)
+
+    def term_names(self) -> tuple[str, ...]:
+        """A name per objective term, in order: the term's kind as a problem file names it
+        (``lateral_offset``), its slot or reference in brackets (``control_effort[pointing_L]``,
+        ``lateral_offset[beam]``), then ``#2`` ... for repeats. The names of
+        ``OcpResult.cost_terms``."""
+        names: list[str] = []
+        for term in self.objective:
+            name = re.sub(r"(?<!^)(?=[A-Z])", "_", type(term).__name__).lower()
+            if isinstance(term, ControlEffort | ControlRate | TrackReference):
+                name += f"[{term.slot}]"
+            elif isinstance(term, LateralOffset):
+                name += f"[{term.relative_to.value}]"
+            repeat = sum(n == name or n.startswith(name + "#") for n in names)
+            names.append(f"{name}#{repeat + 1}" if repeat else name)
+        return tuple(names)
 
     def pulse_map_options(self, base: PulseMapOptions) -> PulseMapOptions:
         """``base`` (scheme, substeps, dense) with this problem's RCS profile: the options

@@ -111,6 +111,8 @@ class OcpResult(Presentable):
     solver : the solver used (``OcpSolver`` value).
     cost : objective value at the returned iterate [cost units of the terms].
     cost_terms : (n_terms,) each objective term's value, in the problem's order.
+    cost_term_names : (n_terms,) their names (:meth:`OcpProblem.term_names`:
+        ``lateral_offset[pad]``, ``control_rate[pointing_L]`` ...); () when not given.
     iterations : NLP iterations.
     solve_time : wall time of the solve [s] (the NLP build is ``build_time``).
     build_time : wall time to build the transcription and solver, 0 when reused [s].
@@ -148,6 +150,7 @@ class OcpResult(Presentable):
     dynamics_gap: float = float("nan")
     dynamics_closed: bool = True
     cost_terms: np.ndarray = field(default_factory=lambda: np.empty(0))
+    cost_term_names: tuple[str, ...] = ()
     w: np.ndarray = field(default_factory=lambda: np.empty(0))
     lam_x: np.ndarray = field(default_factory=lambda: np.empty(0))
     lam_g: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -175,6 +178,11 @@ class OcpResult(Presentable):
         col = self.u[:, s.start : s.stop]
         return col[:, 0] if s.size == 1 else col
 
+    def _term_rows(self) -> list[tuple[str, str]]:
+        """One summary row per objective term, its name and value (the cost is their sum)."""
+        names = self.cost_term_names or tuple(f"term {i + 1}" for i in range(self.cost_terms.size))
+        return [(f"  {n}", f"{v:.6g}") for n, v in zip(names, self.cost_terms, strict=True)]
+
     @property
     def laser_energy(self) -> float:
         """Total energy the laser fires over the horizon [J]."""
@@ -187,7 +195,8 @@ class OcpResult(Presentable):
             ("status", f"{self.status.value} ({self.message})"),
             ("solver", f"{self.solver}, {self.iterations} iterations"),
             ("times", f"solve {self.solve_time:.3f} s, build {self.build_time:.3f} s"),
-            ("cost", f"{self.cost:.6g} (terms {np.array2string(self.cost_terms, precision=4)})"),
+            ("cost", f"{self.cost:.6g}"),
+            *self._term_rows(),
             ("violation", f"{self.constraint_violation:.3g} (scaled)"),
             ("horizon", f"{self.horizon} pulses, {float(self.t[-1] - self.t[0]):.3f} s"),
         ]

@@ -540,6 +540,7 @@ class CompiledOcp:
             dynamics_gap=gap,
             dynamics_closed=gap <= tol,
             cost_terms=terms,
+            cost_term_names=pr.term_names(),
             w=w,
             lam_x=lam_x,
             lam_g=lam_g,
