@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from lightcraft_opt.cli.args import integer, real
 from lightcraft_opt.model.checks import MAX_DURATION
+from lightcraft_opt.model.limits import MAX_WIND_SPEED, WHY_MAX_WIND_SPEED
 from lightcraft_opt.ocp.problem import MAX_HORIZON
 
 # The ranges of the numeric flags, each with its reason (cli/args.py).
@@ -14,6 +15,9 @@ DURATION = real(
     unit="s",
     why="an hour at most: a lightcraft flight lasts seconds",
 )
+
+
+WIND_SPEED = real(0.0, MAX_WIND_SPEED, unit="m/s", why=WHY_MAX_WIND_SPEED)
 
 
 LAUNCH_SPEED = real(

@@ -3,12 +3,21 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 from pathlib import Path
 
 from lightcraft_opt.cli.args import finite, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
-from lightcraft_opt.cli.flags import DROPOUT, DURATION, LAUNCH_SPEED, OFFSET, SEED, TILT
+from lightcraft_opt.cli.flags import (
+    DROPOUT,
+    DURATION,
+    LAUNCH_SPEED,
+    OFFSET,
+    SEED,
+    TILT,
+    WIND_SPEED,
+)
 from lightcraft_opt.errors import LightcraftError, renamed
 from lightcraft_opt.files.model import load_model, load_record
 from lightcraft_opt.files.plan import read_plan
@@ -19,9 +28,26 @@ from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.simulate import simulate
 
 
+def _with_wind(model: Model, speed: float | None, direction_deg: float | None) -> Model:
+    """``model`` in the wind of ``--wind-mps`` (at the reference height, the file's shear)
+    and ``--wind-from-deg`` (where it blows from, clockwise from north); either alone keeps
+    the file's other value."""
+    if speed is None and direction_deg is None:
+        return model
+    wind = model.environment.wind
+    wind = dataclasses.replace(
+        wind,
+        speed_ref=wind.speed_ref if speed is None else speed,
+        direction_from=wind.direction_from
+        if direction_deg is None
+        else math.radians(direction_deg),
+    )
+    return dataclasses.replace(model, environment=dataclasses.replace(model.environment, wind=wind))
+
+
 def run(args: argparse.Namespace) -> int:
     check_kind(args.model, "simulate")
-    model = load_model(args.model)
+    model = _with_wind(load_model(args.model), args.wind_mps, args.wind_from_deg)
     track = None if args.track is None else read_track(args.track)
     period = 1.0 / model.flight.pulse_rate
     plan = None if args.inputs is None else read_plan(args.inputs, _input_layout(model), period)
@@ -183,6 +209,19 @@ def add(sub: argparse._SubParsersAction) -> None:
             default=argparse.SUPPRESS,
             help=argparse.SUPPRESS,
         )
+    sim.add_argument(
+        "--wind-mps",
+        type=WIND_SPEED,
+        default=None,
+        help="wind speed at the reference height [m/s] instead of the model file's "
+        "(environment.wind: its height, shear and gust stay)",
+    )
+    sim.add_argument(
+        "--wind-from-deg",
+        type=finite,
+        default=None,
+        help="where the wind blows from, clockwise from north [deg] instead of the file's",
+    )
     sim.add_argument(
         "--dropout-rate",
         type=DROPOUT,
