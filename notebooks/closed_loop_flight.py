@@ -66,10 +66,10 @@ print("drop-outs:", problem.loop.dropout_rate)
 #
 # The MPC and the LQR share the scheduled linear model (built once, ~25 s, then cached) and
 # the objective of the file's `[mpc.tolerances]`; "none" flies the nominal input.
-# The MPC flies without the file's wall-clock budget (the deterministic mode, as
-# `lightcraft closed-loop --deterministic`): the flight, and the figures below, are then the
-# same on any machine, however loaded; the injected late answers still come late. The
-# solve times are measured all the same and drawn against the file's budget.
+# The MPC flies without a wall-clock budget (the deterministic mode, the default; a file's
+# `time_budget_ms` would make a real-time study): the flight, and the figures below, are then
+# the same on any machine, however loaded; the injected late answers still come late. The
+# solve times are measured all the same.
 
 # %%
 plant = build_pulse_map(model, PLANT_MAP)

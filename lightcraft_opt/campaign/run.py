@@ -13,12 +13,12 @@ a row of wall-clock timings, kept apart so that tables can be compared bit for b
 writes: a row it refuses is flown again (run_table.py).
 
 The plant Φ and the controller are built once per process and thread (keyed by the
-campaign's fingerprint), not per run. Determinism: the MPC normally discards a solve that
-overruns its wall-clock ``time_budget`` and flies its fallback plan, which would make a run
-depend on the machine's load; campaign runs fly the deterministic mode instead
-(``time_budget=None``: a solve is never late, injected ``late`` faults still are), so a run
-depends only on (campaign, seed, index). A run that raises is a row with status ``error``
-and the message.
+campaign's fingerprint), not per run. Determinism: a wall-clock ``time_budget`` (a
+real-time study) would discard solves that overrun it and make a run depend on the
+machine's load; campaign runs fly the deterministic mode even where the file sets one
+(``time_budget=None``, the controllers' default: a solve is never late, injected ``late``
+faults still are), so a run depends only on (campaign, seed, index). A run that raises is
+a row with status ``error`` and the message.
 """
 
 from __future__ import annotations

@@ -135,9 +135,10 @@ def add(sub: argparse._SubParsersAction) -> None:
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
         "model is built once per model and kept in the cache folder (~25 s the first time; "
-        "lightcraft --help: LIGHTCRAFT_CACHE). A solve over its wall-clock "
-        "budget is discarded (the shifted plan flies), so results depend on the machine's "
-        "load unless --deterministic. Exit status 0: the flight reached its duration; 1: it "
+        "lightcraft --help: LIGHTCRAFT_CACHE). The flight depends only on its inputs: no "
+        "solve has a wall-clock budget unless the file's time_budget_ms or --time-budget-ms "
+        "makes a real-time study (a later solve is discarded, the shifted plan flies). Exit "
+        "status 0: the flight reached its duration; 1: it "
         "ended early (left the beam, landed) or no pulse fired; 2: bad input.",
     )
     loop.add_argument("problem", help="closed-loop TOML, e.g. problems/nutation_suppression.toml")
@@ -164,9 +165,9 @@ def add(sub: argparse._SubParsersAction) -> None:
     budget.add_argument(
         "--deterministic",
         action="store_true",
-        help="no wall-clock budget for the MPC and the director (time_budget none): no "
-        "solve is discarded as late, so the results depend only on the inputs, not on the "
-        "machine's load (injected 'late' faults still fall back)",
+        help="no wall-clock budget for the MPC and the director even where the file sets "
+        "time_budget_ms (the default without one): no solve is discarded as late, so the "
+        "results depend only on the inputs (injected 'late' faults still fall back)",
     )
     budget.add_argument(
         "--time-budget-ms",

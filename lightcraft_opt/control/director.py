@@ -22,7 +22,7 @@ Every pulse, ``u = director.step(x)`` (docs/director.md):
 4. fly the first input and keep the plan. A solve that fails or overruns the budget is
    discarded and the plan's next input flies (status ``fallback_*``); once the plan is used
    up, the schedule's focus and the flight's energy with the beam on the craft. No budget
-   (``time_budget=None``, the deterministic mode): no solve is late.
+   (``time_budget=None``, the default: the deterministic mode): no solve is late.
 
 The focus is decided in its vergence κ = 1/f: the beam's side at height z is
 a0 sqrt((1 - z κ)² + (z/z_R)²), affine in κ inside the root, so the QP sees a nearly linear

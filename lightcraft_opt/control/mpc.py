@@ -28,10 +28,11 @@ interpolation adds 0.3 % (A) to 1 % (B).
 A solve that fails (solver error, iteration cap, NaN) or overruns the wall-time budget is
 discarded: the previous plan's next input is applied (the shifted plan) and the pulse is
 counted as a fallback in ``last.status``; once the plan is used up the operating input
-(RCS off, beam on the pad axis) is applied. With ``time_budget=None`` (the deterministic
-mode) no solve is late: the flight depends only on its inputs, not on the machine's load.
+(RCS off, beam on the pad axis) is applied. With ``time_budget=None`` (the default, the
+deterministic mode) no solve is late: the flight depends only on its inputs, not on the
+machine's load.
 
-Actuators. The RCS thrust is phase-locked to the coning rate in B (options.RcsProfile):
+Actuators. The RCS thrust is phase-locked to the coning rate in B (layout.RcsProfile):
 a mean level plus a cosine and a sine at ω per thruster. The coning mode (216 Hz) turns
 ~8.3 times a pulse interval, so a held level averages out (test_rcs_profiles: 25 times
 less coning removed per interval than a phase-locked torque of the same peak) and

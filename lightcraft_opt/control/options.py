@@ -129,10 +129,11 @@ class MpcOptions:
     solver : QP solver (:class:`MpcSolver`); HPIPM on the stage-structured QP.
     max_iter : iteration cap of the QP solver, >= 1 (a solve that reaches it falls back).
     tol : solver tolerance on the residuals, in (0, 1).
-    time_budget : wall time a solve may take [s], > 0: a later answer is discarded and
-        the shifted previous plan flies (not applied to IPOPT, the reference). None: no
-        wall-clock check, the deterministic mode (max_iter still bounds the work): the
-        flight then depends only on its inputs, not on the machine's load.
+    time_budget : None (default): no wall-clock check, the deterministic mode (max_iter
+        still bounds the work): the flight depends only on its inputs, not on the machine's
+        load. A number [s], > 0, makes a real-time study: a solve that takes longer is
+        discarded and the shifted previous plan flies (not applied to IPOPT, the
+        reference).
     envelope_directions : P >= 2: the thrust envelope, the pointing limit and the beam
         offset limit are regular 2P-gons inscribed in their circles.
     max_offset_over_capture_radius : soft limit of the predicted beam offset over the
@@ -146,7 +147,7 @@ class MpcOptions:
     solver: MpcSolver = MpcSolver.HPIPM
     max_iter: int = 30
     tol: float = 1e-6
-    time_budget: float | None = 5e-3
+    time_budget: float | None = None
     envelope_directions: int = 4
     max_offset_over_capture_radius: float = 0.4
     warm_start: bool = True
@@ -258,9 +259,9 @@ class DirectorOptions:
     solver : QP solver (:class:`MpcSolver`); HPIPM on the stage structure.
     max_iter : QP iteration cap, >= 1.
     tol : QP tolerance on the residuals, in (0, 1).
-    time_budget : wall time the QP may take [s], > 0; a later answer is discarded and the
-        shifted plan flies (not applied to IPOPT, the reference). None: no wall-clock
-        check, the deterministic mode (as :class:`MpcOptions`).
+    time_budget : None (default): no wall-clock check, the deterministic mode; a number
+        [s], > 0: a real-time study, a QP that takes longer is discarded and the shifted
+        plan flies (as :class:`MpcOptions`).
     relinearize : stages whose Jacobians are computed afresh each pulse, in [1, horizon]:
         the first (at the measured state), the new last one and the others in turn; the
         rest are the previous pulses' Jacobians, shifted (a multi-level real-time
@@ -286,7 +287,7 @@ class DirectorOptions:
     solver: MpcSolver = MpcSolver.HPIPM
     max_iter: int = 30
     tol: float = 1e-6
-    time_budget: float | None = 20e-3
+    time_budget: float | None = None
     relinearize: int = 3
     focus_schedule: FocusSchedule = FocusSchedule.MATCHED
     matched_side: float | None = None

@@ -34,6 +34,7 @@ from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
+    DirectorOptions,
     MeasurementNoise,
     MpcOptions,
     PlantDispersion,
@@ -245,8 +246,9 @@ class _SlowAt:
 def test_the_deterministic_mode_ignores_a_slow_solve(prediction, plant):
     """The same 0.3 s of coning flown three times. Without a budget (time_budget None)
     the flight with a 50 ms stall in pulse 3's solve is the calm machine's to the last
-    bit: same states, inputs and log. With the default 5 ms budget the stalled solve is
-    discarded (FALLBACK_LATE at pulse 3) and the shifted plan flies."""
+    bit: same states, inputs and log; so is the default's (no budget either). With a 5 ms
+    budget, a real-time study, the stalled solve is discarded (FALLBACK_LATE at pulse 3)
+    and the shifted plan flies."""
     x0 = coned(MODEL, 5.0)
     calm = closed_loop(
         MODEL, MpcController(MODEL, NO_CLOCK, prediction=prediction), 0.3, x0=x0, pulse_map=plant
@@ -262,8 +264,8 @@ def test_the_deterministic_mode_ignores_a_slow_solve(prediction, plant):
     assert calm.log.count(ControllerStatus.SOLVED) == 8
     np.testing.assert_array_equal(calm.log.iterations, stalled.log.iterations)
 
-    budget = MpcController(MODEL, MpcOptions(), prediction=prediction)
-    assert budget.options.time_budget == 5e-3
+    assert MpcOptions().time_budget is None and DirectorOptions().time_budget is None
+    budget = MpcController(MODEL, MpcOptions(time_budget=5e-3), prediction=prediction)
     _SlowAt(budget, 3)
     real_time = closed_loop(MODEL, budget, 0.3, x0=x0, pulse_map=plant)
     assert real_time.log.status[3] is ControllerStatus.FALLBACK_LATE
