@@ -31,13 +31,15 @@ from lightcraft_opt.ocp.problem import (
     TiltLimit,
 )
 from lightcraft_opt.ocp.result import OcpResult
-from lightcraft_opt.simulation.result import PulseRecord
+from lightcraft_opt.simulation.flight_measures import flight_result
+from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
 __all__ = [
     "constraint_margins",
     "engine_columns",
     "input_columns",
+    "node_flight",
     "node_tilt",
     "offsets_over_capture_radius",
     "replay_summary",
@@ -133,6 +135,22 @@ def node_tilt(result: OcpResult, problem: OcpProblem) -> np.ndarray:
     """(N + 1,) angle of b1 from L up at the nodes [rad]."""
     _, _, tilt, _, _ = build_invariants().map(len(result.t))(result.x.T, problem.p)
     return np.asarray(tilt).ravel()
+
+
+def node_flight(result: OcpResult, problem: OcpProblem) -> SimulationResult:
+    """The solve's nodes as a flight sampled at the node times, with their angular
+    momentum H_L, tilt, coning and mass under the problem's parameters, and its pulses
+    (inputs and engine outputs) fired at t[:-1]: what the per-pulse plots read
+    (trajectory.png's tilt band, :mod:`lightcraft_opt.plots.per_pulse`)."""
+    return flight_result(
+        problem.model,
+        result.t,
+        result.x,
+        problem.p,
+        SimulationStatus.DURATION_REACHED,
+        "the optimal control solve's nodes",
+        pulses=PulseRecord(result.t[:-1], result.u, result.engine),
+    )
 
 
 def constraint_margins(result: OcpResult, problem: OcpProblem) -> list[dict[str, Any]]:

@@ -40,7 +40,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
 from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
-from lightcraft_opt.files.ocp_outputs import write_ocp_summary, write_solution_csv
+from lightcraft_opt.files.ocp_outputs import node_flight, write_ocp_summary, write_solution_csv
 from lightcraft_opt.files.problem import ProblemFile
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import (
@@ -222,7 +222,8 @@ def _ocp_plot(
     if isinstance(problem, ProblemFile):
         title = problem.title if title is None else title
         problem = problem.problem
-    return ocp_figures(result, problem, title=title or "")
+    nodes = node_flight(result, problem) if problem is not None else None
+    return ocp_figures(result, problem, title=title or "", nodes=nodes)
 
 
 def _ocp_save(

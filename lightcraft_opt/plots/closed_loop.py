@@ -6,6 +6,9 @@ and an optional axes, draws, labels the line with the controller's name (so that
 controllers drawn on one axes compare), and returns the artists (docs/architecture.md#rule-10); none
 calls ``show()``. :func:`closed_loop_figures` builds the files the CLI writes. Angles are
 shown in degrees, lengths in cm, propellant in g; the data stay SI.
+
+The reference lines (the coning threshold, the capture radius) carry labels, and the
+figures gather every label into one legend below the panels, where it hides no curve.
 """
 
 from __future__ import annotations
@@ -22,13 +25,17 @@ from lightcraft_opt.layout import PULSE_INPUT, VectorLayout
 from lightcraft_opt.model import Laser
 from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
 from lightcraft_opt.plots.labels import state_label
+from lightcraft_opt.plots.titles import fit_suptitle
 
 __all__ = [
+    "capture_radius_label",
     "closed_loop_figures",
     "compare_closed_loops",
+    "coning_threshold_label",
     "fallback_times",
     "inputs_figure",
     "mark_fallbacks",
+    "panels_legend",
     "plot_closed_loop_altitude",
     "plot_closed_loop_coning",
     "plot_closed_loop_offset",
@@ -46,6 +53,19 @@ CONTROLLER_COLORS = {
     "director": "tab:green",
     "none": "0.45",
 }
+#: The open loop is drawn dashed: a controller that flies it (e.g. one whose every step fell
+#: back) is seen beneath it.
+OPEN_LOOP = "none"
+
+
+def coning_threshold_label(threshold_deg: float) -> str:
+    """Legend label of the coning threshold line [deg]."""
+    return f"coning threshold {threshold_deg:g} deg"
+
+
+def capture_radius_label(capture_radius: float) -> str:
+    """Legend label of the capture radius line (``capture_radius`` in m, shown in cm)."""
+    return f"capture radius {100 * capture_radius:.3g} cm"
 
 
 def _axes(ax: Axes | None) -> Axes:
@@ -65,6 +85,7 @@ def _style(result: ClosedLoopResult) -> dict[str, Any]:
         "color": CONTROLLER_COLORS.get(result.controller),
         "marker": ".",
         "markersize": 4,
+        "linestyle": "--" if result.controller == OPEN_LOOP else "-",
     }
 
 
@@ -77,11 +98,13 @@ def _finish(ax: Axes, ylabel: str) -> None:
 def plot_closed_loop_coning(
     result: ClosedLoopResult, *, ax: Axes | None = None, threshold_deg: float | None = 0.5
 ) -> list[Any]:
-    """Coning angle b1 to H [deg] before each pulse; a dotted line at ``threshold_deg``."""
+    """Coning angle b1 to H [deg] before each pulse; a dotted line at ``threshold_deg``,
+    labelled (:func:`coning_threshold_label`)."""
     ax = _axes(ax)
     lines = ax.plot(_node_times(result), np.degrees(result.coning), **_style(result))
     if threshold_deg is not None:
-        lines.append(ax.axhline(threshold_deg, color="k", ls=":", lw=0.8))
+        label = coning_threshold_label(threshold_deg)
+        lines.append(ax.axhline(threshold_deg, color="k", ls=":", lw=0.8, label=label))
     _finish(ax, "coning angle b1 to H [deg]")
     return lines
 
@@ -98,11 +121,12 @@ def plot_closed_loop_offset(
     result: ClosedLoopResult, *, ax: Axes | None = None, capture_radius: float | None = None
 ) -> list[Any]:
     """Distance of the optic centre from the beam axis at each pulse [cm]; the capture
-    radius [m] dashed when given."""
+    radius [m] dashed when given, labelled (:func:`capture_radius_label`)."""
     ax = _axes(ax)
     lines = ax.plot(result.pulse_t, 100 * result.offset, **_style(result))
     if capture_radius is not None:
-        lines.append(ax.axhline(100 * capture_radius, color="k", ls="--", lw=0.8))
+        label = capture_radius_label(capture_radius)
+        lines.append(ax.axhline(100 * capture_radius, color="k", ls="--", lw=0.8, label=label))
     _finish(ax, "beam offset at the optic [cm]")
     return lines
 
@@ -255,8 +279,23 @@ def _panels(results: list[ClosedLoopResult], capture_radius: float | None) -> tu
     for ax in axs[0]:
         ax.set_xlabel("")
         ax.tick_params(labelbottom=False)
-    axs[0, 0].legend(loc="upper right", fontsize=9)
     return fig, axs
+
+
+def panels_legend(fig: Figure) -> Any:
+    """One legend of every labelled artist on ``fig``'s axes (each label once, in the
+    order drawn), below the panels: outside every axes, it hides no curve."""
+    handles: dict[str, Any] = {}
+    for ax in fig.axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            handles.setdefault(label, handle)
+    return fig.legend(
+        list(handles.values()),
+        list(handles),
+        loc="outside lower center",
+        ncols=min(len(handles), 5),
+        fontsize=9,
+    )
 
 
 def compare_closed_loops(
@@ -266,9 +305,10 @@ def compare_closed_loops(
     one line per controller, labelled and coloured by its name), like
     :func:`closed_loop_figures`' closed_loop.png."""
     fig, _ = _panels(results, capture_radius)
+    panels_legend(fig)
     said = ", ".join(f"{r.controller} {r.flight.status.value}" for r in results)
     name = title or (results[0].flight.model_name if results else "")
-    fig.suptitle(f"{name}: {said}")
+    fit_suptitle(fig, f"{name}\n{said}")
     return fig
 
 
@@ -290,10 +330,12 @@ def closed_loop_figures(
     fig, axs = _panels([result], capture_radius)
     for ax in axs.ravel():
         mark_fallbacks(result, ax=ax)
+    panels_legend(fig)
     fallbacks = int(np.sum(result.log.fallbacks))
-    fig.suptitle(
-        f"{title or result.flight.model_name}: {result.controller}, "
-        f"{result.flight.status.value}, {fallbacks} fallbacks"
+    fit_suptitle(
+        fig,
+        f"{title or result.flight.model_name}\n{result.controller}, "
+        f"{result.flight.status.value}, {fallbacks} fallbacks",
     )
     hist = Figure(figsize=(6.5, 4.5), layout="constrained")
     plot_solve_times(result, ax=hist.add_subplot(), budget=budget)

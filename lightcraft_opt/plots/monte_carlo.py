@@ -21,6 +21,7 @@ from lightcraft_opt.campaign.summary import CHI2_2DOF_95
 from lightcraft_opt.plots.labels import state_label
 
 __all__ = [
+    "ELLIPSE_RUNS",
     "STATUS_COLORS",
     "monte_carlo_figures",
     "plot_apogee_histogram",
@@ -31,6 +32,8 @@ __all__ = [
 ]
 
 Table = Mapping[str, np.ndarray]
+#: Fewest runs of one outcome given a mean and ellipses (a covariance of fewer is degenerate).
+ELLIPSE_RUNS = 3
 #: Colour of each run status.
 STATUS_COLORS = {
     "duration_reached": "tab:blue",
@@ -62,9 +65,13 @@ def plot_end_points(
     table: Table, *, ax: Axes | None = None, capture_radius: float | None = None
 ) -> list[Any]:
     """Where each run ends (its landing point when it landed, else its last position:
-    runs.csv's ``final_x_m``, ``final_y_m``), east against north, by status, with the 1σ
-    and 95 % ellipses of all the points and, given ``capture_radius`` [m], the optic's
-    capture circle about the pad (the beam axis of a beam held there) for scale."""
+    runs.csv's ``final_x_m``, ``final_y_m``), east against north, each outcome (run
+    status) apart in its colour: its points and, with at least :data:`ELLIPSE_RUNS` of them,
+    its mean (+) and its 1σ and 95 % ellipses. The outcomes are not one Gaussian cloud (the
+    runs that stay in the beam end near it, those that leave it far out), so no ellipse
+    spans two. Given ``capture_radius`` [m], the optic's capture circle about the pad (the
+    beam axis of a beam held there) for scale. The legend is beside the axes, off the
+    points."""
     ax = _axes(ax)
     status = _status(table)
     east = 100.0 * np.asarray(table["final_x_m"], dtype=float)
@@ -72,28 +79,31 @@ def plot_end_points(
     artists: list[Any] = []
     for name in sorted(set(status) - {"error"}):
         sel = status == name
+        color = STATUS_COLORS.get(name)
         artists.append(
-            ax.scatter(east[sel], north[sel], s=12, color=STATUS_COLORS.get(name), label=name)
+            ax.scatter(east[sel], north[sel], s=12, color=color, label=f"{name} ({sel.sum()})")
         )
-    ok = np.isfinite(east) & np.isfinite(north) & (status != "error")
-    if ok.sum() >= 3:
+        ok = sel & np.isfinite(east) & np.isfinite(north)
+        if ok.sum() < ELLIPSE_RUNS:
+            continue
         xy = np.vstack([east[ok], north[ok]])
         mean, cov = xy.mean(axis=1), np.cov(xy)
-        for scale, style, label in ((1.0, "-", "1σ"), (CHI2_2DOF_95, "--", "95 %")):
+        for scale, style, what in ((1.0, "-", "1σ"), (CHI2_2DOF_95, "--", "95 %")):
             ex, ey = _ellipse_xy(mean, cov, scale)
-            artists += ax.plot(ex, ey, style, color="0.2", lw=1, label=f"{label} ellipse")
-        artists += ax.plot(*mean, "+", color="0.2", ms=10)
+            label = f"{name}: {what} ellipse"
+            artists += ax.plot(ex, ey, style, color=color, lw=1, label=label)
+        artists += ax.plot(*mean, "+", color=color, ms=10, label=f"{name}: mean")
     if capture_radius is not None:
         a = np.linspace(0.0, 2.0 * math.pi, 121)
         r = 100.0 * capture_radius
         artists += ax.plot(
-            r * np.cos(a), r * np.sin(a), color="tab:green", lw=1.0, label="capture radius"
+            r * np.cos(a), r * np.sin(a), color="0.3", ls=":", lw=1.0, label="capture radius"
         )
     ax.set_xlabel(state_label("east", "r_L", "east", "cm"))
     ax.set_ylabel(state_label("north", "r_L", "north", "cm"))
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.set_title("end points (landing, else last position)")
     return artists
 
@@ -181,13 +191,14 @@ def monte_carlo_figures(
     dispersed: Sequence[str] = (),
     capture_radius: float | None = None,
 ) -> dict[str, Figure]:
-    """{file name: figure} of a campaign: end points with ellipses (and the capture circle
-    of ``capture_radius`` [m]), apogee histogram, per-run extremes. With ``dispersed``
-    (the run-table columns of the drawn inputs, ``Campaign.dispersions.columns``),
-    run_extremes.png puts the largest tilt against the largest coning beside the largest
-    beam offset against each drawn input; without, against the run number."""
+    """{file name: figure} of a campaign: end points with each outcome's ellipses (and the
+    capture circle of ``capture_radius`` [m]), apogee histogram, per-run extremes. With
+    ``dispersed`` (the run-table columns of the drawn inputs,
+    ``Campaign.dispersions.columns``), run_extremes.png puts the largest tilt against the
+    largest coning beside the largest beam offset against each drawn input; without,
+    against the run number."""
     figures: dict[str, Figure] = {}
-    fig = Figure(figsize=(6, 4.5), layout="constrained")
+    fig = Figure(figsize=(8, 4.8), layout="constrained")
     plot_end_points(table, ax=fig.add_subplot(), capture_radius=capture_radius)
     figures["end_points.png"] = fig
     fig = Figure(figsize=(6, 4.5), layout="constrained")

@@ -4,8 +4,16 @@ beam's offset on the optic against the capture constraint.
 Axes-level functions take an :class:`~lightcraft_opt.ocp.result.OcpResult` and an
 optional ``ax`` and return the artists; :func:`ocp_figures` builds the figures the CLI
 saves. Pulse k fires at ``t[k]`` and its input holds until the next pulse, so inputs are
-drawn as steps; states are drawn at the nodes. Positions in L (docs/frames.md: x east,
+drawn as steps; positions are drawn at the nodes. Positions in L (docs/frames.md: x east,
 y north, z up, origin at the pad).
+
+The attitude is not drawn as b1's tilt at the nodes: b1 cones about the angular momentum H
+at some 216 Hz, and one sample a pulse draws beats that are not there. As on attitude.png
+(:mod:`lightcraft_opt.plots.per_pulse`), the tilt of H is drawn with the band b1's tilt
+takes over each pulse interval, from the nodes' H and coning angle, which only the
+aerodynamic and RCS torques change between pulses. Those need the model's mass properties:
+the caller gives the nodes as a flight (``nodes``,
+:func:`~lightcraft_opt.files.ocp_outputs.node_flight`); plots hold no casadi.
 """
 
 from __future__ import annotations
@@ -17,7 +25,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.layout import PARAMETERS
 from lightcraft_opt.ocp.problem import (
     NoGroundContact,
     OcpProblem,
@@ -27,7 +35,8 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.plots.labels import auto_length_unit, length_factor, state_label
-from lightcraft_opt.simulation.result import PulseRecord
+from lightcraft_opt.plots.trajectory import plot_tilt
+from lightcraft_opt.simulation.result import PulseRecord, SimulationResult
 
 __all__ = [
     "Bounds",
@@ -90,15 +99,6 @@ def _draw_bounds(ax: Axes, bounds: Bounds, scale: float = 1.0) -> list[Any]:
         label = "bounds" if i == 0 else None
         artists.append(ax.axhline(scale * v, color="0.3", ls="--", lw=0.9, label=label))
     return artists
-
-
-def _tilt(x: np.ndarray) -> np.ndarray:
-    """(n,) angle between b1 and L up [rad] from the states' q_LB (w, x, y, z):
-    b1's up component is R_LB[2, 0] = 2 (x z - w y) / |q|^2."""
-    q = x[:, STATE.index("q_LB")]
-    w, qx, qy, qz = q.T
-    up = 2.0 * (qx * qz - w * qy) / np.sum(q * q, axis=1)
-    return np.arccos(np.clip(up, -1.0, 1.0))
 
 
 def _offset_L(result: OcpResult) -> np.ndarray:
@@ -178,25 +178,28 @@ def plot_node_altitude(
 
 
 def plot_node_tilt(
-    result: OcpResult, *, ax: Axes | None = None, max_tilt: float | None = None
+    nodes: SimulationResult, *, ax: Axes | None = None, max_tilt: float | None = None
 ) -> list[Any]:
-    """Tilt of b1 from L up at the nodes [deg]; the problem's tilt limit [rad] dashed."""
+    """Tilt of H from L up at the nodes [deg] inside the band b1's tilt takes over each
+    pulse interval (:func:`~lightcraft_opt.plots.trajectory.plot_tilt` of the solve's
+    ``nodes``, a flight sampled at the nodes); the problem's tilt limit [rad] dashed (it
+    bounds b1's tilt at the nodes, which lies in the band)."""
     ax = _axes(ax)
-    lines = ax.plot(result.t, np.degrees(_tilt(result.x)), marker=".", color="tab:purple")
+    artists = plot_tilt(nodes, ax=ax)
     if max_tilt is not None:
-        lines.append(
+        artists.append(
             ax.axhline(
                 np.degrees(max_tilt),
                 color="C3",
                 ls="--",
                 lw=0.9,
-                label=f"limit {np.degrees(max_tilt):.3g} deg",
+                label=f"tilt limit {np.degrees(max_tilt):.3g} deg (b1 at the nodes)",
             )
         )
-        ax.legend(loc="best", fontsize=9)
+    ax.legend(loc="best", fontsize=9)
     ax.set_ylim(bottom=0.0)
-    _finish(ax, "tilt of b1 from L up [deg]")
-    return lines
+    _finish(ax, "tilt from L up [deg]")
+    return artists
 
 
 def plot_drift(
@@ -297,12 +300,20 @@ def controls_figure(
 
 
 def ocp_trajectory_figure(
-    result: OcpResult, *, title: str = "", problem: OcpProblem | None = None
+    result: OcpResult,
+    *,
+    title: str = "",
+    problem: OcpProblem | None = None,
+    nodes: SimulationResult | None = None,
 ) -> Figure:
-    """Altitude, east/north drift and tilt at the nodes, sharing time, with the
-    ``problem``'s altitude and tilt limits dashed."""
-    fig = Figure(figsize=(8.5, 8.5), layout="constrained")
-    ax_z, ax_d, ax_t = fig.subplots(3, 1, sharex=True)
+    """Altitude and east/north drift at the nodes and, given the ``nodes`` as a flight, the
+    tilt of H with b1's band per pulse interval (:func:`plot_node_tilt`), sharing time,
+    with the ``problem``'s altitude and tilt limits dashed. Without ``nodes`` the tilt is
+    left out, not drawn from b1's aliased samples."""
+    panels = 3 if nodes is not None else 2
+    fig = Figure(figsize=(8.5, 2.6 * panels + 0.7), layout="constrained")
+    axes = fig.subplots(panels, 1, sharex=True)
+    ax_z, ax_d = axes[:2]
     limits: list[tuple[float, str]] = []
     tilts: list[float] = []
     for c in problem.constraints if problem is not None else ():
@@ -314,8 +325,9 @@ def ocp_trajectory_figure(
             tilts.append(c.max_tilt)
     plot_node_altitude(result, ax=ax_z, limits=limits)
     plot_drift(result, ax=ax_d)
-    plot_node_tilt(result, ax=ax_t, max_tilt=min(tilts) if tilts else None)
-    for ax in (ax_z, ax_d):
+    if nodes is not None:
+        plot_node_tilt(nodes, ax=axes[2], max_tilt=min(tilts) if tilts else None)
+    for ax in axes[:-1]:
         ax.label_outer()
     fig.suptitle(_title(result, title))
     return fig
@@ -336,13 +348,19 @@ def capture_figure(
 
 
 def ocp_figures(
-    result: OcpResult, problem: OcpProblem | None = None, *, title: str = ""
+    result: OcpResult,
+    problem: OcpProblem | None = None,
+    *,
+    title: str = "",
+    nodes: SimulationResult | None = None,
 ) -> dict[str, Figure]:
     """Every figure of a solve by file name: controls.png, trajectory.png, capture.png.
 
     ``problem`` (the one solved) gives the capture radius, the tightest
     :class:`~lightcraft_opt.ocp.problem.OffsetLimit`, the input bounds (inputs it holds
-    fixed are left out), the altitude limits and the tilt limit.
+    fixed are left out), the altitude limits and the tilt limit. ``nodes`` (the solve's
+    nodes as a flight, :func:`~lightcraft_opt.files.ocp_outputs.node_flight`) gives
+    trajectory.png its tilt panel (:func:`ocp_trajectory_figure`).
     """
     radius = fraction = focus = None
     if problem is not None:
@@ -356,7 +374,7 @@ def ocp_figures(
         focus = bool(np.any(problem.free[problem.inputs.index("focus")]))
     return {
         "controls.png": controls_figure(result, focus=focus, title=title, problem=problem),
-        "trajectory.png": ocp_trajectory_figure(result, title=title, problem=problem),
+        "trajectory.png": ocp_trajectory_figure(result, title=title, problem=problem, nodes=nodes),
         "capture.png": capture_figure(
             result, capture_radius=radius, fraction=fraction, title=title
         ),

@@ -24,7 +24,7 @@ from support.paths import REPO_ROOT
 from support.results import made_up_solve
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.files.ocp_outputs import solution_columns
+from lightcraft_opt.files.ocp_outputs import node_flight, solution_columns
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import STATE, initial_state, map_input_layout
 from lightcraft_opt.ocp.options import OCP_TIME_LIMIT
@@ -268,7 +268,7 @@ def test_ocp_figures_draw_the_results_numbers(problem_file):
     engine = np.zeros((3, 11))
     engine[:, 7:9] = [[0.003, 0.004], [0.0, 0.01], [0.006, 0.008]]  # offset_L [m]
     result = made_up_solve(x, u, map_input_layout(0, False), engine=engine, cost=1.0)
-    figures = ocp_figures(result, problem, title="made up")
+    figures = ocp_figures(result, problem, title="made up", nodes=node_flight(result, problem))
     assert list(figures) == list(FIGURES)
 
     (pointing,) = figures["controls.png"].axes  # focus and energy held, no RCS: one panel

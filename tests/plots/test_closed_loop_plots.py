@@ -1,15 +1,29 @@
-"""The closed-loop figures draw the controller's inputs, the altitude and its fallbacks.
+"""The closed-loop figures draw the controller's inputs, the altitude and its fallbacks,
+label their reference lines and keep their legend and title off the curves and inside
+the figure.
 
 Reference: a 0.5-second Flight 5 simulation taken as the plant's flight, its pulse inputs
 as the commanded ones (the pointing stepped east by 1 mm a pulse so that it varies), and
 a controller log in which pulses 2 and 5 fell back to the shifted plan; every drawn line
-and tick is compared with those numbers.
+and tick is compared with those numbers. compare.png overlays it as mpc, lqr and none,
+each with its own coning (none's rising to 9 degrees at the end, in the upper right corner
+where the legend used to be), under the long title of problems/nutation_suppression.toml.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
+from support.figure_checks import (
+    covered,
+    display_points,
+    drawn,
+    legend_labels,
+    outside_axes,
+    outside_figure,
+)
 from support.models import table1_flight5
 
 from lightcraft_opt.control.result import (
@@ -19,10 +33,17 @@ from lightcraft_opt.control.result import (
     StepStats,
 )
 from lightcraft_opt.layout import PULSE_INPUT, STATE, initial_state, map_input_layout
-from lightcraft_opt.plots.closed_loop import closed_loop_figures
+from lightcraft_opt.plots.closed_loop import (
+    capture_radius_label,
+    closed_loop_figures,
+    compare_closed_loops,
+    coning_threshold_label,
+)
 from lightcraft_opt.simulation.simulate import simulate
 
 FALLBACKS = (2, 5)
+CAPTURE_RADIUS = 0.055
+TITLE = "Flight 5 with RCS: 5 degrees of coning removed in the first second"
 
 
 @pytest.fixture(scope="module")
@@ -78,3 +99,85 @@ def test_fallback_pulses_are_ticked_on_every_axes(looped):
             times = [seg[0, 0] for seg in ticks.get_segments()]
             np.testing.assert_array_equal(times, looped.pulse_t[list(FALLBACKS)])
     assert "2 fallbacks" in figures["closed_loop_inputs.png"].get_suptitle()
+
+
+@pytest.fixture(scope="module")
+def compared(looped) -> list[ClosedLoopResult]:
+    """``looped`` as three controllers: coning falling (mpc, lqr) and rising (none) [rad]."""
+    k = looped.pulses + 1
+    coning = {
+        "mpc": np.radians(np.linspace(5.0, 0.2, k)),
+        "lqr": np.radians(np.linspace(5.0, 0.4, k)),
+        "none": np.radians(np.linspace(5.0, 9.0, k)),
+    }
+    return [
+        replace(looped, coning=cone, log=replace(looped.log, controller=name))
+        for name, cone in coning.items()
+    ]
+
+
+def _reference_lines(fig):
+    """{label: y} of the horizontal reference lines of the coning and offset axes."""
+    coning_ax, _, offset_ax, _ = fig.axes
+    lines = {}
+    for ax in (coning_ax, offset_ax):
+        for line in ax.get_lines():
+            y = np.asarray(line.get_ydata(), dtype=float)
+            if np.ptp(line.get_xdata()) == 1 and np.ptp(y) == 0:  # axhline: x in axes 0..1
+                lines[line.get_label()] = float(y[0])
+    return lines
+
+
+def test_compare_labels_its_reference_lines_in_a_legend_off_the_curves(compared):
+    fig = compare_closed_loops(compared, title=TITLE, capture_radius=CAPTURE_RADIUS)
+    assert _reference_lines(fig) == {
+        coning_threshold_label(0.5): 0.5,
+        capture_radius_label(CAPTURE_RADIUS): pytest.approx(100 * CAPTURE_RADIUS),  # cm
+    }
+    assert coning_threshold_label(0.5) == "coning threshold 0.5 deg"
+    assert capture_radius_label(CAPTURE_RADIUS) == "capture radius 5.5 cm"
+    (legend,) = fig.legends
+    assert legend_labels(legend) == [
+        "mpc",
+        "lqr",
+        "none",
+        "coning threshold 0.5 deg",
+        "capture radius 5.5 cm",
+    ]
+    renderer = drawn(fig)
+    box = legend.get_window_extent(renderer)
+    assert not any(box.overlaps(ax.bbox) for ax in fig.axes)
+    for ax in fig.axes:  # no point of any controller's curve under the legend
+        for line in ax.get_lines():
+            assert not np.any(covered(box, display_points(line))), line.get_label()
+    none_line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "none")
+    k = compared[0].pulses + 1
+    np.testing.assert_allclose(none_line.get_ydata(), np.linspace(5.0, 9.0, k))
+    assert none_line.get_linestyle() == "--"  # an mpc that flies the open loop shows beneath
+
+
+def test_compare_title_and_axes_stay_inside_the_figure(compared):
+    fig = compare_closed_loops(compared, title=TITLE, capture_radius=CAPTURE_RADIUS)
+    assert fig.get_suptitle().replace("\n", " ") == (
+        f"{TITLE} mpc duration_reached, lqr duration_reached, none duration_reached"
+    )
+    assert outside_figure(fig) == {}
+    assert outside_axes(fig) == {}
+
+
+def test_closed_loop_png_labels_its_lines_and_fits_the_figure(looped):
+    title = f"{TITLE}, under a title long enough to need a line of its own"
+    fig = closed_loop_figures(looped, title=title, capture_radius=CAPTURE_RADIUS)
+    fig = fig["closed_loop.png"]
+    (legend,) = fig.legends
+    assert legend_labels(legend) == [
+        "mpc",
+        "coning threshold 0.5 deg",
+        "fallback steps (2)",
+        "capture radius 5.5 cm",
+    ]
+    assert set(_reference_lines(fig)) == {"coning threshold 0.5 deg", "capture radius 5.5 cm"}
+    box = legend.get_window_extent(drawn(fig))
+    assert not any(box.overlaps(ax.bbox) for ax in fig.axes)
+    assert outside_figure(fig) == {}
+    assert outside_axes(fig) == {}

@@ -1,8 +1,11 @@
 """The Monte Carlo figures colour by status, label their statistics, draw the capture
-circle and put the beam offset against the drawn inputs.
+circle, put the beam offset against the drawn inputs, and give each outcome's end points
+their own ellipses.
 
 Reference: a made-up 40-run table (two dispersed inputs, three statuses); every drawn
-point, line and label is compared with the table's numbers.
+point, line and label is compared with the table's numbers. For the end points, a bimodal
+made-up table: 30 runs that stayed in the beam ending within a few cm of the pad, 8 that
+left it ending some 30 cm out, 2 that landed.
 """
 
 from __future__ import annotations
@@ -10,8 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from matplotlib.colors import to_rgba
+from support.figure_checks import drawn, legend_labels, outside_axes, outside_figure
 
-from lightcraft_opt.plots.monte_carlo import STATUS_COLORS, monte_carlo_figures
+from lightcraft_opt.campaign.summary import CHI2_2DOF_95
+from lightcraft_opt.plots.monte_carlo import ELLIPSE_RUNS, STATUS_COLORS, monte_carlo_figures
 
 CAPTURE_RADIUS = 0.055
 DISPERSED = ("mass_kg", "wind_speed_mps")
@@ -66,13 +71,77 @@ def test_apogee_lines_are_labelled_with_their_values(table):
     assert ax.get_legend() is not None
 
 
-def test_end_points_draw_the_capture_circle(table):
-    (ax,) = monte_carlo_figures(table, capture_radius=CAPTURE_RADIUS)["end_points.png"].axes
+@pytest.fixture(scope="module")
+def bimodal(table):
+    """``table`` with end points of two outcomes far apart, and one of fewer runs than an
+    ellipse needs."""
+    rng = np.random.default_rng(7)
+    groups = {  # status: (runs, mean [m], std [m])
+        "duration_reached": (30, (0.0, 0.0), (0.012, 0.006)),
+        "left_beam": (8, (0.25, -0.30), (0.03, 0.02)),
+        "landed": (2, (-0.05, 0.05), (0.01, 0.01)),
+    }
+    status, xy = [], []
+    for name, (n, mean, std) in groups.items():
+        status += [name] * n
+        xy.append(np.array(mean) + np.array(std) * rng.standard_normal((n, 2)))
+    xy = np.vstack(xy)
+    assert len(status) == len(table["run"])
+    return {**table, "status": np.array(status), "final_x_m": xy[:, 0], "final_y_m": xy[:, 1]}
+
+
+def _end_points(table):
+    fig = monte_carlo_figures(table, capture_radius=CAPTURE_RADIUS)["end_points.png"]
+    (ax,) = fig.axes
+    return fig, ax
+
+
+def test_end_points_draw_each_outcome_with_its_own_ellipses(bimodal):
+    _, ax = _end_points(bimodal)
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("east, r_L[east] [cm]", "north, r_L[north] [cm]")
-    for dots in ax.collections:  # the end points, x and y in L, by status, in cm
-        sel = table["status"] == dots.get_label()
-        expected = np.c_[table["final_x_m"][sel], table["final_y_m"][sel]]
-        np.testing.assert_allclose(dots.get_offsets(), 100 * expected)
-    assert {d.get_label() for d in ax.collections} == set(table["status"])
-    (circle,) = [ln for ln in ax.get_lines() if ln.get_label() == "capture radius"]
-    np.testing.assert_allclose(np.hypot(circle.get_xdata(), circle.get_ydata()), 5.5)
+    xy = 100 * np.c_[bimodal["final_x_m"], bimodal["final_y_m"]]  # cm
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    for dots in ax.collections:  # the end points, by status, in cm
+        name, _, count = dots.get_label().partition(" (")
+        sel = bimodal["status"] == name
+        assert count == f"{sel.sum()})"
+        np.testing.assert_allclose(dots.get_offsets(), xy[sel])
+        color = to_rgba(STATUS_COLORS[name])
+        assert tuple(dots.get_facecolor()[0]) == color
+        ellipses = [f"{name}: 1σ ellipse", f"{name}: 95 % ellipse", f"{name}: mean"]
+        if sel.sum() < ELLIPSE_RUNS:
+            assert not set(ellipses) & set(lines)
+            continue
+        mean, cov = xy[sel].mean(axis=0), np.cov(xy[sel].T)
+        np.testing.assert_allclose(np.ravel(lines[f"{name}: mean"].get_xydata()), mean)
+        for label, level in zip(ellipses, (1.0, CHI2_2DOF_95), strict=False):
+            d = lines[label].get_xydata() - mean  # on x^T C^-1 x = level of this outcome
+            np.testing.assert_allclose(np.sum(d @ np.linalg.inv(cov) * d, axis=1), level)
+            assert to_rgba(lines[label].get_color()) == color
+        # no ellipse spans two outcomes: the other runs lie outside this one's 95 % ellipse
+        d = xy[~sel] - mean
+        assert np.all(np.sum(d @ np.linalg.inv(cov) * d, axis=1) > CHI2_2DOF_95)
+    assert {d.get_label().partition(" (")[0] for d in ax.collections} == set(bimodal["status"])
+    np.testing.assert_allclose(
+        np.hypot(*lines["capture radius"].get_xydata().T), 100 * CAPTURE_RADIUS
+    )
+
+
+def test_end_points_legend_names_every_outcome_beside_the_axes(bimodal):
+    fig, ax = _end_points(bimodal)
+    legend = ax.get_legend()
+    assert legend_labels(legend) == [
+        "duration_reached (30)",
+        "duration_reached: 1σ ellipse",
+        "duration_reached: 95 % ellipse",
+        "duration_reached: mean",
+        "landed (2)",
+        "left_beam (8)",
+        "left_beam: 1σ ellipse",
+        "left_beam: 95 % ellipse",
+        "left_beam: mean",
+        "capture radius",
+    ]
+    assert not legend.get_window_extent(drawn(fig)).overlaps(ax.bbox)
+    assert outside_figure(fig) == {}
+    assert outside_axes(fig) == {}

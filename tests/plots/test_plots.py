@@ -11,20 +11,22 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from mpl_toolkits.mplot3d import proj3d
+from support.figure_checks import display_points, drawn, legend_labels, outside_axes, outside_figure
 from support.models import table1_flight5
 from support.paths import MODELS
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.model import load_record
 from lightcraft_opt.layout import PULSE_INPUT, STATE, initial_state, parameter_values
-from lightcraft_opt.model import FlightRecord
+from lightcraft_opt.model import BeamProfile, FlightRecord
 from lightcraft_opt.plots import (
     altitude_figure,
     attitude_figure,
     flight_figures,
     track_figure,
 )
-from lightcraft_opt.plots.flight3d import beam_outline
+from lightcraft_opt.plots.flight3d import beam_outline, fired_beam
 from lightcraft_opt.plots.per_pulse import tilt_envelope
 from lightcraft_opt.plots.track import plot_track_xy
 from lightcraft_opt.simulation.flight_log import beam_sides
@@ -191,6 +193,74 @@ def test_flight3d_draws_r_L_inside_the_beam_outline(flight):
     # the outline's half-width along east (angle 0) is half the beam's size at that altitude
     np.testing.assert_allclose(e[:, 0], 0.5 * np.array(side))
     np.testing.assert_allclose(n[:, 0], 0.0, atol=1e-15)
+
+
+def _steered(result: SimulationResult, dropped: int) -> SimulationResult:
+    """The same flight with its beam steered as the director steers it: pointing_L 1 mm
+    east and 0.5 mm south a pulse from the pad, the focus 1 m further a pulse, and pulse
+    ``dropped`` not fired (drawing only)."""
+    assert result.pulses is not None
+    u = result.pulses.u.copy()
+    k = np.arange(len(u))
+    u[:, PULSE_INPUT.index("pointing_L")] = np.c_[1e-3 * k, -0.5e-3 * k]
+    u[:, PULSE_INPUT.slot("focus").start] += k
+    u[dropped, ENERGY] = 0.0
+    return replace(result, pulses=replace(result.pulses, u=u))
+
+
+def test_flight3d_draws_the_beam_each_pulse_fired_where_it_met_the_craft(flight):
+    """Each fired pulse's beam edge is a ring at the craft's altitude about that pulse's
+    pointing, its size at that altitude and focus; the dropped pulse has none."""
+    model = table1_flight5()
+    p = parameter_values(model)
+    steered = _steered(flight, dropped=4)
+    size = lambda z, f: beam_sides(z, f, p, model.laser)  # noqa: E731
+    fig = flight_figures(steered, laser=model.laser, beam_size=size)["flight3d.png"]
+    (ax,) = fig.axes
+    rec = steered.pulses
+    fired = np.arange(len(rec.t)) != 4
+    pointing = rec.u[fired][:, PULSE_INPUT.index("pointing_L")]
+    focus = rec.u[fired][:, PULSE_INPUT.slot("focus").start]
+    z = np.interp(rec.t[fired], flight.t, flight.x[:, R + 2])
+    (axis,) = [ln for ln in ax.lines if ln.get_label() == "beam axis (pointing_L)"]
+    np.testing.assert_allclose(np.array(axis.get_data_3d()).T, np.c_[pointing, z])
+
+    beam = fired_beam(steered, model.laser, size)
+    side = [float(beam_side(zk, fk, p, model.laser)) for zk, fk in zip(z, focus, strict=True)]
+    np.testing.assert_allclose(beam.side, side)
+    # each ring (Flight 5's hollow square) centred on its pulse's pointing
+    assert model.laser.profile is BeamProfile.HOLLOW_SQUARE
+    centre = 0.5 * np.c_[
+        beam.east.min(axis=1) + beam.east.max(axis=1),
+        beam.north.min(axis=1) + beam.north.max(axis=1),
+    ]
+    np.testing.assert_allclose(centre, pointing, atol=1e-15)
+    np.testing.assert_allclose(beam.east[:, 0] - pointing[:, 0], 0.5 * np.array(side))
+
+    (rings,) = ax.collections  # what is drawn: those rings, projected
+    assert rings.get_label() == "beam edge at the craft, each pulse"
+    drawn(fig)
+    x, y, _ = proj3d.proj_transform(
+        beam.east.ravel(), beam.north.ravel(), np.repeat(z, beam.east.shape[1]), ax.M
+    )
+    expected = ax.transData.transform(np.c_[x, y])
+    np.testing.assert_allclose(display_points(rings), expected, atol=1e-6)
+
+    # the rings and the path inside the 3-D box, everything inside the axes and figure
+    for points in (np.c_[beam.east.ravel(), beam.north.ravel()], flight.x[:, R : R + 2]):
+        assert ax.get_xlim3d()[0] < points[:, 0].min() and points[:, 0].max() < ax.get_xlim3d()[1]
+        assert ax.get_ylim3d()[0] < points[:, 1].min() and points[:, 1].max() < ax.get_ylim3d()[1]
+    assert ax.get_zlim3d()[0] < 0.0 and flight.x[:, R + 2].max() < ax.get_zlim3d()[1]
+    assert outside_figure(fig) == {}  # the altitude label included
+    assert outside_axes(fig) == {}
+    (legend,) = fig.legends
+    assert not legend.get_window_extent(drawn(fig)).overlaps(ax.bbox)
+    assert legend_labels(legend) == [
+        "mass centre r_L",
+        "ground trace",
+        "beam edge at the craft, each pulse",
+        "beam axis (pointing_L)",
+    ]
 
 
 def test_track_figure_draws_r_L_in_cm_with_the_capture_circle(flight):
