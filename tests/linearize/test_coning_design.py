@@ -111,7 +111,8 @@ def test_lqr_policy_saturates_to_the_hardware_and_says_so_once(held):
     and held thrust, the README's weights. From 5 degrees of coning the bare law's first
     input points the beam 1.19 m off the axis (reach 10 cm) and asks 0.67-1.04 N of the
     thrusters (0.2 N each) (measured); the policy flies it saturated, with one
-    SaturationWarning naming the entries, and none for later pulses."""
+    SaturationWarning naming the entries, and none for later pulses; flown, the craft
+    leaves the beam within 3 pulses."""
     point = trim_hover(MODEL, 20.0, pulse_map=held)
     sys = linearize(MODEL, point, inputs=["pointing_L", "rcs_thrust"], pulse_map=held)
     gains = lqr(sys, [1.0] * sys.nstates, [100.0] * sys.ninputs)
@@ -129,6 +130,8 @@ def test_lqr_policy_saturates_to_the_hardware_and_says_so_once(held):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         policy(1, 1 / 26, coned())
+        run = simulate(MODEL, 1.0, x0=coned(), inputs=policy, pulse_map=held.pulse_map)
+    assert run.status is SimulationStatus.LEFT_BEAM and len(run.pulses.t) <= 3
 
 
 @pytest.mark.slow
