@@ -8,8 +8,11 @@ and the closed loop that flies them on the full pulse map Φ.
 - :mod:`.factory`: :func:`build_controller`, every controller from a :class:`ControllerKind`;
 - :mod:`.prediction_model`: linear models in coning coordinates scheduled on spin and
   altitude (:func:`coning_model`), the MPC's and the LQR controller's prediction;
-- :mod:`.controllers`: the ``step(x)`` interface, :class:`OpenLoopController`,
-  :class:`LqrController`, and the coning frame and phase tracker they share;
+- :mod:`.controllers`: the ``step(x)`` interface (:class:`Controller`, a Protocol a
+  user's own controller meets: docs/mpc.md#your-own-controller),
+  :class:`OpenLoopController`, :class:`LqrController`, and the coning frame
+  (:class:`ConingFrame`: coning coordinates of a state, Φ's saturated input of the
+  model's inputs) and phase tracker they share;
 - :mod:`.mpc_qp`: the stage-structured QP (HPIPM, ...); :mod:`.mpc`: :class:`MpcController`;
 - :mod:`.director_qp`, :mod:`.director`: :class:`DirectorController`, beam tracking by a
   real-time iteration on the reduced map Ψ (beam pointing, focus, pulse energy);
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
 from lightcraft_opt.control.controllers import (
+    ConingFrame,
     Controller,
     LqrController,
     Measurement,
@@ -61,6 +65,7 @@ from lightcraft_opt.control.result import (
 __all__ = [
     "ClosedLoopOptions",
     "ClosedLoopResult",
+    "ConingFrame",
     "ConingModel",
     "ControlWeights",
     "Controller",

@@ -111,6 +111,35 @@ def _retract() -> ca.Function:
     return build_error_state()[0]
 
 
+#: Where the Controller protocol and a worked example of one are.
+_PROTOCOL = "the Controller protocol: docs/mpc.md#your-own-controller"
+
+
+def _check_controller(controller: object) -> None:
+    """A ParameterError naming what ``controller`` lacks of the Controller protocol."""
+    missing = [m for m in ("name", "step", "reset") if not hasattr(controller, m)]
+    missing += [
+        m for m in ("step", "reset") if m not in missing and not callable(getattr(controller, m))
+    ]
+    if missing:
+        raise ParameterError(
+            "controller",
+            f"{type(controller).__name__} has no {' or '.join(missing)} ({_PROTOCOL}: "
+            "name, step(x, t, *, fault) -> u, reset() and last)",
+        )
+
+
+def _last(controller: Controller) -> StepStats:
+    """The controller's ``last``, or a ParameterError when its step left none."""
+    stats = getattr(controller, "last", None)
+    if not isinstance(stats, StepStats):
+        raise ParameterError(
+            "controller.last",
+            f"must be the StepStats of the latest step, got {stats!r} ({_PROTOCOL})",
+        )
+    return stats
+
+
 def closed_loop(
     model: Model,
     controller: Controller,
@@ -126,8 +155,10 @@ def closed_loop(
     Parameters
     ----------
     model : the plant's model (the controller holds its own).
-    controller : ``step(x, t, fault=...) -> u`` and ``last`` (controllers.py, mpc.py);
-        reset before the flight.
+    controller : anything with ``name``, ``step(x, t, *, fault=None) -> u``, ``reset()``
+        and ``last`` (:class:`~lightcraft_opt.control.controllers.Controller`: the
+        built-in ones, or a user's own, docs/mpc.md#your-own-controller); reset before
+        the flight.
     duration : s, > 0.
     x0 : state at the first pulse (default: on the pad, upright, spinning).
     parameters : {PARAMETERS slot: value} overriding the plant's parameters before the
@@ -145,6 +176,7 @@ def closed_loop(
     """
     opts = options or ClosedLoopOptions()
     duration = checked_duration(duration)
+    _check_controller(controller)
     phi = pulse_map or pulse_map_for(model, plant_options(model))
     lay = phi.inputs
     if lay is None:
@@ -181,7 +213,7 @@ def closed_loop(
             u = checked_vector(
                 f"controller input {k}", controller.step(y, t, fault=fault), lay.size
             )
-            steps.append(controller.last)
+            steps.append(_last(controller))
             commanded.append(u)
             applied = u.copy()
             if dropped[k]:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -25,8 +25,17 @@ from lightcraft_opt.control.options import ControllerFault, ControlWeights
 from lightcraft_opt.control.prediction_model import ConingModel, turn
 from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import CONING, STATE, VectorLayout, nominal_inputs, parameter_values
+from lightcraft_opt.layout import (
+    CONING,
+    STATE,
+    VectorLayout,
+    nominal_inputs,
+    parameter_values,
+    saturated_inputs,
+)
+from lightcraft_opt.linear.coning import coning_inputs
 from lightcraft_opt.linear.riccati import dlqr_gain
+from lightcraft_opt.linear.signal_names import entry_names, select_entries
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
 
@@ -42,10 +51,30 @@ __all__ = [
 ]
 
 
+@runtime_checkable
 class Controller(Protocol):
-    """What the closed loop needs of a controller. A controller whose input never depends
-    on the state may also have ``fixed_input`` (that input, an array): the closed loop then
-    flies it a second of pulses per call of Φ (:class:`OpenLoopController`)."""
+    """What :func:`~lightcraft_opt.control.closed_loop` flies: any object with these four
+    members is a controller (a ``typing.Protocol``: nothing to inherit; a worked example
+    of a user's own is docs/mpc.md#your-own-controller).
+
+    - ``name``: what the log and the files call it (``ClosedLoopResult.log.controller``).
+    - ``step(x, t=0.0, *, fault=None) -> u``: the map input for state ``x`` (layout
+      ``STATE``; with measurement noise, what the controller is told) at pulse time
+      ``t`` [s]. ``u`` is laid out as the plant Φ's ``inputs`` (PHASE_LOCKED by
+      default: :func:`~lightcraft_opt.layout.nominal_inputs` gives a start) and should
+      stay within the hardware's limits, which Φ does not enforce
+      (:func:`~lightcraft_opt.layout.saturated_inputs`; :meth:`ConingFrame.map_input`
+      saturates). ``fault`` is an injected :class:`ControllerFault` (the MPC's solver
+      fails on it; a controller without a solver ignores it).
+    - ``reset()``: forget what a flight taught it (plans, estimates); called before the
+      first pulse of every flight.
+    - ``last``: the :class:`StepStats` of the latest ``step`` (status, solve and step
+      time, iterations), logged each pulse; ``StepStats(ControllerStatus.FEEDBACK)`` for
+      a plain feedback law.
+
+    A controller whose input never depends on the state may also have ``fixed_input``
+    (that input, an array): the closed loop then flies it a second of pulses per call of
+    Φ (:class:`OpenLoopController`)."""
 
     name: str
     last: StepStats
@@ -80,31 +109,56 @@ class Measurement:
 
 
 class ConingFrame:
-    """Coning coordinates of a state and the map input of the model's inputs.
+    """Coning coordinates of a state and the map input of the model's inputs: what a
+    controller designed in coning coordinates needs around its gain (the built-in LQR,
+    the MPC, a user's own: docs/mpc.md#your-own-controller).
 
     Parameters
     ----------
     model : the controller's model.
-    prediction : the scheduled linear model (its input layout and operating input).
+    prediction : the scheduled linear model (its input layout and operating input), or
+        the phase-locked map-input layout (a plant Φ's ``inputs``), whose operating input
+        is then the nominal one (:func:`~lightcraft_opt.layout.nominal_inputs`).
     p : the controller's parameter vector (default the model's).
+
+    Attributes
+    ----------
+    inputs : the model inputs' names, in the order :meth:`map_input` takes them (those of
+        :func:`lightcraft_opt.linearize.coning_state_space`).
+    layout : the map-input layout :meth:`map_input` returns.
     """
 
-    def __init__(self, model: Model, prediction: ConingModel, p: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        model: Model,
+        prediction: ConingModel | VectorLayout,
+        p: np.ndarray | None = None,
+    ) -> None:
         self.model = model
-        self.prediction = prediction
         self.p = parameter_values(model) if p is None else np.asarray(p, dtype=float)
         self._coords = build_coning_coordinates()
-        lay = prediction.map_inputs
+        if isinstance(prediction, VectorLayout):
+            lay = prediction
+            names = coning_inputs(lay)
+            self.prediction: ConingModel | None = None
+            self.input_index = np.asarray(select_entries(lay, names, "inputs"))
+            self.inputs = tuple(entry_names(lay)[k] for k in self.input_index)
+            self.u_op = nominal_inputs(model, lay)
+        else:
+            lay = prediction.map_inputs
+            self.prediction = prediction
+            self.input_index = prediction.input_index
+            self.inputs = prediction.inputs
+            self.u_op = prediction.u_op
         self.layout = lay
         rcs = model.craft.rcs
         if rcs is None:
             raise ParameterError("model", f"{model.name!r} has no RCS: the controllers need one")
         self.max_thrust = np.array([t.max_thrust for t in rcs.thrusters], dtype=float)
         self._pointing = lay.index("pointing_L")
-        self._slots = {name: lay.index(name) for name in ("rcs_thrust", "rcs_cos", "rcs_sin")}
         self.pointing_limit = model.laser.pointing_limit
-        first = prediction.input_index[:2]
-        if prediction.inputs[:2] != ("pointing_L[east]", "pointing_L[north]") or np.any(
+        first = self.input_index[:2]
+        if self.inputs[:2] != ("pointing_L[east]", "pointing_L[north]") or np.any(
             first != np.arange(self._pointing.start, self._pointing.stop)
         ):
             raise ParameterError("prediction", "its first two inputs must be pointing_L")
@@ -123,36 +177,21 @@ class ConingFrame:
 
     def map_input(self, du: np.ndarray, yaw: float) -> np.ndarray:
         """Φ's map input for model inputs ``du`` (departures from the operating input,
-        pointing in the yaw-aligned frame Y) at yaw ``yaw`` [rad]: the pointing turned
-        into L, then :meth:`project` onto the thrust envelope and the pointing range."""
-        u = self.prediction.u_op.copy()
+        pointing in the yaw-aligned frame Y; in the order of :attr:`inputs`) at yaw
+        ``yaw`` [rad]: the pointing turned into L, then :meth:`project` onto the thrust
+        envelope and the pointing range."""
+        u = self.u_op.copy()
         d = np.array(du, dtype=float)
         d[:2] = turn(yaw) @ d[:2]
-        u[self.prediction.input_index] += d
+        u[self.input_index] += d
         return self.project(u)
 
     def project(self, u: np.ndarray) -> np.ndarray:
         """``u`` with every thruster inside its envelope at every phase and the pointing
-        inside ±pointing_limit per axis.
-
-        The amplitude is capped at max/2; then every mean is raised by the same amount,
-        the least that lifts each to its |amplitude| (a common level adds lift, and no
-        torque for a ring of thrusters along b1 at equal radius, so the commanded torques
-        survive), and finally clipped to [|amplitude|, max - |amplitude|]. An input
-        already inside is returned unchanged.
-        """
-        out = u.copy()
-        mean, c, s = (out[self._slots[k]] for k in ("rcs_thrust", "rcs_cos", "rcs_sin"))
-        amp = np.hypot(c, s)
-        half = self.max_thrust / 2
-        scale = np.where(amp > half, half / np.maximum(amp, 1e-300), 1.0)
-        c, s, amp = c * scale, s * scale, amp * scale
-        out[self._slots["rcs_cos"]], out[self._slots["rcs_sin"]] = c, s
-        lift = max(0.0, float(np.max(amp - mean)))
-        out[self._slots["rcs_thrust"]] = np.clip(mean + lift, amp, self.max_thrust - amp)
-        lim = self.pointing_limit
-        out[self._pointing] = np.clip(out[self._pointing], -lim, lim)
-        return out
+        inside ±pointing_limit per axis: the hardware's limits
+        (:func:`~lightcraft_opt.layout.saturated_inputs`, which says how the thrust is
+        projected). An input already inside is returned unchanged."""
+        return saturated_inputs(self.model, u, self.layout)
 
 
 class PhaseTracker:

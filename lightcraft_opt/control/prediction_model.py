@@ -10,10 +10,12 @@ beam pointing and the phase-locked RCS slots of the map input
 
 Each grid point is a climb point (:func:`~lightcraft_opt.linear.climb_point`: upright, centred,
 climbing at the nominal climb's speed at that altitude, spinning at that spin) and its
-linear model (:func:`~lightcraft_opt.linear.linear_model` in the error-state entries of
-:data:`~lightcraft_opt.layout.CONING_ERROR_STATE`: r, v, theta_B[b2, b3], w_B[b2, b3])
-mapped into z by the exact Jacobians of the coordinates before and after the pulse:
-A_z = T1 A T0^-1, B_z = T1 B.
+linear model in z (:func:`~lightcraft_opt.linear.coning_linear_model`: the error-state
+entries of :data:`~lightcraft_opt.layout.CONING_ERROR_STATE`, r, v, theta_B[b2, b3],
+w_B[b2, b3], mapped into z by the exact Jacobians of the coordinates before and after the
+pulse: A_z = T1 A T0^-1, B_z = T1 B; why these coordinates and the phase-locked RCS:
+:mod:`lightcraft_opt.linear.coning`). One grid point as a python-control StateSpace:
+:func:`lightcraft_opt.linearize.coning_state_space`.
 
 Yaw. A coning craft's despun frame turns about its axis by the holonomy of the cone,
 2π (1 - cos θ) a coning turn, i.e. ω T (1 - cos θ) a pulse (0.196 rad at 5 degrees,
@@ -34,7 +36,6 @@ thrust's lift) is measured there as the prediction error against Φ.
 
 from __future__ import annotations
 
-import functools
 import io
 import math
 import os
@@ -43,24 +44,25 @@ from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 
 from lightcraft_opt.compiled.cache import cache_dir, load_entry, structure_key, write_entry
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     CONING,
-    CONING_ERROR_STATE,
-    ERROR_STATE,
     STATE,
     RcsProfile,
     VectorLayout,
-    coning_input_layout,
-    initial_state,
     nominal_inputs,
     parameter_values,
 )
-from lightcraft_opt.linear.linear_model import linear_model
+from lightcraft_opt.linear.coning import (
+    coning_coordinate_jacobian,
+    coning_inputs,
+    coning_linear_model,
+    nominal_climb_speeds,
+    turn,
+)
 from lightcraft_opt.linear.operating_points import (
     PulseMapJacobian,
     climb_point,
@@ -69,7 +71,6 @@ from lightcraft_opt.linear.operating_points import (
 from lightcraft_opt.linear.signal_names import entry_names, select_entries
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.coning_coordinates import build_coning_coordinates
-from lightcraft_opt.symbolic.maps.error_state import build_error_state
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
@@ -91,28 +92,6 @@ DEFAULT_SPINS = tuple(round(0.80 + 0.01 * k, 2) for k in range(26))
 DEFAULT_ALTITUDES = (0.0, 0.5, 1.0, 2.0, 4.0, 7.0, 11.0, 16.0, 22.0, 30.0)
 _C = CONING.index("c_B")  # the coning rows of z
 _L_ROWS = tuple(CONING.index(name) for name in ("r_Y", "v_Y", "h_Y"))  # L vectors read in Y
-#: The error-state entries linearised, as signal names (``r_L[east]`` ...).
-_LINEARISED = tuple(entry_names(CONING_ERROR_STATE))
-
-
-def turn(angle: np.ndarray | float) -> np.ndarray:
-    """(..., 2, 2) rotations by ``angle`` [rad] (counter-clockwise)."""
-    a = np.asarray(angle, dtype=float)
-    c, s = np.cos(a), np.sin(a)
-    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
-
-
-@functools.cache
-def _coordinate_jacobian() -> ca.Function:
-    """``(x_op, p) -> ∂z(x_op ⊕ δ)/∂δ`` at δ = 0 (8 x ERROR_STATE.size)."""
-    retract, _ = build_error_state()
-    coords = build_coning_coordinates()
-    x_op = ca.SX.sym("x_op", STATE.size)
-    p = ca.SX.sym("p", coords.size1_in(1))
-    d = ca.SX.sym("dx", ERROR_STATE.size)
-    z = coords(retract(x_op, d), p)[0]
-    jac = ca.substitute(ca.jacobian(z, d), d, ca.DM.zeros(ERROR_STATE.size))
-    return ca.Function("coning_coordinates_jacobian", [x_op, p], [jac], ["x_op", "p"], ["T"])
 
 
 @dataclass(frozen=True)
@@ -239,33 +218,6 @@ class ConingModel:
         return A[0], B[0]
 
 
-def _model_inputs(lay: VectorLayout) -> tuple[str, ...]:
-    """The map-input slots of :func:`~lightcraft_opt.layout.coning_input_layout` for the
-    phase-locked map input ``lay``."""
-    return coning_input_layout(lay.slot("rcs_thrust").size).names
-
-
-def _nominal_climb_speeds(
-    model: Model, phi: PulseMap, altitudes: np.ndarray, u: np.ndarray
-) -> np.ndarray:
-    """Vertical speed [m/s] before the pulse of the nominal flight from the pad when it
-    passes each altitude (linear between pulses; 0 where it never gets that high)."""
-    x = initial_state(model)
-    p = parameter_values(model)
-    z, v = [0.0], [0.0]
-    iz, iv = STATE.slot("r_L").start + 2, STATE.slot("v_L").start + 2
-    for k in range(int(10 / phi.period)):
-        x = np.asarray(phi.step(x, u, p, k * phi.period)[0]).ravel()
-        if not np.all(np.isfinite(x)) or x[iv] <= 0:
-            break
-        z.append(float(x[iz]))
-        v.append(float(x[iv]))
-        if z[-1] > altitudes[-1]:
-            break
-    speeds = np.interp(altitudes, z, v, right=0.0)
-    return np.asarray(speeds, dtype=float)
-
-
 def coning_model(
     model: Model,
     *,
@@ -315,10 +267,8 @@ def coning_model(
         opts = options or PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED)
         phi = pulse_map or build_pulse_map(model, opts)
     lay = phi.inputs
-    if lay is None or "rcs_cos" not in lay:
-        raise ParameterError(
-            "pulse_map", "needs the PHASE_LOCKED RCS profile (rcs_thrust, rcs_cos, rcs_sin)"
-        )
+    assert lay is not None  # build_pulse_map always records it
+    coning_inputs(lay)  # a ParameterError unless PHASE_LOCKED
     s0 = model.craft.spin
     s_grid = np.asarray(s0 * np.asarray(DEFAULT_SPINS) if spins is None else spins, float)
     a_grid = np.asarray(altitudes, dtype=float)
@@ -327,7 +277,7 @@ def coning_model(
             raise ParameterError(name, f"must be an increasing 1-D grid, got {grid}")
     u_op = nominal_inputs(model, lay)
     v_grid = (
-        _nominal_climb_speeds(model, phi, a_grid, u_op)
+        nominal_climb_speeds(model, phi, a_grid, u_op)
         if speeds is None
         else np.asarray(speeds, dtype=float)
     )
@@ -358,12 +308,8 @@ def _linearise_grid(
     phi = jac.pulse_map
     lay = phi.inputs
     assert lay is not None
-    keep = select_entries(ERROR_STATE, _LINEARISED, "states")
-    coords = build_coning_coordinates()
-    tjac = _coordinate_jacobian()
     ns, na = s_grid.size, a_grid.size
-    inputs = _model_inputs(lay)
-    index = np.asarray(select_entries(lay, inputs, "inputs"))
+    index = np.asarray(select_entries(lay, coning_inputs(lay), "inputs"))
     A = np.empty((ns, na, CONING.size, CONING.size))
     B = np.empty((ns, na, CONING.size, index.size))
     ratio = np.empty((ns, na))
@@ -372,17 +318,13 @@ def _linearise_grid(
     for i, s in enumerate(s_grid):
         for j, (alt, speed) in enumerate(zip(a_grid, v_grid, strict=True)):
             pt = climb_point(model, float(alt), float(speed), spin=float(s), pulse_map=jac)
-            lin = linear_model(model, pt, states=_LINEARISED, inputs=inputs, pulse_map=jac)
-            T0 = np.asarray(tjac(pt.x, pt.p))[:, keep]
-            T1 = np.asarray(tjac(pt.x_next, pt.p))[:, keep]
-            Az = T1 @ lin.A @ np.linalg.inv(T0)
-            Bz = T1 @ lin.B
-            omega = float(coords(pt.x, pt.p)[2])
-            back = turn(-omega * phi.period)
+            lin = coning_linear_model(model, pt, pulse_map=jac)
+            Az, Bz = lin.A, lin.B
+            back = turn(-lin.omega * phi.period)
             Az[_C] = back @ Az[_C]
             Bz[_C] = back @ Bz[_C]
             A[i, j], B[i, j] = Az, Bz
-            ratio[i, j] = omega / s
+            ratio[i, j] = lin.omega / s
             decay[i, j] = pt.x_next[ispin] / pt.x[ispin]
     if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
         raise ParameterError("model", "a grid point's linear model is not finite")
@@ -416,7 +358,7 @@ def _cache_name(
         "coning_model",
         phi.step,
         build_coning_coordinates(),
-        _coordinate_jacobian(),
+        coning_coordinate_jacobian(),
         *(np.ascontiguousarray(a, dtype=float).tobytes() for a in numbers),
     )
     return f"coning_model-{key}.npz"
@@ -434,7 +376,7 @@ def _decoded(data: bytes, lay: VectorLayout, u_op: np.ndarray, name: str) -> Con
     with np.load(io.BytesIO(data), allow_pickle=False) as tables:
         arrays = {k: np.array(tables[k]) for k in _ARRAYS}
         period = float(tables["period"])
-    index = np.asarray(select_entries(lay, _model_inputs(lay), "inputs"))
+    index = np.asarray(select_entries(lay, coning_inputs(lay), "inputs"))
     assert {f.name for f in fields(ConingModel)} >= set(_ARRAYS)
     return ConingModel(
         **arrays,

@@ -42,7 +42,7 @@ from lightcraft_opt.files.problem import (
 )
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
-from lightcraft_opt.layout import PARAMETERS, STATE
+from lightcraft_opt.layout import PARAMETERS, STATE, coning_rates
 from lightcraft_opt.model import FocusSchedule, Model, Wind
 
 __all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
@@ -258,7 +258,8 @@ def _controller(
 def _initial(src: str, model: Model, raw: Any) -> np.ndarray:
     """problem_files' [initial] with the coning keys: w_B's transverse part set so that
     tan(coning) = A |w_⊥| / H1 at w_B[b1] = 0 (H1 = J (w1 + spin), A the transverse
-    moment: the craft's own inertia, for a centred rotor)."""
+    moment: the craft's own inertia, for a centred rotor; layout.coning_rates, as
+    ``initial_state(model, coning=...)``)."""
     raw = dict(raw or {})
     table = read_table(src, {k: raw.pop(k) for k in list(raw) if k.startswith("coning")},
                        "initial", _CONING)  # fmt: skip
@@ -276,15 +277,11 @@ def _initial(src: str, model: Model, raw: Any) -> np.ndarray:
         w = STATE.index("w_B")
         if abs(x0[w][0]) > 0 and coning.get("coning", 0.0):
             raise ProblemFileError(src, "initial.coning", "needs w_B[b1] = 0 (w_B_rad_s[0])")
-        craft = model.craft
         spin = float(x0[STATE.index("spin")][0])
         if angle and spin == 0.0:
             raise ProblemFileError(src, table.key("coning"), "a craft without spin cannot cone")
-        w_t = craft.inertia_axial * spin * math.tan(coning.get("coning", 0.0))
-        w_t /= craft.inertia_transverse
         phase = coning.get("coning_azimuth", 0.0)
-        x0[w.start + 1] += w_t * math.cos(phase)
-        x0[w.start + 2] += w_t * math.sin(phase)
+        x0[w.start + 1 : w.start + 3] += coning_rates(model, angle, phase, spin)
     return x0
 
 

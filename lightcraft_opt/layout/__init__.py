@@ -7,7 +7,9 @@
 - :mod:`~lightcraft_opt.layout.controllers`: the layouts of the controllers' own vectors
   (the nutation MPC's linearised state and inputs, the director's QP);
 - :mod:`~lightcraft_opt.layout.defaults`: a model's default x, u and p (launch state,
-  nominal inputs, parameter values with overrides).
+  nominal inputs, parameter values with overrides);
+- :mod:`~lightcraft_opt.layout.limits`: the hardware's limits on the map input, and an
+  input saturated to them (:func:`saturated_inputs`).
 
 Import from here: ``from lightcraft_opt.layout import STATE, initial_state``. Layouts never
 import defaults, and neither imports casadi (pyproject.toml, ``[tool.importlinter]``).
@@ -24,12 +26,14 @@ from lightcraft_opt.layout.controllers import (
     coning_input_layout,
 )
 from lightcraft_opt.layout.defaults import (
+    coning_rates,
     initial_state,
     nominal_inputs,
     parameter_values,
     quaternion_from_tilt,
     tilted_attitude,
 )
+from lightcraft_opt.layout.limits import saturated_inputs
 from lightcraft_opt.layout.vector_layout import Slot, VectorLayout
 from lightcraft_opt.layout.vectors import (
     B123,
@@ -71,6 +75,7 @@ __all__ = [
     "Slot",
     "VectorLayout",
     "coning_input_layout",
+    "coning_rates",
     "initial_state",
     "input_layout",
     "map_input_layout",
@@ -78,6 +83,7 @@ __all__ = [
     "parameter_values",
     "quaternion_from_tilt",
     "rcs_levels",
+    "saturated_inputs",
     "substep_input_layout",
     "tilted_attitude",
 ]

@@ -5,7 +5,8 @@ its launch state x, each laid out as :mod:`lightcraft_opt.layout.vectors` says.
   problem, a closed loop or a campaign changes the model's parameters;
 - :func:`nominal_inputs`: u of an unsteered flight, the one nominal-input policy;
 - :func:`initial_state`: x at launch, and the attitudes it is made of
-  (:func:`quaternion_from_tilt`, :func:`tilted_attitude`).
+  (:func:`quaternion_from_tilt`, :func:`tilted_attitude`) and the body rates of a coning
+  craft (:func:`coning_rates`).
 
 Frames: docs/frames.md. All values SI.
 """
@@ -24,6 +25,7 @@ from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import checked_vector
 
 __all__ = [
+    "coning_rates",
     "initial_state",
     "nominal_inputs",
     "parameter_values",
@@ -192,6 +194,31 @@ def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     )
 
 
+def coning_rates(
+    model: Model, coning: float, azimuth: float = 0.0, spin: float | None = None
+) -> np.ndarray:
+    """w_B[b2], w_B[b3] [rad/s] of a craft coning by ``coning`` [rad] (the angle from its
+    axis b1 to its angular momentum H) with H's transverse part at ``azimuth`` [rad] from
+    b2 toward b3, spinning at ``spin`` [rad/s] (default the craft's) with w_B[b1] = 0:
+    tan(coning) = A |w_⊥| / (J spin), A and J the craft's transverse and axial moments
+    (exact for a centred rotor)."""
+    for name, value in (("coning", coning), ("coning_azimuth", azimuth)):
+        if not math.isfinite(value):
+            raise ParameterError(name, f"must be finite, got {value}")
+    if not 0.0 <= coning < math.pi / 2:
+        raise ParameterError(
+            "coning",
+            f"must lie in [0, 90) degrees, got {math.degrees(coning):.6g}: the angle from "
+            "the spin axis b1 to H (set its direction with coning_azimuth)",
+        )
+    craft = model.craft
+    spin = craft.spin if spin is None else spin
+    if coning and spin == 0.0:
+        raise ParameterError("coning", "a craft without spin cannot cone")
+    w_t = craft.inertia_axial * spin * math.tan(coning) / craft.inertia_transverse
+    return np.array([w_t * math.cos(azimuth), w_t * math.sin(azimuth)])
+
+
 def initial_state(
     model: Model,
     *,
@@ -201,6 +228,8 @@ def initial_state(
     tilt_azimuth: float = 0.0,
     w_B: Sequence[float] = (0.0, 0.0, 0.0),
     spin: float | None = None,
+    coning: float = 0.0,
+    coning_azimuth: float = 0.0,
 ) -> np.ndarray:
     """Launch state of ``model``: at the pad, upright, spinning at the craft's spin rate.
 
@@ -210,6 +239,11 @@ def initial_state(
     tilt, tilt_azimuth : see :func:`quaternion_from_tilt` [rad].
     w_B : angular velocity of B relative to N, B frame [rad/s].
     spin : rotor spin relative to B [rad/s]; default ``model.craft.spin``.
+    coning, coning_azimuth : coning angle [rad] (b1 to H) and the direction of H's
+        transverse part in B [rad, from b2 toward b3], added to ``w_B`` as
+        :func:`coning_rates` (needs w_B[b1] = 0): what a closed-loop file's
+        ``[initial] coning_deg`` sets. ``initial_state(model, coning=math.radians(5))``
+        is the 5 degrees the nutation controllers are measured from (docs/mpc.md).
     """
     tilt, tilt_azimuth = _launch_angles(tilt, tilt_azimuth)
     for name, vec in (("r_L", r_L), ("v_L", v_L), ("w_B", w_B)):
@@ -218,13 +252,21 @@ def initial_state(
     if spin is not None and not math.isfinite(spin):
         raise ParameterError("spin", f"must be finite, got {spin}")
     craft = model.craft
+    spin = craft.spin if spin is None else spin
+    w = np.array(w_B, dtype=float)
+    if coning or coning_azimuth:
+        rates = coning_rates(model, coning, coning_azimuth, spin)
+        if w.size == 3:  # else STATE.pack says w_B needs 3 values
+            if coning and w[0] != 0.0:
+                raise ParameterError("coning", f"needs w_B[b1] = 0, got {w[0]} rad/s")
+            w[1:] += rates
     return STATE.pack(
         {
             "r_L": r_L,
             "v_L": v_L,
             "q_LB": quaternion_from_tilt(tilt, tilt_azimuth),
-            "w_B": w_B,
-            "spin": craft.spin if spin is None else spin,
+            "w_B": w,
+            "spin": spin,
             "liner_mass": craft.liner.mass if craft.liner else 0.0,
             "rcs_mass": craft.rcs.propellant_mass if craft.rcs else 0.0,
             "pulses": 0.0,

@@ -4,11 +4,15 @@ numeric vector is :func:`lightcraft_opt.model.checks.checked_vector`.)
 Physics code reads ``STATE.get("w_B", x)``, never ``x[10:13]`` (docs/architecture.md#rule-8).
 Every slot has a unit and a frame (docs/frames.md), and :meth:`VectorLayout.labels` turns
 them into plot and CSV labels. Slicing works alike on numpy arrays and casadi SX/MX column
-vectors. The layouts themselves are in :mod:`lightcraft_opt.layout.vectors`.
+vectors. A :class:`Slot` indexes numpy arrays itself: ``X[:, STATE.slot("w_B")]`` is the
+(n, 3) block of a trajectory (a copy, by integer indices; ``STATE.index("w_B")``, a slice,
+gives a view and also indexes casadi). The layouts themselves are in
+:mod:`lightcraft_opt.layout.vectors`.
 """
 
 from __future__ import annotations
 
+import builtins
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
@@ -24,7 +28,12 @@ T = TypeVar("T")
 
 @dataclass(frozen=True)
 class Slot:
-    """A named block of a vector: ``size`` entries from ``start``, with unit and frame."""
+    """A named block of a vector: ``size`` entries from ``start``, with unit and frame.
+
+    It indexes numpy arrays as its entries' indices (``__array__``): ``x[slot]``,
+    ``X[..., slot]`` (a copy, always ``size`` long, even for one entry) and ``x[slot] =
+    value``; :attr:`slice` is the same entries as a slice (a view, and casadi takes it).
+    """
 
     name: str
     start: int
@@ -36,6 +45,16 @@ class Slot:
     @property
     def stop(self) -> int:
         return self.start + self.size
+
+    @property
+    def slice(self) -> builtins.slice:
+        """``slice(start, stop)``."""
+        return slice(self.start, self.stop)
+
+    def __array__(self, dtype: Any = None, copy: bool | None = None) -> np.ndarray:
+        """The entries' indices, ``start`` to ``stop`` (numpy's array protocol), so that a
+        slot indexes numpy arrays."""
+        return np.arange(self.start, self.stop, dtype=dtype or np.intp)
 
 
 class VectorLayout:

@@ -10,6 +10,8 @@ exact casadi AD). The modules, in the order they build on each other:
   of a point (:func:`error_state`);
 - :mod:`.linear_model`: A and B at a point as numpy arrays (:func:`linear_model`), in
   :class:`Coordinates` ``FULL`` or ``ERROR_STATE``, by default on :data:`REDUCED_STATES`;
+- :mod:`.coning`: A and B at a climb point in coning coordinates with the phase-locked
+  RCS (:func:`coning_linear_model`), the nutation controllers' design model;
 - :mod:`.riccati`: the discrete LQR gain on matrices (:func:`dlqr_gain`, scipy);
 - :mod:`.focus`: the focus of a :class:`~lightcraft_opt.model.FocusSchedule` at a
   height (:func:`scheduled_focus`) and the beam's side it makes there.
@@ -21,6 +23,7 @@ import, stays with :mod:`lightcraft_opt.linearize` (the same models as
 docs/architecture.md#contracts).
 """
 
+from lightcraft_opt.linear.coning import ConingLinearModel, coning_linear_model
 from lightcraft_opt.linear.focus import focus_for_side, reachable_sides, scheduled_focus, side_at
 from lightcraft_opt.linear.linear_model import (
     REDUCED_STATES,
@@ -42,12 +45,14 @@ from lightcraft_opt.linear.signal_names import entry_names, select_entries
 
 __all__ = [
     "REDUCED_STATES",
+    "ConingLinearModel",
     "Coordinates",
     "LinearModel",
     "OperatingPoint",
     "PointStatus",
     "PulseMapJacobian",
     "climb_point",
+    "coning_linear_model",
     "dlqr_gain",
     "entry_names",
     "error_state",

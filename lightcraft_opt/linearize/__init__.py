@@ -15,11 +15,12 @@ python-control; they are re-exported here. The modules here, in the order they b
 each other:
 
 - :mod:`.state_space`: the linear model (:func:`linearize`) in :class:`Coordinates`
-  ``FULL`` or ``ERROR_STATE``, by default on :data:`REDUCED_STATES`;
+  ``FULL`` or ``ERROR_STATE``, by default on :data:`REDUCED_STATES`, and the nutation
+  controllers' design model in coning coordinates (:func:`coning_state_space`);
 - :mod:`.modes`: multipliers and the kind of each mode (:func:`multipliers`,
   :func:`beam_riding_modes`), and :func:`controllability`;
 - :mod:`.state_feedback`: discrete LQR (:func:`lqr`) and its feedback policy
-  (:func:`lqr_policy`);
+  (:func:`lqr_policy`, saturated to the hardware's limits, :class:`SaturationWarning`);
 - :mod:`.stability_grid`: multipliers over spin rate × beam offset
   (:func:`stability_map`);
 - :mod:`.beam_riding`: multipliers over altitude × focus schedule × offset
@@ -29,7 +30,8 @@ each other:
 Only :mod:`.state_space`, :mod:`.modes` and :mod:`.state_feedback` import python-control
 (an import-linter contract), and ``import lightcraft_opt`` reaches this package on first use
 of ``lc.linearize``. The nutation MPC's prediction model, linear models in coning
-coordinates scheduled on spin and altitude, is :mod:`lightcraft_opt.control.prediction_model`.
+coordinates scheduled on spin and altitude, is :mod:`lightcraft_opt.control.prediction_model`;
+one of its points is :func:`coning_state_space`.
 
 Everything public is re-exported here: ``from lightcraft_opt.linearize import ...``.
 """
@@ -62,8 +64,13 @@ from lightcraft_opt.linearize.modes import (
     multipliers,
 )
 from lightcraft_opt.linearize.stability_grid import StabilityMap, stability_map
-from lightcraft_opt.linearize.state_feedback import LqrResult, lqr, lqr_policy
-from lightcraft_opt.linearize.state_space import linearize
+from lightcraft_opt.linearize.state_feedback import (
+    LqrResult,
+    SaturationWarning,
+    lqr,
+    lqr_policy,
+)
+from lightcraft_opt.linearize.state_space import coning_state_space, linearize
 
 __all__ = [
     "REDUCED_STATES",
@@ -77,11 +84,13 @@ __all__ = [
     "OperatingPoint",
     "PointStatus",
     "PulseMapJacobian",
+    "SaturationWarning",
     "SideStability",
     "StabilityMap",
     "altitude_stability",
     "beam_riding_modes",
     "climb_point",
+    "coning_state_space",
     "controllability",
     "dlqr_gain",
     "error_state",

@@ -29,7 +29,7 @@ import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.control.closed_loop import PLANT_MAP, closed_loop, disperse, measured
-from lightcraft_opt.control.controllers import LqrController, OpenLoopController
+from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
 from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
@@ -41,6 +41,7 @@ from lightcraft_opt.control.options import (
 )
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, initial_state, parameter_values
 from lightcraft_opt.model import Model
@@ -390,3 +391,30 @@ def test_dropouts_before_the_first_pulse_leave_the_craft_on_the_pad():
         assert np.array_equal(x[0], x[1]) and np.array_equal(x[1], x[2])  # at rest, 2 pulses
         assert x[-1, 2] > 0.5  # then it climbs
     assert np.allclose(chunked.flight.x, stepped.flight.x, rtol=0, atol=1e-12)
+
+
+class _NoLast:
+    """A controller that forgot ``last``."""
+
+    name = "forgetful"
+
+    def __init__(self, inputs) -> None:  # type: ignore[no-untyped-def]
+        self._open = OpenLoopController(MODEL, inputs)
+
+    def reset(self) -> None:
+        pass
+
+    def step(self, x, t=0.0, *, fault=None):  # type: ignore[no-untyped-def]
+        return self._open.fixed_input
+
+
+def test_the_loop_names_what_a_controller_lacks_of_the_protocol(plant):
+    """Any object with name, step, reset and last flies (the Controller Protocol, checked
+    at run time); one without them is refused before the first pulse, one whose step
+    leaves no ``last`` at the first, each error naming the protocol's page."""
+    assert isinstance(OpenLoopController(MODEL, plant.inputs), Controller)
+    assert not isinstance(object(), Controller)
+    with pytest.raises(ParameterError, match=r"controller: object has no name or step or reset"):
+        closed_loop(MODEL, object(), 1.0, pulse_map=plant)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"controller.last: must be the StepStats.*mpc.md"):
+        closed_loop(MODEL, _NoLast(plant.inputs), 1.0, pulse_map=plant)  # type: ignore[arg-type]
