@@ -54,8 +54,8 @@ _KIND: dict[str, str | None] = {
 _FORMER = {"offset_east": "launch_offset_x", "offset_north": "launch_offset_y"}
 _DISTRIBUTIONS = ("normal", "uniform")
 #: How a unit suffix of a key is shown in a message, where it differs.
-_SHOWN = {"mps": "m/s", "kmh": "km/h", "kg_m2": "kg m^2", "g_cm2": "g cm^2",
-          "g_mm2": "g mm^2", "ns": "N s", "n_s": "N s"}  # fmt: skip
+_SHOWN = {"mps": "m/s", "kmh": "km/h", "cm_per_s": "cm/s", "mm_per_s": "mm/s",
+          "kg_m2": "kg m^2", "g_cm2": "g cm^2", "g_mm2": "g mm^2", "ns": "N s"}  # fmt: skip
 
 
 def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:

@@ -111,8 +111,8 @@ _DIRECTOR_TOLERANCES: dict[str, Spec] = {
     "tilt": quantity("angle"),
     "pointing": quantity("length"),
     "move": quantity("length"),
-    "move_vergence": NUMBER,
-    "vergence": NUMBER,
+    "move_vergence": quantity("inverse length"),
+    "vergence": quantity("inverse length"),
     "energy": quantity("energy"),
     "torque": quantity("torque"),
 }
@@ -276,7 +276,7 @@ def _initial(src: str, model: Model, raw: Any) -> np.ndarray:
             )
         w = STATE.index("w_B")
         if abs(x0[w][0]) > 0 and coning.get("coning", 0.0):
-            raise ProblemFileError(src, "initial.coning", "needs w_B[b1] = 0 (w_B_rad_s[0])")
+            raise ProblemFileError(src, "initial.coning", "needs w_B[b1] = 0 (w_B_rad_per_s[0])")
         spin = float(x0[STATE.index("spin")][0])
         if angle and spin == 0.0:
             raise ProblemFileError(src, table.key("coning"), "a craft without spin cannot cone")

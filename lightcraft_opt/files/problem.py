@@ -30,14 +30,15 @@ from lightcraft_opt.files.problem_tables import (
     BLOCKS,
     CONSTRAINTS,
     CONTROL,
-    NUMBERS,
     OBJECTIVES,
+    SLOT,
     Table,
     read_array,
     read_item,
     read_kind,
     read_table,
     si_note,
+    slot_spec,
 )
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import RcsProfile, initial_state
@@ -285,8 +286,9 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
 
 
 def _guess_inputs(src: str, problem: OcpProblem, raw: Any) -> dict[str, tuple[float, ...]]:
-    """``[initial_guess]``: one number or one per component for map-input slots (SI)."""
-    schema = {name: NUMBERS for name in problem.inputs.names}
+    """``[initial_guess]``: one number or one per component for map-input slots, in a unit
+    of the slot's quantity (``energy_j``, ``pointing_L_cm``)."""
+    schema = {name: slot_spec(SLOT, name) for name in problem.inputs.names}
     table = read_table(src, raw or {}, "initial_guess", schema)
     out: dict[str, tuple[float, ...]] = {}
     for name, value in table.values.items():

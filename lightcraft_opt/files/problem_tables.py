@@ -1,12 +1,15 @@
 """The tables of a problem file read into SI values (files/problem.py has the schema).
 
-:func:`read_table` reads any table with model_files' keys and units (its QUANTITIES, its
-unknown-key hints), plus keys whose unit is the slot's their table names (``lower``,
-``lower_cm``, ``slew_rate_cm_per_s``); :func:`read_item` turns one ``[[objective]]``,
-``[[constraint]]`` or ``[[control]]`` table into its ocp_problem dataclass
-(:data:`OBJECTIVES`, :data:`CONSTRAINTS`, :data:`CONTROL`). Errors are
-:class:`~lightcraft_opt.errors.ProblemFileError` naming the key as written, or
-model_files' ModelFileError, which problem_files turns into one.
+:func:`read_table` reads any table with schema.QUANTITIES' keys and units and its
+unknown-key hints. A key of an ``[[objective]]``, ``[[constraint]]`` or ``[[control]]`` that
+is in the unit of the slot the table names (``lower``, ``reference``, ``path``) carries a
+unit of the slot's quantity (:data:`SLOT_QUANTITY`: ``lower_cm`` for pointing_L,
+``upper_kj`` for energy), a slew rate one of its rate (``slew_rate_mps``,
+``slew_rate_j_per_s``); only slots without a unit (q_LB, pulses) take bare numbers.
+:func:`read_item` turns one table into its ocp.problem dataclass (:data:`OBJECTIVES`,
+:data:`CONSTRAINTS`, :data:`CONTROL`). Errors are
+:class:`~lightcraft_opt.errors.ProblemFileError` naming the key as written, or the schema's
+ModelFileError, which files/problem.py turns into one. Every key: docs/files/problem.md.
 """
 
 from __future__ import annotations
@@ -23,11 +26,13 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.errors import ParameterError, ProblemFileError
-from lightcraft_opt.files import model as mf
 from lightcraft_opt.files.schema import (
     INTEGER,
     NOT_SI,
     NUMBER,
+    QUANTITIES,
+    RATE_OF,
+    SI_QUANTITY,
     TEXT,
     Spec,
     choice,
@@ -38,7 +43,7 @@ from lightcraft_opt.files.schema import (
     quantity,
     renamed,
 )
-from lightcraft_opt.layout import STATE
+from lightcraft_opt.layout import STATE, RcsProfile, map_input_layout
 from lightcraft_opt.ocp.problem import (
     ControlBound,
     ControlEffort,
@@ -73,29 +78,41 @@ __all__ = [
     "read_kind",
     "read_table",
     "si_note",
+    "slot_spec",
 ]
 
 SLOT = Spec("in the unit of its slot")  # one number or one per component, inf allowed
 SLOT_RATE = Spec("in the unit of its slot per second")
-NUMBERS = Spec("one number or one per component")
+NUMBERS = Spec("dimensionless", "numbers")  # one number or one per component
 BLOCKS = Spec("pulses per block")  # an integer or a list of integers
 
 
-#: Quantity of each slot whose bounds may carry a unit in the key (model_files.QUANTITIES).
-SLOT_QUANTITY: Mapping[str, str] = {
-    "pointing_L": "length",
-    "focus": "length",
-    "energy": "energy",
-    "rcs_thrust": "force",
-    "rcs_cos": "force",
-    "rcs_sin": "force",
-    "r_L": "length",
-    "v_L": "speed",
-    "w_B": "angular rate",
-    "spin": "angular rate",
-    "liner_mass": "mass",
-    "rcs_mass": "mass",
-}
+def _slot_quantities() -> dict[str, str]:
+    """Quantity of each state and map-input slot with a unit (from the layouts' units)."""
+    inputs = map_input_layout(1, True, RcsProfile.PHASE_LOCKED, 1)
+    return {
+        slot.name: SI_QUANTITY[slot.unit]
+        for layout in (STATE, inputs)
+        for slot in (layout.slot(n) for n in layout.names)
+        if slot.unit in SI_QUANTITY
+    }
+
+
+#: Quantity of each slot with a unit (schema.QUANTITIES): its bounds, reference, path and
+#: initial guess carry a unit of it in the key (``lower_cm``), its slew rate one of
+#: RATE_OF[quantity] (``slew_rate_mps``); the other slots (q_LB, pulses) are bare numbers.
+SLOT_QUANTITY: Mapping[str, str] = _slot_quantities()
+
+
+def slot_spec(spec: Spec, slot: str | None) -> Spec:
+    """What ``spec`` holds for ``slot``: SLOT a quantity of the slot's, SLOT_RATE its rate,
+    as one number or one per component (bare numbers for a slot without a unit)."""
+    quantity = SLOT_QUANTITY.get(slot or "")
+    if spec == SLOT:
+        return Spec(quantity or "dimensionless", "numbers")
+    if spec == SLOT_RATE:
+        return Spec(RATE_OF.get(quantity or "", "dimensionless"), "numbers")
+    return spec
 
 
 @dataclass(frozen=True)
@@ -254,16 +271,11 @@ def read_item(
             f"{slot!r} takes no unit in keys ({suffixed[0]}): only "
             f"{', '.join(sorted(SLOT_QUANTITY))} do; is the name right?",
         )
-    schema = {**kind.schema, **({tag: TEXT} if tag else {})}
     slot_name = slot if isinstance(slot, str) else None
+    schema = {f: slot_spec(spec, slot_name) for f, spec in kind.schema.items()}
+    schema.update({tag: TEXT} if tag else {})
     table = read_table(
-        src,
-        raw,
-        where,
-        schema,
-        required=kind.required,
-        slot=slot_name,
-        former=dict(kind.former_keys),
+        src, raw, where, schema, required=kind.required, former=dict(kind.former_keys)
     )
     values = {kind.field(f): v for f, v in table.values.items() if f not in (tag, "path_csv")}
     if kind.cls is TrackReference:
@@ -288,22 +300,25 @@ def _track_path(src: str, file: Path, table: Table, times: np.ndarray | None) ->
         return table.values["path"]
     key = table.key("path_csv")
     table.keys["path"] = table.keys["path_csv"]  # the path's errors name the CSV key
-    size = STATE.slot(table.values.get("state", "r_L")).size
+    slot = table.values.get("state", "r_L")
+    size = STATE.slot(slot).size
     target = file.parent / table.values["path_csv"]
     try:
         rows = list(csv.reader(target.read_text(encoding="utf-8").splitlines()))
     except (OSError, UnicodeDecodeError) as err:
         raise ProblemFileError(src, key, f"cannot read {str(target)!r}: {err}") from err
-    if not rows or len(rows[0]) != size + 1 or rows[0][0].strip() != "t_s":
+    if not rows or len(rows[0]) != size + 1:
         raise ProblemFileError(
             src, key, f"{target}: needs a header t_s and {size} columns, e.g. t_s,x_m,y_m,z_m"
         )
+    factors = _column_factors(src, key, target, rows[0], SLOT_QUANTITY.get(slot))
     try:
         data = np.array([[float(v) for v in row] for row in rows[1:] if row], dtype=float)
     except ValueError as err:
         raise ProblemFileError(src, key, f"{target}: {err}") from err
     if data.ndim != 2 or data.shape[0] < 2 or data.shape[1] != size + 1:
         raise ProblemFileError(src, key, f"{target}: needs 2 or more rows of {size + 1} numbers")
+    data = data * factors
     t = data[:, 0]
     if not np.all(np.isfinite(data)) or np.any(np.diff(t) <= 0):
         raise ProblemFileError(src, key, f"{target}: needs finite values, t_s increasing")
@@ -318,6 +333,33 @@ def _track_path(src: str, file: Path, table: Table, times: np.ndarray | None) ->
     return np.column_stack([np.interp(nodes, t, data[:, j]) for j in range(1, size + 1)])
 
 
+def _column_factors(
+    src: str, key: str, target: Path, header: list[str], quantity: str | None
+) -> np.ndarray:
+    """Factors to SI of a path CSV's columns: the time (``t_s``, ``t_ms``), then each
+    component with a unit of the slot's quantity in its name (``x_cm``; bare for a slot
+    without a unit)."""
+    factors = []
+    for i, name in enumerate(h.strip() for h in header):
+        kind = "time" if i == 0 else quantity
+        units = QUANTITIES[kind] if kind else {}
+        unit = next((u for u in units if name.endswith("_" + u)), None)
+        if i == 0 and not (unit and name == "t_" + unit):
+            raise ProblemFileError(
+                src, key, f"{target}: the first column is the time, t_s or t_ms; got {name!r}"
+            )
+        if units and unit is None:
+            raise ProblemFileError(
+                src,
+                key,
+                f"{target}: column {name!r} needs its unit in the name, one of {kind}: "
+                + ", ".join(units)
+                + " (e.g. x_m, x_cm)",
+            )
+        factors.append(float(units[unit]) if unit else 1.0)
+    return np.asarray(factors)
+
+
 def read_table(
     src: str,
     data: Any,
@@ -325,12 +367,11 @@ def read_table(
     schema: Mapping[str, Spec],
     *,
     required: tuple[str, ...] = (),
-    slot: str | None = None,
     tables: tuple[str, ...] = (),
     former: Mapping[str, str] | None = None,
 ) -> Table:
-    """Convert one table to SI values by field, with model_files' keys and units; a key in
-    ``former`` (old -> new name) is refused with its new name (schema.match_key)."""
+    """Convert one table to SI values by field, with schema.QUANTITIES' keys and units; a
+    key in ``former`` (old -> new name) is refused with its new name (schema.match_key)."""
     if not isinstance(data, dict):
         raise ProblemFileError(src, where or None, f"must be a table [{where}], got {data!r}")
     values: dict[str, Any] = {}
@@ -339,19 +380,15 @@ def read_table(
         if key in tables:
             continue
         name = join_key(where, key)
-        field, factor = _slot_key(src, name, schema, slot)
-        unit = None
-        if field is None:
-            field, unit = match_key(src, key, name, schema, tables, former)
-            factor = mf.QUANTITIES[schema[field].kind][unit] if unit else "1"
+        field, unit = match_key(src, key, name, schema, tables, former)
         if field in keys:
             raise ProblemFileError(
                 src, name, f"{field} is also given as {join_key(where, keys[field])}; give it once"
             )
         keys[field] = key
         spec = schema[field]
-        if spec in (SLOT, SLOT_RATE, NUMBERS):
-            values[field] = _numbers(src, name, raw, factor)
+        if spec.shape == "numbers":
+            values[field] = _numbers(src, name, raw, QUANTITIES[spec.kind][unit] if unit else "1")
         elif spec is BLOCKS:
             values[field] = (
                 tuple(parse_value(src, f"{name}[{i}]", v, INTEGER, None) for i, v in enumerate(raw))
@@ -370,36 +407,6 @@ def read_table(
     return Table(where, values, keys)
 
 
-def _slot_key(
-    src: str, name: str, schema: Mapping[str, Spec], slot: str | None
-) -> tuple[str | None, float | str]:
-    """(field, factor to SI) of a key in the unit of its slot (``lower``, ``lower_cm``,
-    ``slew_rate_cm_per_s``), or (None, "1") for any other key."""
-    key = name.rpartition(".")[2]
-    if key in schema:
-        return (key if schema[key] in (SLOT, SLOT_RATE, NUMBERS) else None), "1"
-    units = mf.QUANTITIES.get(SLOT_QUANTITY.get(slot or "", ""), {})
-    for field, spec in schema.items():
-        if spec not in (SLOT, SLOT_RATE) or not key.startswith(field + "_"):
-            continue
-        unit = key[len(field) + 1 :]
-        if spec is SLOT_RATE:
-            unit = unit.removesuffix("_per_s") if unit.endswith("_per_s") else ""
-        if unit in units:
-            return field, units[unit]
-        if units:
-            rate = "_per_s" if spec is SLOT_RATE else ""
-            spellings = ", ".join(f"{field}_{u}{rate}" for u in units)
-            raise ProblemFileError(
-                src,
-                name,
-                f"unit {key[len(field) + 1 :]!r} is not known for {slot} "
-                f"({SLOT_QUANTITY[slot or '']}{' per second' * bool(rate)}); "
-                f"write {field} (SI) or {spellings}",
-            )
-    return None, "1"
-
-
 def _numbers(src: str, name: str, raw: Any, factor: float | str) -> Any:
     """A number, or nested lists of numbers, times ``factor``; +-inf kept, NaN refused."""
     if isinstance(raw, list):
@@ -410,12 +417,11 @@ def _numbers(src: str, name: str, raw: Any, factor: float | str) -> Any:
 
 
 def _spelling(field: str, schema: Mapping[str, Spec]) -> str:
-    units = mf.QUANTITIES.get(schema[field].kind)
+    units = QUANTITIES.get(schema[field].kind)
     return " or ".join(f"{field}_{u}" for u in units) if units else field
 
 
 def si_note(key: str, reason: str) -> str:
     """``reason``, noting that its numbers are SI when the key wrote another unit."""
-    unit = key.removesuffix("_per_s").rpartition("_")[2]
-    converted = unit in NOT_SI and re.search(r"\d", reason)
+    converted = any(key.endswith(f"_{u}") for u in NOT_SI) and re.search(r"\d", reason)
     return reason + (" (converted to SI)" if converted else "")

@@ -25,11 +25,14 @@ from typing import Any, TypeVar
 from lightcraft_opt.errors import ModelFileError, ParameterError, renamed
 
 __all__ = [
+    "FORMER_UNITS",
     "INTEGER",
     "NOT_SI",
     "NUMBER",
     "NUMBERS",
     "QUANTITIES",
+    "RATE_OF",
+    "SI_QUANTITY",
     "SWITCH",
     "TEXT",
     "Places",
@@ -49,8 +52,12 @@ __all__ = [
 T = TypeVar("T")
 
 _DEG = math.pi / 180.0
-#: Unit suffixes each physical quantity accepts and their factors to SI. Decimal
-#: factors are strings so that ``32.5 g`` becomes exactly the float ``0.0325 kg``.
+#: Unit suffixes each physical quantity accepts and their factors to SI, one spelling per
+#: unit: symbols in lower case, a product written together (``ns``: N s, ``nm``: N m) or
+#: with ``_`` before a power (``kg_m2``), a quotient with ``_per_`` (``rad_per_s``,
+#: ``ug_per_j``), but for three words of their own: ``mps`` (m/s), ``kmh`` (km/h), ``rpm``.
+#: The SI unit comes first. Decimal factors are strings so that ``32.5 g`` becomes exactly
+#: the float ``0.0325 kg``.
 QUANTITIES: Mapping[str, Mapping[str, float | str]] = {
     "length": {"m": "1", "cm": "1e-2", "mm": "1e-3", "um": "1e-6", "km": "1e3"},
     "mass": {"kg": "1", "g": "1e-3", "mg": "1e-6"},
@@ -58,15 +65,45 @@ QUANTITIES: Mapping[str, Mapping[str, float | str]] = {
     "time": {"s": "1", "ms": "1e-3", "us": "1e-6"},
     "frequency": {"hz": "1", "khz": "1e3"},
     "angle": {"rad": "1", "mrad": "1e-3", "deg": _DEG},
-    "angular rate": {"rad_s": "1", "rpm": 2.0 * math.pi / 60.0, "deg_s": _DEG},
+    "angular rate": {"rad_per_s": "1", "rpm": 2.0 * math.pi / 60.0, "deg_per_s": _DEG},
     "angle per length": {"rad_per_m": "1", "deg_per_m": _DEG},
-    "speed": {"mps": "1", "kmh": 1.0 / 3.6},
+    "inverse length": {"per_m": "1"},
+    "speed": {"mps": "1", "kmh": 1.0 / 3.6, "cm_per_s": "1e-2", "mm_per_s": "1e-3"},
     "energy": {"j": "1", "kj": "1e3"},
+    "energy rate": {"j_per_s": "1", "kj_per_s": "1e3"},
     "force": {"n": "1"},
-    "torque": {"nm": "1", "n_m": "1", "mnm": "1e-3"},
-    "impulse": {"ns": "1", "n_s": "1"},
+    "force rate": {"n_per_s": "1"},
+    "torque": {"nm": "1", "mnm": "1e-3"},
+    "torque rate": {"nm_per_s": "1"},
+    "impulse": {"ns": "1"},
     "mass per energy": {"kg_per_j": "1", "mg_per_j": "1e-6", "ug_per_j": "1e-9"},
     "impulse per energy": {"ns_per_j": "1", "n_per_mw": "1e-6"},
+}
+#: Suffixes written otherwise before issue 29 made one spelling per unit: old -> new,
+#: refused with the key in the new spelling (:func:`match_key`).
+FORMER_UNITS: Mapping[str, str] = {
+    "rad_s": "rad_per_s",
+    "deg_s": "deg_per_s",
+    "m_per_s": "mps",
+    "n_m": "nm",
+    "n_s": "ns",
+}
+#: The quantity of a slot's rate of change (a slew rate): the slot's quantity per second.
+RATE_OF: Mapping[str, str] = {
+    "length": "speed",
+    "energy": "energy rate",
+    "force": "force rate",
+    "torque": "torque rate",
+}
+#: Quantity of each SI unit the layouts name (layout.VectorLayout slots' ``unit``).
+SI_QUANTITY: Mapping[str, str] = {
+    "m": "length",
+    "m/s": "speed",
+    "rad/s": "angular rate",
+    "kg": "mass",
+    "J": "energy",
+    "N": "force",
+    "N m": "torque",
 }
 ALL_UNITS = {u for units in QUANTITIES.values() for u in units}
 NOT_SI = {u for units in QUANTITIES.values() for u, factor in units.items() if factor != "1"}
@@ -168,8 +205,7 @@ def match_key(
             raise ModelFileError(
                 src,
                 name,
-                f"{key} is a {spec.kind} and needs its unit in the "
-                f"key: write {_spellings(key, schema)}",
+                f"needs its unit in the key, one of {spec.kind}: write {_spellings(key, schema)}",
             )
         return key, None
     field = max((f for f in schema if key.startswith(f + "_")), key=len, default=None)
@@ -178,7 +214,15 @@ def match_key(
         kind = schema[field].kind
         if unit in QUANTITIES.get(kind, {}):
             return field, unit
-        if "_" not in unit or unit in ALL_UNITS:
+        now = FORMER_UNITS.get(unit)
+        if now in QUANTITIES.get(kind, {}):
+            raise ModelFileError(
+                src,
+                name,
+                f"{renamed(key, f'{field}_{now}')} (one spelling per unit: {unit!r} is "
+                f"written {now!r}); write {field}_{now}",
+            )
+        if "_" not in unit or unit in ALL_UNITS or "_per_" in unit:
             if kind not in QUANTITIES:
                 raise ModelFileError(
                     src, name, f"{field} is {kind} and takes no unit; write {field}"

@@ -71,11 +71,11 @@ kind = "no_ground_contact"
 input = "pointing_L"
 lower_cm = -5
 upper_cm = 5
-slew_rate = 0.2
+slew_rate_mps = 0.2
 [[control]]
 input = "energy"
-lower = 420.0
-upper = 420.0
+lower_j = 420.0
+upper_j = 420.0
 
 [pulse_map]
 scheme = "split"

@@ -48,8 +48,8 @@ kind = "no_ground_contact"
 
 [[control]]
 input = "pointing_L"
-lower = 0.0
-upper = 0.0
+lower_m = 0.0
+upper_m = 0.0
 
 [solver]
 tol = 1e-8

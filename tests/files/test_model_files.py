@@ -17,6 +17,7 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.files.model import QUANTITIES, SCHEMA, load_laser, load_model, load_site
+from lightcraft_opt.files.schema import FORMER_UNITS, RATE_OF
 from lightcraft_opt.model import (
     Aerodynamics,
     BeamSizeModel,
@@ -110,7 +111,7 @@ def test_same_model_in_si_keys(tmp_path: Path) -> None:
             "diameter_mm = 122.2": "diameter_m = 0.1222",
             "mass_g = 32.5": "mass_kg = 0.0325",
             "inertia_axial_g_cm2 = 602.7": "inertia_axial_kg_m2 = 6.027e-5",
-            "spin_rpm = 10000.0": f"spin_rad_s = {10_000 * RPM!r}",
+            "spin_rpm = 10000.0": f"spin_rad_per_s = {10_000 * RPM!r}",
             "beam_side_cm = 7.1974": "beam_side_m = 0.071974",
         },
     )
@@ -122,6 +123,42 @@ def test_every_quantity_has_its_si_unit_first() -> None:
         assert float(next(iter(units.values()))) == 1.0, quantity
     kinds = {spec.kind for table in SCHEMA.values() for spec in table.values()}
     assert kinds - set(QUANTITIES) <= {"dimensionless", "text", "switch", "choice"}
+
+
+def test_one_spelling_per_unit() -> None:
+    """No unit has two suffixes, within a quantity or across (issue 29); a quotient is
+    written with _per_ but for mps, kmh and rpm; each former spelling names a unit."""
+    suffixes = [u for units in QUANTITIES.values() for u in units]
+    assert len(suffixes) == len(set(suffixes))
+    compact = {"mps", "kmh", "rpm"}
+    for units in QUANTITIES.values():
+        for unit in units:
+            assert unit in compact or not re.search(r"(?<!_per)_s$|ps$", unit), unit
+    for old, new in FORMER_UNITS.items():
+        assert old not in suffixes and new in suffixes
+    # every rate of a slot is a quantity of its own
+    assert set(RATE_OF.values()) <= set(QUANTITIES)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "written"),
+    [
+        ("spin_rpm = 10000.0", "spin_rad_s = 1047.2", "spin_rad_per_s"),
+        ("spin_rpm = 10000.0", "spin_deg_s = 60000.0", "spin_deg_per_s"),
+        ("impulse_per_pulse_ns = 0.0637", "impulse_per_pulse_n_s = 0.0637", "impulse_per_pulse_ns"),
+        ("speed_ref_mps = 0.0", "speed_ref_m_per_s = 0.0", "speed_ref_mps"),
+    ],
+)
+def test_a_former_unit_spelling_is_refused_with_the_new_key(
+    tmp_path: Path, old: str, new: str, written: str
+) -> None:
+    flight = _copy(tmp_path, {old: new})
+    with pytest.raises(ModelFileError) as info:
+        load_model(flight)
+    key = new.split(" = ")[0]
+    assert info.value.field is not None and info.value.field.endswith(key)
+    assert f"'{key}' was renamed '{written}'" in info.value.reason
+    assert info.value.reason.endswith(f"write {written}")
 
 
 def test_rcs_carrier_and_wind_tables(tmp_path: Path) -> None:
@@ -275,7 +312,8 @@ BAD_ENGINE_AND_BEAM = [
         "spent_coupling_n_per_mw = 151.67",
         "spent_coupling_n_per_kw = 0.15",
         "craft.engine.spent_coupling_n_per_kw",
-        "did you mean 'spent_coupling_n_per_mw'",
+        "unit 'n_per_kw' is not known for impulse per energy; use spent_coupling_ns_per_j or "
+        "spent_coupling_n_per_mw",
     ),
     (
         "plvts.toml",
@@ -316,7 +354,7 @@ BAD = [
         "spin_rpm = 10000.0",
         "spin_rmp = 10000.0",
         "craft.spin_rmp",
-        "unit 'rmp' is not known for angular rate; use spin_rad_s, spin_rpm or spin_deg_s",
+        "unit 'rmp' is not known for angular rate; use spin_rad_per_s, spin_rpm or spin_deg_per_s",
     ),
     (
         "misspelt field",

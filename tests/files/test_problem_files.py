@@ -55,7 +55,7 @@ position_L_cm = [1.0, 0.0, 200.0]
 velocity_L_mps = [0.0, 0.0, 4.0]
 tilt_deg = 2.0
 tilt_azimuth_deg = 90.0
-w_B_rad_s = [0.0, 0.5, 0.0]
+w_B_rad_per_s = [0.0, 0.5, 0.0]
 spin_rpm = 9000
 
 [[objective]]
@@ -80,7 +80,7 @@ total_kj = 2.0
 [[constraint]]
 kind = "terminal_state"
 state = "v_L"
-lower = [-inf, -inf, 0.0]
+lower_mps = [-inf, -inf, 0.0]
 
 [[control]]
 input = "pointing_L"
@@ -90,7 +90,7 @@ slew_rate_cm_per_s = 100
 [[control]]
 input = "energy"
 lower_kj = 0.42
-upper = 420.0
+upper_j = 420.0
 
 [solver]
 name = "fatrop"
@@ -189,6 +189,19 @@ def test_a_minimal_file_takes_the_defaults(folder: Path) -> None:
     assert pf.problem.t0 == 0.0 and pf.problem.controls == () and pf.problem.constraints == ()
 
 
+def test_a_slew_rate_takes_a_unit_of_its_slots_rate(folder: Path) -> None:
+    """pointing_L's slew rate is a speed (mps, cm_per_s ...), energy's an energy per second:
+    the same limits in other units give the same problem."""
+    base = load_problem(write(folder, PROBLEM)).problem
+    text = PROBLEM.replace("slew_rate_cm_per_s = 100", "slew_rate_mps = 1.0").replace(
+        "upper_j = 420.0", "upper_j = 420.0\nslew_rate_kj_per_s = 2.6"
+    )
+    other = load_problem(write(folder, text, "q.toml")).problem
+    lay = base.inputs
+    assert np.array_equal(other.slew[lay.index("pointing_L")], base.slew[lay.index("pointing_L")])
+    assert other.slew[lay.index("energy")][0] == pytest.approx(2600.0 * base.period, rel=1e-15)
+
+
 def test_command_line_overrides_replace_the_files_values(folder: Path) -> None:
     path = write(folder, PROBLEM.replace("move_blocking = [2, 2, 2]", "move_blocking = 2"))
     pf = load_problem(path, horizon=4, solver="sqp_qrqp", max_iter=7)
@@ -224,7 +237,7 @@ BAD = [
     ('model = "../models/flight5.toml"', 'model = "flight5.toml"', "model", "no such file"),
     ("tilt_deg = 2.0", 'tilt_deg = "2"', "initial.tilt_deg", "must be a number"),
     ("tilt_deg = 2.0", "tilt = 2.0", "initial.tilt", "tilt_deg"),
-    ("w_B_rad_s", "w_B_radps", "initial.w_B_radps", "w_B_rad_s"),
+    ("w_B_rad_per_s", "w_B_radps", "initial.w_B_radps", "w_B_rad_per_s"),
     (
         "position_L_cm = [1.0, 0.0, 200.0]",
         "position_L_cm = [1.0, 0.0]",
@@ -285,15 +298,43 @@ BAD = [
         "control[0].slew_rate_cm_per_s",
         "positive",
     ),
+    # a bound, reference or rate carries the unit of its slot (issue 29): pointing_L is a
+    # length, its slew rate a speed, energy an energy
     (
-        "upper = 420.0",
+        "lower_cm = -5.0",
+        "lower = -5.0",
+        "control[0].lower",
+        "needs its unit in the key, one of length: write lower_m, lower_cm, lower_mm",
+    ),
+    (
+        "slew_rate_cm_per_s = 100",
+        "slew_rate = 1.0",
+        "control[0].slew_rate",
+        "write slew_rate_mps, slew_rate_kmh, slew_rate_cm_per_s or slew_rate_mm_per_s",
+    ),
+    (
+        "slew_rate_cm_per_s = 100",
+        "slew_rate_m_per_s = 1.0",
+        "control[0].slew_rate_m_per_s",
+        "'slew_rate_m_per_s' was renamed 'slew_rate_mps' (one spelling per unit: 'm_per_s' "
+        "is written 'mps'); write slew_rate_mps",
+    ),
+    ("upper_j = 420.0", "upper = 420.0", "control[1].upper", "write upper_j or upper_kj"),
+    (
+        "reference_cm = [0.1, -0.2]",
+        "reference = [0.001, -0.002]",
+        "objective[1].reference",
+        "write reference_m, reference_cm",
+    ),
+    (
+        "upper_j = 420.0",
         "upper_mm = 420.0",
         "control[1].upper_mm",
-        "unit 'mm' is not known for energy (energy); write upper (SI) or upper_j",
+        "unit 'mm' is not known for energy; use upper_j or upper_kj",
     ),
     ('input = "energy"', 'input = "energi"', "control[1].input", "'energi' takes no unit"),
     (
-        'input = "energy"\nlower_kj = 0.42',
+        'input = "energy"\nlower_kj = 0.42\nupper_j = 420.0',
         'input = "energi"\nlower = 420',
         "control[1].input",
         "no such input",
@@ -368,7 +409,9 @@ def test_csv_reference_errors_name_the_csv_key(folder: Path) -> None:
     path = write(folder, text)
     for csv, words in (
         (None, "cannot read"),
-        ("time,x,y,z\n0,0,0,0\n1,0,0,1\n", "header t_s"),
+        ("time,x,y,z\n0,0,0,0\n1,0,0,1\n", "the first column is the time, t_s or t_ms"),
+        ("t_s,x,y,z\n0,0,0,0\n1,0,0,1\n", "column 'x' needs its unit in the name, one of length"),
+        ("t_s,x_m,y_m\n0,0,0\n1,0,0\n", "needs a header t_s and 3 columns"),
         ("t_s,x_m,y_m,z_m\n0,0,0,0\n0.1,0,0,1\n", "covers t = 0..0.1 s"),
         ("t_s,x_m,y_m,z_m\n0,0,0,0\n1,0,zero,1\n", "could not convert"),
     ):
@@ -388,10 +431,13 @@ def test_track_reference_needs_exactly_one_path(folder: Path) -> None:
     with pytest.raises(ProblemFileError, match="one of path or path_csv") as err:
         load_problem(write(folder, text))
     assert err.value.field == "objective[0].path"
-    rows = "path = [[0, 0, 0], [0, 0, 1]]\n"  # 2 rows for N + 1 = 3 nodes
+    rows = "path_m = [[0, 0, 0], [0, 0, 1]]\n"  # 2 rows for N + 1 = 3 nodes
     with pytest.raises(ProblemFileError, match="needs N \\+ 1 = 3 rows") as err:
         load_problem(write(folder, text + rows))
-    assert err.value.field == "objective[0].path"
+    assert err.value.field == "objective[0].path_m"
+    # a path without its unit: r_L is a length
+    with pytest.raises(ProblemFileError, match="needs its unit in the key, one of length"):
+        load_problem(write(folder, text + rows.replace("path_m", "path")))
     # the slot (r_L unless named) is a length: the rows may come in cm
     ok = load_problem(write(folder, text + "path_cm = [[0, 0, 0], [0, 0, 100], [0, 0, 200]]\n"))
     (track,) = ok.problem.objective
@@ -454,8 +500,8 @@ horizon_pulses = 4
 [[objective]]
 term = "laser_energy"
 [initial_guess]
-energy = 75.0
-pointing_L = [0.01, -0.02]
+energy_j = 75.0
+pointing_L_cm = [1.0, -2.0]
 """,
     )
     loaded = load_problem(path)
@@ -467,7 +513,11 @@ pointing_L = [0.01, -0.02]
     assert np.all(
         guess[:, lay.index("focus")] == loaded.problem.nominal_input()[lay.index("focus")]
     )
-    bad = write(folder, path.read_text().replace("[0.01, -0.02]", "[0.01, 0.0, 0.0]"), "b.toml")
+    bad = write(folder, path.read_text().replace("[1.0, -2.0]", "[1.0, 0.0, 0.0]"), "b.toml")
     with pytest.raises(ProblemFileError) as err:
         load_problem(bad)
-    assert err.value.field == "initial_guess.pointing_L"
+    assert err.value.field == "initial_guess.pointing_L_cm"
+    bare = write(folder, path.read_text().replace("energy_j", "energy"), "c.toml")
+    with pytest.raises(ProblemFileError, match="write energy_j or energy_kj") as err:
+        load_problem(bare)
+    assert err.value.field == "initial_guess.energy"

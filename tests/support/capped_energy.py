@@ -21,6 +21,6 @@ def capped_flight16(path: Path, *, energy_cap_J: float, minimum_m: float) -> Pat
     assert model in text and minimum in text, "problems/least_energy_flight16.toml changed"
     text = text.replace(model, f'model = "{(MODELS / "flight16.toml").as_posix()}"')
     text = text.replace(minimum, f"minimum_m = {minimum_m!r}")
-    cap = f'[[control]]\ninput = "energy"\nlower = 0.0\nupper = {energy_cap_J!r}\n\n[solver]'
+    cap = f'[[control]]\ninput = "energy"\nlower_j = 0.0\nupper_j = {energy_cap_J!r}\n\n[solver]'
     path.write_text(text.replace("[solver]", cap, 1))
     return path
