@@ -7,6 +7,7 @@ callers can catch one type; the children say which kind of thing went wrong.
 from __future__ import annotations
 
 __all__ = [
+    "HardwareLimitError",
     "LightcraftError",
     "ModelFileError",
     "OptionError",
@@ -35,6 +36,28 @@ class ParameterError(LightcraftError, ValueError):
         self.field = field
         self.reason = message
         super().__init__(f"{field}: {message}")
+
+
+class HardwareLimitError(ParameterError):
+    """A bound beyond what the hardware can do: the laser's pointing reach, focus range or
+    pulse energy, a thruster's force.
+
+    ``value`` and the hardware's range ``low`` .. ``high`` are in the SI ``unit``;
+    ``limit`` says whose limit it is and the model field that sets it, e.g. "the laser's
+    pointing reach (laser.pointing_limit)". Readers show the numbers in the unit of the
+    key the bound was written with.
+    """
+
+    def __init__(
+        self, field: str, value: float, low: float, high: float, unit: str, limit: str
+    ) -> None:
+        self.value, self.low, self.high, self.unit, self.limit = value, low, high, unit, limit
+        super().__init__(field, self.message(1.0, unit))
+
+    def message(self, factor: float, unit: str) -> str:
+        """The reason with the numbers divided by ``factor`` and shown in ``unit``."""
+        value, low, high = (v / factor for v in (self.value, self.low, self.high))
+        return f"{value:g} {unit} is beyond {self.limit}: {low:g} to {high:g} {unit}"
 
 
 class ModelFileError(LightcraftError, ValueError):

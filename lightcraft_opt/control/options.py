@@ -270,7 +270,8 @@ class DirectorOptions:
     matched_side : the beam's side the "matched" schedule puts at the craft [m], > 0; None
         (default) the launch side a0 (docs/beam_riding.md: 8.5 cm for the record craft).
     energy_range : (lowest, highest) pulse energy as fractions of the flight's, 0 <= low
-        <= high; the highest is capped at the laser's maximum.
+        <= high; the highest is capped at the laser's maximum (a closed-loop file whose
+        highest lies beyond it is refused).
     quadrature : (radial, azimuthal) points of the optic quadrature of the director's
         model of the engine, each >= 2 (coarser than the plant's: the planner's belief).
     disturbance_gain : in [0, 1): how fast the lateral velocity and the lateral angular

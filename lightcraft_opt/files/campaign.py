@@ -53,9 +53,6 @@ _KIND: dict[str, str | None] = {
 #: Dispersion tables renamed: old -> new name, refused with the new one.
 _FORMER = {"offset_east": "launch_offset_x", "offset_north": "launch_offset_y"}
 _DISTRIBUTIONS = ("normal", "uniform")
-#: How a unit suffix of a key is shown in a message, where it differs.
-_SHOWN = {"mps": "m/s", "kmh": "km/h", "cm_per_s": "cm/s", "mm_per_s": "mm/s",
-          "kg_m2": "kg m^2", "g_cm2": "g cm^2", "g_mm2": "g mm^2", "ns": "N s"}  # fmt: skip
 
 
 def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:
@@ -225,7 +222,7 @@ def _check_domain(src: str, name: str, where: str, raw: dict[str, Any], dist: Di
         written = [keys[f].split("_", 1)[1] for f in fields if "_" in keys.get(f, "")]
         unit = next((u for u in written if u in units), "")
         unit = unit or next(u for u, factor in units.items() if factor == "1")
-        return f"{si / float(units[unit]):g} {_SHOWN.get(unit, unit)}".rstrip()
+        return f"{si / float(units[unit]):g} {schema.unit_symbol(unit)}".rstrip()
 
     def refuse(key: str, what: str, si: float, *fields: str) -> None:
         if domain.below(si):

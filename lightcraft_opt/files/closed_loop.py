@@ -220,18 +220,34 @@ def closed_loop_from_tables(
         raise ProblemFileError(src, top.key("duration"), f"must be positive, got {t_end} s")
     x0 = _initial(src, model, data.get("initial"))
     plant = data.get("plant", {})
+    director = _director_options(src, data.get("director", {}))
+    _check_energy_range(src, model, director)
     return ClosedLoopProblem(
         model=model,
         x0=x0,
         duration=float(t_end),
         controller=_controller(src, top, data, absent),
         mpc=_mpc_options(src, data.get("mpc", {})),
-        director=_director_options(src, data.get("director", {})),
+        director=director,
         loop=_loop_options(src, plant),
         plant_parameters=_plant_wind(src, plant),
         title=top.values.get("title", file.stem),
         source=file,
     )
+
+
+def _check_energy_range(src: str, model: Model, director: DirectorOptions) -> None:
+    """The director's highest pulse energy within the laser's: refused beyond it."""
+    flight, most = model.flight.pulse_energy, model.laser.pulse_energy_max
+    high = director.energy_range[1] * flight
+    if high > most * (1 + 1e-12):
+        raise ProblemFileError(
+            src,
+            "director.energy_range",
+            f"its highest, {director.energy_range[1]:g} of the flight's {flight:g} J = "
+            f"{high:g} J, is beyond the laser's pulse energy (laser.pulse_energy_max): "
+            f"0 to {most:g} J",
+        )
 
 
 def _controller(

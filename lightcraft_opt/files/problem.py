@@ -23,7 +23,13 @@ from typing import Any, get_type_hints
 
 import numpy as np
 
-from lightcraft_opt.errors import ModelFileError, OptionError, ParameterError, ProblemFileError
+from lightcraft_opt.errors import (
+    HardwareLimitError,
+    ModelFileError,
+    OptionError,
+    ParameterError,
+    ProblemFileError,
+)
 from lightcraft_opt.files import model as mf
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.problem_tables import (
@@ -274,6 +280,12 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
             rcs_profile=top.values.get("rcs_profile", RcsProfile.HOLD),
             rcs_subintervals=top.values.get("rcs_subintervals", 1),
         )
+    except HardwareLimitError as err:
+        key = _problem_key(err.field, top, items)
+        unit = key.rpartition(".")[2].partition("_")[2]  # upper_cm -> cm
+        factor = schema.QUANTITIES.get(schema.SI_QUANTITY.get(err.unit, ""), {}).get(unit)
+        shown = err.message(float(factor), schema.unit_symbol(unit)) if factor else err.reason
+        raise ProblemFileError(src, key, shown) from err
     except ParameterError as err:
         key = _problem_key(err.field, top, items)
         raise ProblemFileError(src, key, si_note(key, err.reason)) from err

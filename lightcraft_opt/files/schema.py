@@ -47,6 +47,7 @@ __all__ = [
     "read_fields",
     "read_toml",
     "renamed",
+    "unit_symbol",
 ]
 
 T = TypeVar("T")
@@ -106,6 +107,10 @@ SI_QUANTITY: Mapping[str, str] = {
     "N m": "torque",
 }
 ALL_UNITS = {u for units in QUANTITIES.values() for u in units}
+#: How a suffix reads in a message where it is not the symbol itself (:func:`unit_symbol`).
+_SYMBOLS = {"j": "J", "kj": "kJ", "n": "N", "nm": "N m", "mnm": "mN m", "ns": "N s",
+            "hz": "Hz", "khz": "kHz", "mw": "MW", "mps": "m/s", "kmh": "km/h",
+            "kg_m2": "kg m^2", "g_cm2": "g cm^2", "g_mm2": "g mm^2", "per_m": "1/m"}  # fmt: skip
 NOT_SI = {u for units in QUANTITIES.values() for u, factor in units.items() if factor != "1"}
 
 
@@ -306,6 +311,13 @@ def parse_number(src: str, name: str, raw: Any, factor: float | str) -> float:
     if isinstance(factor, str):
         return float(Decimal(repr(raw)) * Decimal(factor))
     return float(raw) * factor
+
+
+def unit_symbol(suffix: str) -> str:
+    """A unit suffix as a message shows it: ``cm_per_s`` -> ``cm/s``, ``kj`` -> ``kJ``."""
+    if suffix in _SYMBOLS:
+        return _SYMBOLS[suffix]
+    return "/".join(_SYMBOLS.get(part, part) for part in suffix.split("_per_"))
 
 
 def join_key(where: str, key: str) -> str:

@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.errors import HardwareLimitError, OptionError, ParameterError
 from lightcraft_opt.layout import (
     STATE,
     RcsProfile,
@@ -224,8 +224,11 @@ class ControlBound:
     """Bounds of one map-input slot, one value or one per component, in the slot's unit.
 
     lower, upper : lower <= u_k[slot] <= upper at every pulse (equal: held at that value,
-        not a decision variable); +-inf for none; None (the default) keeps the model's
-        limit below, so a ControlBound that sets only a slew rate stays within the laser.
+        not a decision variable); +-inf for no bound of its own (the hardware's); None (the
+        default) keeps the model's limit below, so a ControlBound that sets only a slew
+        rate stays within the laser. A bound beyond what the hardware can do
+        (:meth:`OcpProblem.hardware_limits`) is refused with a
+        :class:`~lightcraft_opt.errors.HardwareLimitError` naming the limit.
     slew_rate : |u_k - u_{k-1}| / T <= slew_rate [unit/s], > 0; inf for none (from
         ``u_previous`` at k = 0 when the problem gives it).
 
@@ -235,7 +238,7 @@ class ControlBound:
     each RCS level (``rcs_thrust``: held, per sub-interval, or the phase-locked mean)
     within [0, its thruster's ``max_thrust``], the phase-locked amplitudes ``rcs_cos`` and
     ``rcs_sin`` within +-``max_thrust`` / 2, the motor torque held at 0 (the model gives it
-    no limit).
+    no limit, so bounds of any size are taken).
     """
 
     slot: str
@@ -599,22 +602,51 @@ class OcpProblem:
     def _parameter_vector(self) -> np.ndarray:
         return parameter_values(self.model, self.parameters)
 
-    def _set_bounds(self) -> None:
-        lay, laser, craft = self.inputs, self.model.laser, self.model.craft
-        lower, upper = np.zeros(lay.size), np.zeros(lay.size)
-        lower[lay.index("pointing_L")] = -laser.pointing_limit
-        upper[lay.index("pointing_L")] = laser.pointing_limit
-        focus = (
-            laser.focus_range if laser.size_model is BeamSizeModel.WAIST else laser.focus_range[1:]
-        )
-        lower[lay.index("focus")], upper[lay.index("focus")] = focus[0], focus[-1]
-        upper[lay.index("energy")] = laser.pulse_energy_max
-        if craft.rcs:
+    def hardware_limits(self) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+        """(lower, upper, limit) per map-input entry: what the hardware can do [unit]
+        and whose limit it is, in words with the model field: the beam axis within
+        +-``laser.pointing_limit``, the focus within ``laser.focus_range``, the energy in
+        [0, ``laser.pulse_energy_max``], each RCS level in [0, its thruster's
+        ``max_thrust``] and each phase-locked amplitude within +-``max_thrust`` / 2; the
+        motor torque unlimited (the model gives it no limit). A ControlBound beyond them is
+        refused (:class:`~lightcraft_opt.errors.HardwareLimitError`)."""
+        lay, laser = self.inputs, self.model.laser
+        lower, upper = np.full(lay.size, -math.inf), np.full(lay.size, math.inf)
+        limit = ["none"] * lay.size
+
+        def put(slot: str, low: Any, high: Any, words: str | list[str]) -> None:
+            idx = lay.index(slot)
+            lower[idx], upper[idx] = low, high
+            for j, i in enumerate(range(lay.size)[idx]):
+                limit[i] = words if isinstance(words, str) else words[j]
+
+        put("pointing_L", -laser.pointing_limit, laser.pointing_limit,
+            "the laser's pointing reach (laser.pointing_limit)")  # fmt: skip
+        put("focus", *laser.focus_range, "the laser's focus range (laser.focus_range)")
+        put("energy", 0.0, laser.pulse_energy_max,
+            "the laser's pulse energy (laser.pulse_energy_max)")  # fmt: skip
+        if self.n_thrusters:
             top = self.max_thrust()
-            upper[lay.index("rcs_thrust")] = np.tile(top, self.rcs_subintervals)
+            whose = [
+                f"thruster {i}'s force (craft.rcs.thrusters[{i}].max_thrust)"
+                for i in range(self.n_thrusters)
+            ]
+            levels = lay.slot("rcs_thrust").size // self.n_thrusters
+            put("rcs_thrust", 0.0, np.tile(top, levels), whose * levels)
             for name in ("rcs_cos", "rcs_sin"):
                 if name in lay:
-                    lower[lay.index(name)], upper[lay.index(name)] = -top / 2, top / 2
+                    half = [f"{w[:-1]} / 2)" for w in whose]
+                    put(name, -top / 2, top / 2, half)
+        return lower, upper, tuple(limit)
+
+    def _set_bounds(self) -> None:
+        lay, laser = self.inputs, self.model.laser
+        hw_lower, hw_upper, hw_limit = self.hardware_limits()
+        lower, upper = hw_lower.copy(), hw_upper.copy()
+        if laser.size_model is not BeamSizeModel.WAIST:  # the focus has no effect: held
+            lower[lay.index("focus")] = upper[lay.index("focus")]
+        if "motor_torque" in lay:  # no limit in the model: held at 0 unless bounded
+            lower[lay.index("motor_torque")] = upper[lay.index("motor_torque")] = 0.0
         slew = np.full(lay.size, math.inf)
         seen: set[str] = set()
         for i, bound in enumerate(self.controls):
@@ -639,21 +671,33 @@ class OcpProblem:
                 raise ParameterError(f"{where}.lower", f"{lo} exceeds upper {hi}")
             if np.any(rate <= 0):
                 raise ParameterError(f"{where}.slew_rate", f"must be positive, got {rate}")
-            if bound.slot == "energy" and (lo[0] < 0 or hi[0] > laser.pulse_energy_max):
-                raise ParameterError(
-                    f"{where}.lower" if lo[0] < 0 else f"{where}.upper",
-                    f"pulse energy must lie in [0, {laser.pulse_energy_max}] J (the laser's)",
-                )
             if np.any(np.isinf(lo) & (lo == hi)):
                 raise ParameterError(f"{where}.lower", "an input cannot be held at infinity")
+            # inf: no bound of its own, the hardware's; beyond the hardware: refused
+            low, high = hw_lower[idx], hw_upper[idx]
+            lo, hi = np.where(np.isinf(lo), low, lo), np.where(np.isinf(hi), high, hi)
+            unit = lay.slot(bound.slot).unit
+            for name, values in (("lower", lo), ("upper", hi)):
+                slack = 1e-12 * np.maximum(np.abs(values), 1.0)
+                outside = np.flatnonzero((values < low - slack) | (values > high + slack))
+                if outside.size:
+                    j = int(outside[0])
+                    raise HardwareLimitError(
+                        f"{where}.{name}",
+                        float(values[j]),
+                        float(low[j]),
+                        float(high[j]),
+                        unit,
+                        hw_limit[range(lay.size)[idx][j]],
+                    )
             lower[idx], upper[idx], slew[idx] = lo, hi, rate * self.period
         set_frozen(self, "lower", lower)
         set_frozen(self, "upper", upper)
         set_frozen(self, "slew", slew)
 
     def _check_envelope(self) -> None:
-        """RcsEnvelope: an RCS, level bounds within [0, max_thrust], and thrusters whose
-        phase-locked inputs are all held must hold them inside the envelope."""
+        """RcsEnvelope: an RCS, and thrusters whose phase-locked inputs are all held must
+        hold them inside the envelope."""
         where = [i for i, c in enumerate(self.constraints) if isinstance(c, RcsEnvelope)]
         if not where:
             return
@@ -662,14 +706,8 @@ class OcpProblem:
             raise ParameterError(
                 name, f"RcsEnvelope needs a craft with an RCS; {self.model.name!r} has none"
             )
+        # the levels lie within [0, max_thrust]: _set_bounds refuses bounds beyond them
         lay, top = self.inputs, np.tile(self.max_thrust(), self.rcs_subintervals)
-        idx = lay.index("rcs_thrust")
-        if np.any(self.lower[idx] < 0) or np.any(self.upper[idx] > top):
-            raise ParameterError(
-                name,
-                "RcsEnvelope needs the rcs_thrust bounds within [0, max_thrust]; got "
-                f"[{self.lower[idx]}, {self.upper[idx]}]",
-            )
         if self.rcs_profile is not RcsProfile.PHASE_LOCKED:
             return
         held = ~self.free

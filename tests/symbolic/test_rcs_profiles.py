@@ -455,8 +455,8 @@ def test_bad_rcs_options_name_the_field(rcs_model):
     with pytest.raises(ParameterError, match=r"^constraints\[0\]: RcsEnvelope needs a craft"):
         OcpProblem(no_rcs, 2, (ControlEffort("energy"),), (RcsEnvelope(),))
     with pytest.raises(
-        ParameterError, match=r"^constraints\[0\]: RcsEnvelope needs the rcs_thrust"
-    ):
+        ParameterError, match=r"^controls\[0\].upper: 0.3 N is beyond thruster 0's force"
+    ):  # beyond the thrusters: refused whether or not the envelope is asked for
         problem(constraints=(RcsEnvelope(),), controls=(ControlBound("rcs_thrust", 0, 0.3),))
     with pytest.raises(ParameterError, match=r"^constraints\[0\]: thruster 1's held inputs"):
         problem(
