@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.errors import HardwareLimitError, OptionError, ParameterError
+from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import (
     STATE,
     RcsProfile,
@@ -52,6 +52,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.model.checks import checked_vector, number, numbers, set_frozen
+from lightcraft_opt.ocp.hardware import HardwareLimits, hardware_limits
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
@@ -602,47 +603,15 @@ class OcpProblem:
     def _parameter_vector(self) -> np.ndarray:
         return parameter_values(self.model, self.parameters)
 
-    def hardware_limits(self) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-        """(lower, upper, limit) per map-input entry: what the hardware can do [unit]
-        and whose limit it is, in words with the model field: the beam axis within
-        +-``laser.pointing_limit``, the focus within ``laser.focus_range``, the energy in
-        [0, ``laser.pulse_energy_max``], each RCS level in [0, its thruster's
-        ``max_thrust``] and each phase-locked amplitude within +-``max_thrust`` / 2; the
-        motor torque unlimited (the model gives it no limit). A ControlBound beyond them is
-        refused (:class:`~lightcraft_opt.errors.HardwareLimitError`)."""
-        lay, laser = self.inputs, self.model.laser
-        lower, upper = np.full(lay.size, -math.inf), np.full(lay.size, math.inf)
-        limit = ["none"] * lay.size
-
-        def put(slot: str, low: Any, high: Any, words: str | list[str]) -> None:
-            idx = lay.index(slot)
-            lower[idx], upper[idx] = low, high
-            for j, i in enumerate(range(lay.size)[idx]):
-                limit[i] = words if isinstance(words, str) else words[j]
-
-        put("pointing_L", -laser.pointing_limit, laser.pointing_limit,
-            "the laser's pointing reach (laser.pointing_limit)")  # fmt: skip
-        put("focus", *laser.focus_range, "the laser's focus range (laser.focus_range)")
-        put("energy", 0.0, laser.pulse_energy_max,
-            "the laser's pulse energy (laser.pulse_energy_max)")  # fmt: skip
-        if self.n_thrusters:
-            top = self.max_thrust()
-            whose = [
-                f"thruster {i}'s force (craft.rcs.thrusters[{i}].max_thrust)"
-                for i in range(self.n_thrusters)
-            ]
-            levels = lay.slot("rcs_thrust").size // self.n_thrusters
-            put("rcs_thrust", 0.0, np.tile(top, levels), whose * levels)
-            for name in ("rcs_cos", "rcs_sin"):
-                if name in lay:
-                    half = [f"{w[:-1]} / 2)" for w in whose]
-                    put(name, -top / 2, top / 2, half)
-        return lower, upper, tuple(limit)
+    def hardware_limits(self) -> HardwareLimits:
+        """What the laser and the thrusters can do, per map-input entry
+        (:mod:`~lightcraft_opt.ocp.hardware`); a ControlBound beyond it is refused."""
+        return hardware_limits(self.model, self.inputs)
 
     def _set_bounds(self) -> None:
         lay, laser = self.inputs, self.model.laser
-        hw_lower, hw_upper, hw_limit = self.hardware_limits()
-        lower, upper = hw_lower.copy(), hw_upper.copy()
+        hardware = self.hardware_limits()
+        lower, upper = hardware.lower.copy(), hardware.upper.copy()
         if laser.size_model is not BeamSizeModel.WAIST:  # the focus has no effect: held
             lower[lay.index("focus")] = upper[lay.index("focus")]
         if "motor_torque" in lay:  # no limit in the model: held at 0 unless bounded
@@ -674,22 +643,11 @@ class OcpProblem:
             if np.any(np.isinf(lo) & (lo == hi)):
                 raise ParameterError(f"{where}.lower", "an input cannot be held at infinity")
             # inf: no bound of its own, the hardware's; beyond the hardware: refused
-            low, high = hw_lower[idx], hw_upper[idx]
-            lo, hi = np.where(np.isinf(lo), low, lo), np.where(np.isinf(hi), high, hi)
+            lo = np.where(np.isinf(lo), hardware.lower[idx], lo)
+            hi = np.where(np.isinf(hi), hardware.upper[idx], hi)
             unit = lay.slot(bound.slot).unit
-            for name, values in (("lower", lo), ("upper", hi)):
-                slack = 1e-12 * np.maximum(np.abs(values), 1.0)
-                outside = np.flatnonzero((values < low - slack) | (values > high + slack))
-                if outside.size:
-                    j = int(outside[0])
-                    raise HardwareLimitError(
-                        f"{where}.{name}",
-                        float(values[j]),
-                        float(low[j]),
-                        float(high[j]),
-                        unit,
-                        hw_limit[range(lay.size)[idx][j]],
-                    )
+            hardware.check(f"{where}.lower", idx, lo, unit)
+            hardware.check(f"{where}.upper", idx, hi, unit)
             lower[idx], upper[idx], slew[idx] = lo, hi, rate * self.period
         set_frozen(self, "lower", lower)
         set_frozen(self, "upper", upper)
