@@ -2,7 +2,7 @@
 
 A closed-loop file (files/closed_loop.py) with ``[campaign]`` and one ``[dispersions.<name>]``
 table per dispersed quantity; every key, the quantities, their units, nominal values and
-physical domains: docs/files.md#campaign. Problems raise
+physical domains: docs/files/campaign.md. Problems raise
 :class:`~lightcraft_opt.errors.ProblemFileError` naming the file and the key as written.
 """
 
@@ -33,11 +33,15 @@ from lightcraft_opt.files.problem_tables import Table, read_table
 from lightcraft_opt.files.schema import NUMBER, QUANTITIES, TEXT, Spec, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
 
-__all__ = ["load_campaign"]
+__all__ = ["DISPERSED_KIND", "TABLES", "distribution_keys", "load_campaign"]
 
 _CAMPAIGN: dict[str, Spec] = {"compiled": Spec("switch")}
+#: The tables of a campaign file beside a closed-loop file's (files/closed_loop.py TABLES):
+#: ``[campaign]``; ``[dispersions.<name>]`` has :func:`distribution_keys` for the quantity
+#: :data:`DISPERSED_KIND` gives each name. Every table and key: docs/files/campaign.md.
+TABLES: dict[str, dict[str, Spec]] = {"campaign": _CAMPAIGN}
 #: Quantity of each dispersed value's keys (None: bare numbers).
-_KIND: dict[str, str | None] = {
+DISPERSED_KIND: dict[str, str | None] = {
     "mass": "mass",
     "inertia_axial": "inertia",
     "inertia_transverse": "inertia",
@@ -56,7 +60,7 @@ _DISTRIBUTIONS = ("normal", "uniform")
 
 
 def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:
-    """Read a campaign file (docs/files.md#campaign) and the model file it names.
+    """Read a campaign file (docs/files/campaign.md) and the model file it names.
 
     Parameters
     ----------
@@ -136,7 +140,7 @@ def _dispersions(src: str, raw: Any, nominal: dict[str, float]) -> Dispersions:
             raise ProblemFileError(
                 src, where, f"unknown dispersion; {hint}allowed: {', '.join(DISPERSED)}"
             )
-        dist = _distribution(src, where, table, _KIND[name], nominal[name])
+        dist = _distribution(src, where, table, DISPERSED_KIND[name], nominal[name])
         _check_domain(src, name, where, table, dist)
         items.append((name, dist))
     if "tilt" in raw and "tilt_azimuth" not in raw:
@@ -144,11 +148,11 @@ def _dispersions(src: str, raw: Any, nominal: dict[str, float]) -> Dispersions:
     return Dispersions(tuple(items))
 
 
-def _distribution(
-    src: str, where: str, raw: Any, kind: str | None, nominal: float
-) -> Normal | Uniform:
+def distribution_keys(kind: str | None) -> dict[str, Spec]:
+    """The keys of a ``[dispersions.<name>]`` table for a quantity of ``kind`` (a key of
+    schema.QUANTITIES, None for a bare number)."""
     value = quantity(kind) if kind else NUMBER
-    schema = {
+    return {
         "distribution": TEXT,
         "mean": value,
         "sigma": value,
@@ -157,7 +161,12 @@ def _distribution(
         "low": value,
         "high": value,
     }
-    table = read_table(src, raw, where, schema, required=("distribution",))
+
+
+def _distribution(
+    src: str, where: str, raw: Any, kind: str | None, nominal: float
+) -> Normal | Uniform:
+    table = read_table(src, raw, where, distribution_keys(kind), required=("distribution",))
     v = table.values
     name = v["distribution"]
     if name not in _DISTRIBUTIONS:
@@ -212,7 +221,7 @@ def _distribution(
 def _check_domain(src: str, name: str, where: str, raw: dict[str, Any], dist: Distribution) -> None:
     """Refuse ``dist`` if it draws values outside quantity ``name``'s physical domain,
     naming the key and the value in the file's units."""
-    domain, kind = DOMAINS[name], _KIND[name]
+    domain, kind = DOMAINS[name], DISPERSED_KIND[name]
     keys = {_field(key): key for key in raw}
     table = Table(where, {}, keys)
 

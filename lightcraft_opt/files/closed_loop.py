@@ -5,7 +5,7 @@ model file with ``[model_overrides]``, ``[initial]``, model_files' units in the 
 naming the key as written) for what a closed loop needs instead of an objective: the
 controller it flies (``controller``) and its options (``[mpc]``, ``[director]``), and what
 happens to the plant (``[plant]``). Every table and key, with an example, and the rule that
-picks the controller: docs/files.md#closed-loop.
+picks the controller: docs/files/closed_loop.md.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, qua
 from lightcraft_opt.layout import PARAMETERS, STATE, coning_rates
 from lightcraft_opt.model import FocusSchedule, Model, Wind
 
-__all__ = ["ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
+__all__ = ["TABLES", "ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
 _TABLES = ("model_overrides", "initial", "mpc", "director", "plant")
 _TOP: dict[str, Spec] = {
@@ -142,6 +142,22 @@ _WIND_PARAMETERS = {
     "gust_duration": "gust_duration",
 }
 
+#: The tables of a closed-loop file as written ("" the top level) -> their keys:
+#: ``[initial]`` has problem files' keys (files/problem.py TABLES) and the coning's,
+#: ``[plant.dispersion]`` the names of layout.PARAMETERS, ``[model_overrides]`` a model
+#: file's tables. Every table and key: docs/files/closed_loop.md.
+TABLES: dict[str, dict[str, Spec]] = {
+    "": _TOP,
+    "initial": _CONING,
+    "mpc": _MPC,
+    "mpc.tolerances": _TOLERANCES,
+    "director": _DIRECTOR,
+    "director.tolerances": _DIRECTOR_TOLERANCES,
+    "plant": _PLANT,
+    "plant.noise": _NOISE,
+    "plant.wind": {field: mf.SCHEMA["wind"][field] for field in _WIND_PARAMETERS},
+}
+
 
 @dataclass(frozen=True, eq=False)
 class ClosedLoopProblem:
@@ -175,7 +191,7 @@ class ClosedLoopProblem:
 
 
 def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
-    """Read a closed-loop file (docs/files.md#closed-loop) and the model file it names.
+    """Read a closed-loop file (docs/files/closed_loop.md) and the model file it names.
 
     Parameters
     ----------

@@ -24,13 +24,12 @@ unit in the key (``mass_g``, ``spin_rpm``, ``beam_side_cm``), an SI value the SI
     beam_side_cm = 7.1974
     impulse_per_pulse_ns = 0.0637
 
-Optional: ``[craft.liner]``, ``[craft.carrier]``, ``[craft.rcs]`` with
-``[[craft.rcs.thrusters]]``, ``[craft.aero]``, ``[craft.spin_decay]``, ``[craft.engine]``
-(optic, blast ring, impulse model, health, ablation: ``capture_radius_mm``,
-``blast_angle_deg``, ``ablation_ug_per_j``, ``spent_coupling_n_per_mw``,
-``impulse_model = "sector"``, ``quadrature_radial = 8`` ...), ``[environment]``,
-``[environment.wind]``. Site and laser files hold their keys at the top level. Any problem
-raises one :class:`ModelFileError` naming the file and the key as written in it.
+Optional: ``[record]``, ``[craft.liner]``, ``[craft.carrier]``, ``[craft.rcs]`` with
+``[[craft.rcs.thrusters]]``, ``[craft.aero]``, ``[craft.spin_decay]``, ``[craft.engine]``,
+``[environment]``, ``[environment.wind]`` (:data:`TABLES`). Site and laser files hold their
+keys at the top level. Every table and key with its unit, default and range:
+docs/files/model.md. Any problem raises one :class:`ModelFileError` naming the file and the
+key as written in it.
 """
 
 from __future__ import annotations
@@ -81,6 +80,7 @@ from lightcraft_opt.model import (
 __all__ = [
     "QUANTITIES",
     "SCHEMA",
+    "TABLES",
     "load_laser",
     "load_model",
     "load_record",
@@ -201,6 +201,26 @@ SCHEMA: Mapping[str, Mapping[str, Spec]] = {
         "pointing_limit": quantity("length"),
         "focus_range": quantity("length", "list", 2),
     },
+}
+
+
+#: The tables of a flight file as written ("" the top level) -> their SCHEMA entry; a site
+#: file holds SCHEMA["site"] at its top level, a laser file SCHEMA["laser"]. Every key:
+#: docs/files/model.md.
+TABLES: Mapping[str, str] = {
+    "": "model",
+    "record": "record",
+    "craft": "craft",
+    "craft.liner": "liner",
+    "craft.carrier": "carrier",
+    "craft.rcs": "rcs",
+    "craft.rcs.thrusters": "thruster",
+    "craft.aero": "aero",
+    "craft.spin_decay": "spin_decay",
+    "craft.engine": "engine",
+    "flight": "flight",
+    "environment": "environment",
+    "environment.wind": "wind",
 }
 
 

@@ -3,7 +3,7 @@
 The edge of :mod:`lightcraft_opt.ocp.problem` (what to solve) and
 :class:`~lightcraft_opt.ocp.options.OcpOptions` (how), as :mod:`lightcraft_opt.files.model` is
 the edge of the model: the same units and spellings (its :data:`QUANTITIES`), converted to
-SI here and nowhere else. Every table and key, with an example: docs/files.md#problem;
+SI here and nowhere else. Every table and key, with an example: docs/files/problem.md;
 :mod:`lightcraft_opt.files.problem_tables` reads the objective, constraint and control
 tables. Any problem raises one :class:`~lightcraft_opt.errors.ProblemFileError` naming the
 file and the key as written in it.
@@ -65,6 +65,7 @@ from lightcraft_opt.ocp.problem import (
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
+    "TABLES",
     "ProblemFile",
     "as_problem_file_errors",
     "initial_state_from_table",
@@ -138,19 +139,22 @@ def _options_schema(cls: type, skip: str) -> dict[str, Spec]:
 #: ``[pulse_map]``: the fields of PulseMapOptions (scheme, substeps, dense ...) but the RCS
 #: profile, which is the problem's (it sets the decision variables), not the map's.
 _PULSE_MAP: Mapping[str, Spec] = _options_schema(PulseMapOptions, skip="rcs_")
-#: Table of a model file -> its model_files.SCHEMA entry (to merge overrides by field).
+#: The plain tables of a problem file as written ("" the top level) -> their keys. The
+#: arrays are problem_tables' OBJECTIVES, CONSTRAINTS and CONTROL; ``[initial_guess]`` takes
+#: the map-input slots (``energy_j``), ``[model_overrides]`` a model file's tables. Every
+#: table and key with its unit, default and range: docs/files/problem.md.
+TABLES: Mapping[str, Mapping[str, Spec]] = {
+    "": _TOP,
+    "initial": _INITIAL,
+    "solver": _SOLVER,
+    "pulse_map": _PULSE_MAP,
+}
+#: Table of a model file -> its model_files.SCHEMA entry (to merge overrides by field; an
+#: array of tables, [[craft.rcs.thrusters]], is replaced whole).
 _MODEL_TABLES: Mapping[tuple[str, ...], str] = {
-    (): "model",
-    ("craft",): "craft",
-    ("craft", "liner"): "liner",
-    ("craft", "carrier"): "carrier",
-    ("craft", "rcs"): "rcs",
-    ("craft", "aero"): "aero",
-    ("craft", "spin_decay"): "spin_decay",
-    ("craft", "engine"): "engine",
-    ("flight",): "flight",
-    ("environment",): "environment",
-    ("environment", "wind"): "wind",
+    tuple(path.split(".")) if path else (): name
+    for path, name in mf.TABLES.items()
+    if name != "thruster"
 }
 
 
@@ -196,7 +200,7 @@ def load_problem(
     max_iter: int | None = None,
     time_limit: float | None = None,
 ) -> ProblemFile:
-    """Read a problem file (docs/files.md#problem) and the model file it names.
+    """Read a problem file (docs/files/problem.md) and the model file it names.
 
     Parameters
     ----------
