@@ -88,6 +88,34 @@ def test_a_bad_number_or_a_former_name_is_a_usage_error_naming_the_flag(argv, fl
     assert "m.toml" not in captured.err.splitlines()[-1]  # refused before reading any file
 
 
+# issue 29: one spelling per unit; a file written with a former one exits 2 naming the key
+# in the new spelling (one line, no traceback), for every command that reads a file
+FORMER_UNITS = [
+    ("simulate", "models/flight5.toml", "impulse_per_pulse_ns", "impulse_per_pulse_n_s"),
+    ("optimize", "problems/crosswind_launch.toml", "slew_rate_mps", "slew_rate_m_per_s"),
+    ("closed-loop", "problems/nutation_suppression.toml", "rate_rad_per_s", "rate_rad_s"),
+    ("montecarlo", "problems/montecarlo_gust_mpc.toml", "rate_rad_per_s", "rate_rad_s"),
+]
+
+
+@pytest.mark.parametrize(("command", "file", "key", "former"), FORMER_UNITS)
+def test_a_former_unit_spelling_in_a_file_exits_2_naming_the_new_key(
+    command, file, key, former, tmp_path, capsys
+):
+    for folder in ("models", "problems"):
+        (tmp_path / folder).mkdir()
+        for source in (REPO_ROOT / folder).glob("*.toml"):
+            (tmp_path / folder / source.name).write_text(source.read_text())
+    path = tmp_path / file
+    text = path.read_text()
+    assert f"{key} = " in text
+    path.write_text(text.replace(f"{key} = ", f"{former} = ", 1))
+    assert main([command, str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and len(err.splitlines()) == 1
+    assert f"'{former}' was renamed '{key}'" in err and err.rstrip().endswith(f"write {key}")
+
+
 def test_values_at_the_ends_of_the_ranges_are_taken():
     parse = build_parser().parse_args
     args = parse(["simulate", "m.toml", "--tilt-deg", "89.9", "--dropout-rate", "0",
