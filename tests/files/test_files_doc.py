@@ -59,6 +59,7 @@ from lightcraft_opt.ocp.options import OCP_PULSE_MAP, OcpOptions
 DOCS = REPO_ROOT / "docs"
 PAGES = DOCS / "files"
 REQUIRED = object()  # a key without a default
+NONE = object()  # a default of None: the page says "none"
 #: Dataclass of each model-file SCHEMA entry: its defaults are the reader's.
 MODEL_CLASSES: Mapping[str, type] = {
     "model": m.Model,
@@ -141,12 +142,14 @@ def unit_word(spec: Spec) -> str:
 
 
 def parse_default(cell: str) -> Any:
-    """A default cell as a value: "required", a "choice", true/false, a number or a list of
+    """A default cell as a value: "required", "none", a "choice", true/false, a number or a list of
     numbers in the key's unit or in a unit written after it ((value, unit)); None for words
     (a default that depends on the model)."""
     cell = cell.strip()
     if cell == "required":
         return REQUIRED
+    if cell == "none":
+        return NONE
     if cell in ("true", "false"):
         return cell == "true"
     if re.fullmatch(r'`"[\w]+"`', cell):
@@ -199,14 +202,16 @@ def check_default(where: str, row: Row, spec: Spec, value: Any) -> None:
     if value is REQUIRED or parsed is REQUIRED:
         assert parsed is value, f"{where}: default {row.default!r}, the reader's {value!r}"
         return
+    if value is None or parsed is NONE:
+        assert parsed is NONE or parsed is None, f"{where}: default {row.default!r}, not none"
+        assert value is None, f"{where}: default {row.default!r}, the reader's {value!r}"
+        return
     if parsed is None:  # words: a default that depends on the model
         return
     if isinstance(value, bool) or isinstance(parsed, (bool, str)):
         value = value.value if hasattr(value, "value") else value
         assert parsed == value, f"{where}: default {row.default!r}, the reader's {value!r}"
         return
-    if value is None:
-        raise AssertionError(f"{where}: default {row.default!r}, the reader's is None")
     number, unit = parsed
     if unit is None:
         key_units = [u for u in QUANTITIES.get(spec.kind, {}) if row.key.endswith("_" + u)]
