@@ -107,6 +107,22 @@ class Multipliers:
         """max |λ| (NaN when there is no mode)."""
         return float(np.max(self.magnitude)) if self.values.size else float("nan")
 
+    def __str__(self) -> str:
+        """A table, one row per mode, largest |λ| first: |λ|, its angle per pulse [deg],
+        the growth rate [1/s], the kind and the state it loads most (its share)."""
+        rows = [
+            f"{'mode':>4}  {'|λ|':>8}  {'angle':>8}  {'growth':>9}  {'kind':<11}  most in",
+            f"{'':>4}  {'':>8}  {'deg':>8}  {'1/s':>9}  {'':<11}",
+        ]
+        for i in range(self.values.size):
+            top = int(np.argmax(self.participation[i]))
+            rows.append(
+                f"{i:>4}  {self.magnitude[i]:>8.5f}  {np.degrees(self.angle[i]):>8.2f}  "
+                f"{self.growth_rate[i]:>9.3g}  {self.kinds[i].value:<11}  "
+                f"{self.states[top]} ({self.participation[i, top]:.0%})"
+            )
+        return "\n".join(rows)
+
 
 def state_space_matrices(sys: control.StateSpace) -> tuple[np.ndarray, np.ndarray]:
     """(A (n, n), B (n, m)) of ``sys`` as float arrays."""
