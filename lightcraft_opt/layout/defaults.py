@@ -155,16 +155,26 @@ def quaternion_from_tilt(tilt: float = 0.0, azimuth: float = 0.0) -> np.ndarray:
 def _launch_angles(tilt: float, azimuth: float) -> tuple[float, float]:
     """(tilt, azimuth) [rad] checked: both finite, 0 <= tilt < pi/2 (at 90 degrees the
     craft lies on its side and no beam reaches its optic)."""
-    for name, value in (("tilt", tilt), ("tilt_azimuth", azimuth)):
+    _quarter_turn(
+        ("tilt", tilt),
+        ("tilt_azimuth", azimuth),
+        "lean toward the opposite azimuth instead of a negative tilt; at 90 the craft lies "
+        "on its side",
+    )
+    return float(tilt), float(azimuth)
+
+
+def _quarter_turn(angle: tuple[str, float], azimuth: tuple[str, float], hint: str) -> None:
+    """Check an (angle, azimuth) pair [rad], each given as (name, value): both finite, the
+    angle in [0, 90) degrees; the error names the argument and ends with ``hint``."""
+    for name, value in (angle, azimuth):
         if not math.isfinite(value):
             raise ParameterError(name, f"must be finite, got {value}")
-    if not 0.0 <= tilt < math.pi / 2:
+    name, value = angle
+    if not 0.0 <= value < math.pi / 2:
         raise ParameterError(
-            "tilt",
-            f"must lie in [0, 90) degrees, got {math.degrees(tilt):.6g}: lean toward the "
-            "opposite azimuth instead of a negative tilt; at 90 the craft lies on its side",
+            name, f"must lie in [0, 90) degrees, got {math.degrees(value):.6g}: {hint}"
         )
-    return float(tilt), float(azimuth)
 
 
 def tilted_attitude(q_LB: np.ndarray, tilt: float, azimuth: float = 0.0) -> np.ndarray:
@@ -202,15 +212,11 @@ def coning_rates(
     b2 toward b3, spinning at ``spin`` [rad/s] (default the craft's) with w_B[b1] = 0:
     tan(coning) = A |w_⊥| / (J spin), A and J the craft's transverse and axial moments
     (exact for a centred rotor)."""
-    for name, value in (("coning", coning), ("coning_azimuth", azimuth)):
-        if not math.isfinite(value):
-            raise ParameterError(name, f"must be finite, got {value}")
-    if not 0.0 <= coning < math.pi / 2:
-        raise ParameterError(
-            "coning",
-            f"must lie in [0, 90) degrees, got {math.degrees(coning):.6g}: the angle from "
-            "the spin axis b1 to H (set its direction with coning_azimuth)",
-        )
+    _quarter_turn(
+        ("coning", coning),
+        ("coning_azimuth", azimuth),
+        "the angle from the spin axis b1 to H (set its direction with coning_azimuth)",
+    )
     craft = model.craft
     spin = craft.spin if spin is None else spin
     if coning and spin == 0.0:

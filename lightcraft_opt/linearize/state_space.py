@@ -22,10 +22,16 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import RcsProfile, nominal_inputs
-from lightcraft_opt.linear.coning import coning_inputs, coning_linear_model, nominal_climb_speeds
+from lightcraft_opt.linear.coning import (
+    ConingLinearModel,
+    coning_inputs,
+    coning_linear_model,
+    nominal_climb_speeds,
+)
 from lightcraft_opt.linear.linear_model import (
     REDUCED_STATES,
     Coordinates,
+    LinearModel,
     linear_model,
 )
 from lightcraft_opt.linear.operating_points import (
@@ -73,6 +79,12 @@ def linearize(
         pulse_map=pulse_map,
         options=options,
     )
+    return _state_space(lin, f"{model.name} pulse map ({lin.coordinates.value})")
+
+
+def _state_space(lin: LinearModel | ConingLinearModel, name: str) -> control.StateSpace:
+    """``lin`` as a control.StateSpace: C = I, D = 0, dt the pulse period, the states as
+    outputs, named."""
     n, m = lin.B.shape
     return control.ss(
         lin.A,
@@ -83,7 +95,7 @@ def linearize(
         states=list(lin.states),
         outputs=list(lin.states),
         inputs=list(lin.inputs),
-        name=f"{model.name} pulse map ({lin.coordinates.value})",
+        name=name,
     )
 
 
@@ -148,16 +160,5 @@ def coning_state_space(
         speed = float(nominal_climb_speeds(model, phi, [altitude], u)[0])
     point = climb_point(model, altitude, speed, spin=spin, pulse_map=jac)
     lin = coning_linear_model(model, point, pulse_map=jac)
-    n, m = lin.B.shape
     rpm = spin * 30 / np.pi
-    return control.ss(
-        lin.A,
-        lin.B,
-        np.eye(n),
-        np.zeros((n, m)),
-        lin.dt,
-        states=list(lin.states),
-        outputs=list(lin.states),
-        inputs=list(lin.inputs),
-        name=f"{model.name} pulse map (coning, {rpm:.0f} RPM, {altitude:g} m)",
-    )
+    return _state_space(lin, f"{model.name} pulse map (coning, {rpm:.0f} RPM, {altitude:g} m)")
