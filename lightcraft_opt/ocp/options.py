@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
+from lightcraft_opt.model.checks import checked_choice
 from lightcraft_opt.symbolic.maps.options import CoastScheme, PulseMapOptions
 
 __all__ = [
@@ -216,19 +217,9 @@ class OcpOptions:
             raise OptionError(
                 f"OcpOptions.time_limit must be a positive number of seconds or None, got {t!r}"
             )
-        if not isinstance(self.linear_solver, LinearSolver):
-            allowed = [m.value for m in LinearSolver]
-            raise OptionError(
-                f"OcpOptions.linear_solver must be one of {allowed}, got {self.linear_solver!r}"
-            )
-        if not isinstance(self.start, OcpStart):
-            allowed = [m.value for m in OcpStart]
-            raise OptionError(f"OcpOptions.start must be one of {allowed}, got {self.start!r}")
-        if not isinstance(self.prediction, PredictionMap):
-            allowed = [m.value for m in PredictionMap]
-            raise OptionError(
-                f"OcpOptions.prediction must be one of {allowed}, got {self.prediction!r}"
-            )
+        checked_choice("OcpOptions", "linear_solver", self.linear_solver, LinearSolver)
+        checked_choice("OcpOptions", "start", self.start, OcpStart)
+        checked_choice("OcpOptions", "prediction", self.prediction, PredictionMap)
         if not isinstance(self.replay, bool):
             raise OptionError(f"OcpOptions.replay must be true or false, got {self.replay!r}")
         if not isinstance(self.chain_derivatives, bool):
@@ -236,16 +227,12 @@ class OcpOptions:
                 "OcpOptions.chain_derivatives must be true or false, got "
                 f"{self.chain_derivatives!r}"
             )
-        if not isinstance(self.solver, OcpSolver):
-            allowed = [s.value for s in OcpSolver]
-            raise OptionError(f"OcpOptions.solver must be one of {allowed}, got {self.solver!r}")
+        checked_choice("OcpOptions", "solver", self.solver, OcpSolver)
         if not isinstance(self.pulse_map, PulseMapOptions):
             raise OptionError(
                 f"OcpOptions.pulse_map must be a PulseMapOptions, got {self.pulse_map!r}"
             )
-        if not isinstance(self.hessian, HessianApproximation):
-            allowed = [h.value for h in HessianApproximation]
-            raise OptionError(f"OcpOptions.hessian must be one of {allowed}, got {self.hessian!r}")
+        checked_choice("OcpOptions", "hessian", self.hessian, HessianApproximation)
         if self.hessian is HessianApproximation.CONVEX and not (
             self.solver is OcpSolver.IPOPT and self.chain_derivatives
         ):

@@ -10,6 +10,7 @@ from enum import Enum
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.layout.vectors import RcsProfile
+from lightcraft_opt.model.checks import checked_choice
 
 __all__ = ["CoastScheme", "PulseMapOptions"]
 
@@ -50,11 +51,7 @@ class PulseMapOptions:
     rcs_subintervals: int = 1
 
     def __post_init__(self) -> None:
-        if not isinstance(self.scheme, CoastScheme):
-            allowed = [s.value for s in CoastScheme]
-            raise OptionError(
-                f"PulseMapOptions.scheme must be one of {allowed}, got {self.scheme!r}"
-            )
+        checked_choice("PulseMapOptions", "scheme", self.scheme, CoastScheme)
         if not isinstance(self.rcs_profile, RcsProfile):
             allowed = [s.value for s in RcsProfile]
             raise OptionError(
