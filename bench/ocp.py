@@ -5,8 +5,9 @@ For each solver in ``--solvers`` (``name:hessian[:flag...]``, e.g. ``ipopt:exact
 ``ipopt:convex``; flags ``reduced`` for the coning-aware reduced map Ψ as the prediction,
 ``ad`` for casadi's AD through the map instead of the chain over compiled pieces, ``spral``
 for IPOPT's SPRAL in place of MUMPS, ``exact_only`` for no convexified first phase
-(OcpOptions.convex_iterations = 0), ``rollout`` for the nominal rollout as the start), in
-one process:
+(OcpOptions.convex_iterations = 0), ``rollout`` for the nominal rollout as the start,
+``kept`` for the warm re-solve on the Hessian blocks the cold solve ended with,
+OcpOptions.warm_hessian), in one process:
 
 * **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.solve.CompiledOcp`;
   the pulse map Φ is built once and shared, so only the first build pays for casadi's
@@ -71,6 +72,7 @@ from lightcraft_opt.ocp.options import (
     OcpSolver,
     OcpStart,
     PredictionMap,
+    WarmHessian,
 )
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult
@@ -162,11 +164,11 @@ def main() -> None:
         name, *rest = spec.split(":")
         hessian = rest[0] if rest else "exact"
         flags = set(rest[1:])
-        unknown = flags - {"reduced", "full", "ad", "spral", "exact_only", "rollout"}
+        unknown = flags - {"reduced", "full", "ad", "spral", "exact_only", "rollout", "kept"}
         if unknown:
             parser.error(
                 f"--solvers {spec!r}: unknown {sorted(unknown)}; use reduced, full, ad, spral, "
-                "exact_only, rollout"
+                "exact_only, rollout, kept"
             )
         options = replace(
             base,
@@ -177,6 +179,7 @@ def main() -> None:
             linear_solver=LinearSolver.SPRAL if "spral" in flags else LinearSolver.MUMPS,
             convex_iterations=0 if "exact_only" in flags else base.convex_iterations,
             start=OcpStart.ROLLOUT if "rollout" in flags else base.start,
+            warm_hessian=WarmHessian.KEPT if "kept" in flags else base.warm_hessian,
         )
         start = time.perf_counter()
         full = options.prediction is PredictionMap.FULL
@@ -245,7 +248,7 @@ def profile(problem: OcpProblem, options: OcpOptions, iterations: int) -> None:
     )
     result = compiled.solve()
     n = max(result.iterations, 1)
-    stats = compiled.solver.stats()
+    stats = compiled.last_solver.stats()
     print(
         f"{result.iterations} iterations in {result.solve_time:.2f} s: "
         f"{1e3 * result.solve_time / n:.1f} ms an iteration ({result.status.value})"

@@ -38,7 +38,7 @@ from lightcraft_opt.compiled.cache import (
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.ocp import transcription
-from lightcraft_opt.ocp.evaluation import ConvexBlocks, SharedEvaluation, horizon_map
+from lightcraft_opt.ocp.evaluation import ConvexBlocks, KeptBlocks, SharedEvaluation, horizon_map
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
@@ -90,6 +90,8 @@ class ChainNlp:
     shared : Φ's values and Jacobians over the horizon (ocp/evaluation.py), whose counters
         say how often each was evaluated; they must outlive the solver.
     convex_blocks : the projection's Callback, kept alive likewise.
+    kept_blocks : the chain's Hessian blocks of the last evaluation (ocp/evaluation.py),
+        frozen for a warm re-solve that reuses them.
     """
 
     nlp: ca.Function
@@ -99,6 +101,7 @@ class ChainNlp:
     hess_lag_convex: ca.Function
     shared: tuple[SharedEvaluation, SharedEvaluation]
     convex_blocks: ConvexBlocks
+    kept_blocks: KeptBlocks
 
     def derivatives(self, *, convex: bool = False) -> dict[str, ca.Function]:
         """nlpsol's options ``grad_f``, ``jac_g`` and ``hess_lag`` (the convexified Hessian
@@ -149,8 +152,9 @@ def chain_nlp(
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
     _, xn, en, _, _ = point
     mu_x, mu_e = s.multipliers(w, xn, en, P, lam_f, lam_g)
-    hessians = horizon_map(der.hessian, N, tr.threads)
-    Hb = hessians(z[:nx, :], z[nx:, :], p, times, mu_x, mu_e)
+    # the chain's Hessian blocks, kept for re-solves that reuse them (OcpOptions.warm_hessian)
+    kept = KeptBlocks("ocp_pulse_hessians", horizon_map(der.hessian, N, tr.threads))
+    Hb = kept(z[:nx, :], z[nx:, :], ca.repmat(p, 1, N), times, mu_x, mu_e)
     # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
     psd = ConvexBlocks("ocp_convex_blocks", der.n_v, N)
     hess_lag, hess_convex = (
@@ -163,7 +167,7 @@ def chain_nlp(
         )
         for name, blocks in (("nlp_hess_l", Hb), ("nlp_hess_l_convex", psd(Hb)))
     )
-    return ChainNlp(nlp, grad_f, jac_g, hess_lag, hess_convex, (values, jacobians), psd)
+    return ChainNlp(nlp, grad_f, jac_g, hess_lag, hess_convex, (values, jacobians), psd, kept)
 
 
 def build_surrogate(

@@ -27,7 +27,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["SharedEvaluation", "horizon_map"]
+__all__ = ["ConvexBlocks", "KeptBlocks", "SharedEvaluation", "horizon_map"]
 
 #: Points remembered: the accepted point and a trial point or two of the line search.
 KEEP = 4
@@ -139,3 +139,65 @@ class ConvexBlocks(ca.Callback):
         values, vectors = np.linalg.eigh(H)
         clipped = np.einsum("kij,kj,klj->kil", vectors, np.maximum(values, 0.0), vectors)
         return [ca.DM(clipped.transpose(1, 0, 2).reshape(n, N * n))]
+
+
+class KeptBlocks(ca.Callback):
+    """``kept_blocks(x, u, p, t, mu_x, mu_e) -> H``: Φ's curvature blocks over the horizon,
+    μ_kᵀ∇²Φ(z_k) per pulse side by side, evaluated by ``hessians`` (the chain's, mapped
+    over the horizon) and kept; while :attr:`frozen`, the kept blocks answer every call
+    without evaluating anything.
+
+    A re-solve from a neighbouring optimum (a warm start: the craft moved a few mm, the
+    next MPC step) stands where the last solve ended: its multipliers and pulse arguments
+    are close to those the kept blocks were computed at, so the Newton model with them
+    differs from the exact one by O(|Δz| + |Δμ|). Gradients and Jacobians stay exact, so
+    the optimum and its tolerances are the same; only the convergence is linear instead
+    of quadratic, at a rate that vanishes with the shift, and an iteration costs no Hessian
+    of the chain (most of an exact iteration: bench/README.md).
+
+    Attributes
+    ----------
+    frozen : answer from the kept blocks (when there are any) without evaluating.
+    evaluations, reuses : calls that evaluated the chain's Hessian, calls answered from
+        the kept blocks.
+    """
+
+    def __init__(self, name: str, hessians: ca.Function) -> None:
+        ca.Callback.__init__(self)
+        self._f = hessians
+        self._kept: ca.DM | None = None
+        self.frozen = False
+        self.fresh = 0
+        self.evaluations = 0
+        self.reuses = 0
+        self.construct(name, {})
+
+    @property
+    def has_blocks(self) -> bool:
+        """Whether blocks were kept (a solve has evaluated the Hessian)."""
+        return self._kept is not None
+
+    def get_n_in(self) -> int:
+        return int(self._f.n_in())
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_sparsity_in(self, i: int) -> Any:
+        return self._f.sparsity_in(i)
+
+    def get_sparsity_out(self, i: int) -> Any:
+        return self._f.sparsity_out(0)
+
+    def has_jacobian(self) -> bool:
+        return False
+
+    def eval(self, arg: list[ca.DM]) -> list[ca.DM]:
+        if self.fresh > 0:
+            self.fresh -= 1
+        elif self.frozen and self._kept is not None:
+            self.reuses += 1
+            return [self._kept]
+        self.evaluations += 1
+        self._kept = self._f.call(arg)[0]
+        return [self._kept]

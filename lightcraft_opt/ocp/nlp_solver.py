@@ -24,6 +24,7 @@ from lightcraft_opt.ocp.transcription import MultipleShooting
 __all__ = [
     "CONVEX_PHASE_TOL",
     "QP_SOLVERS",
+    "RESOLVE_IPOPT",
     "WARM_IPOPT",
     "NlpSetup",
     "solver_setup",
@@ -171,6 +172,21 @@ WARM_IPOPT: dict[str, Any] = {
     "warm_start_bound_push": 1e-6,
     "warm_start_mult_bound_push": 1e-6,
     "warm_start_slack_bound_push": 1e-6,
+}
+
+#: IPOPT re-solving from a previous result, its multipliers given (``CompiledOcp.solve(
+#: warm_start=...)``): the barrier parameter at the tolerance's tenth, bounds, slacks and
+#: multipliers pushed by as little. A 2 mm shift of x0 from the optimum of
+#: problems/beam_tracking_focus.toml: 4 iterations, against 32 with :data:`WARM_IPOPT`'s
+#: 1e-6, which makes IPOPT walk the barrier back down (bench/README.md).
+RESOLVE_IPOPT: dict[str, Any] = {
+    "warm_start_init_point": "yes",
+    "mu_init": 1e-9,
+    "warm_start_bound_push": 1e-9,
+    "warm_start_bound_frac": 1e-9,
+    "warm_start_mult_bound_push": 1e-9,
+    "warm_start_slack_bound_push": 1e-9,
+    "warm_start_slack_bound_frac": 1e-9,
 }
 
 #: Tolerance of the convex phase (OcpOptions.convex_iterations): near the optimum the

@@ -21,6 +21,7 @@ __all__ = [
     "OcpSolver",
     "OcpStart",
     "PredictionMap",
+    "WarmHessian",
 ]
 
 
@@ -62,6 +63,23 @@ class OcpStart(Enum):
 
     FLOWN = "flown"
     ROLLOUT = "rollout"
+
+
+class WarmHessian(Enum):
+    """Φ's curvature in a re-solve from a previous result (``CompiledOcp.solve(warm_start=...)``).
+
+    ``EXACT``: the chain's Hessian blocks at every iteration, as in a cold solve.
+    ``KEPT``: the blocks the last solve of this compiled problem ended with, never
+    evaluated again (ocp/evaluation.py KeptBlocks): an iteration costs Φ's values and
+    Jacobians only; gradients and Jacobians stay exact, so the optimum is the same, reached
+    in more, cheaper iterations. Meant for a re-solve from the last result (the next MPC
+    step, a small change of x0 or p); from an older result the kept blocks are another
+    point's. A kept-Hessian solve that does not succeed is solved again from where it
+    stopped with the exact Hessian.
+    """
+
+    EXACT = "exact"
+    KEPT = "kept"
 
 
 class PredictionMap(Enum):
@@ -177,6 +195,8 @@ class OcpOptions:
         problems/beam_tracking_focus.toml (docs/ocp.md) the two phases took far fewer
         iterations than the exact Hessian alone. Figures:
         bench/README.md#after-issue-27-shared-evaluation-flown-starts-two-hessians-2026-12-03.
+    warm_hessian : with IPOPT and the chain's exact Hessian, Φ's curvature in a re-solve
+        from a previous result (:class:`WarmHessian`).
     linear_solver : IPOPT's linear solver (:class:`LinearSolver`).
     start : where a cold solve starts without an initial guess (:class:`OcpStart`).
     replay : fly every solve's plan again through the simulator's Φ at full accuracy and
@@ -199,6 +219,7 @@ class OcpOptions:
     time_limit: float | None = OCP_TIME_LIMIT
     stall_iterations: int | None = OCP_STALL_ITERATIONS
     convex_iterations: int = 80
+    warm_hessian: WarmHessian = WarmHessian.EXACT
     linear_solver: LinearSolver = LinearSolver.MUMPS
     start: OcpStart = OcpStart.FLOWN
     replay: bool = True
@@ -219,6 +240,7 @@ class OcpOptions:
             )
         checked_choice("OcpOptions", "linear_solver", self.linear_solver, LinearSolver)
         checked_choice("OcpOptions", "start", self.start, OcpStart)
+        checked_choice("OcpOptions", "warm_hessian", self.warm_hessian, WarmHessian)
         checked_choice("OcpOptions", "prediction", self.prediction, PredictionMap)
         if not isinstance(self.replay, bool):
             raise OptionError(f"OcpOptions.replay must be true or false, got {self.replay!r}")

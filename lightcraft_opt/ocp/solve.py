@@ -45,6 +45,7 @@ from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.nlp_solver import (
     CONVEX_PHASE_TOL,
     QP_SOLVERS,
+    RESOLVE_IPOPT,
     WARM_IPOPT,
     solver_setup,
     solver_status,
@@ -56,6 +57,7 @@ from lightcraft_opt.ocp.options import (
     OcpSolver,
     OcpStart,
     PredictionMap,
+    WarmHessian,
 )
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
@@ -72,6 +74,7 @@ from lightcraft_opt.ocp.start import (
 from lightcraft_opt.ocp.time_limit import (
     Deadline,
     Progress,
+    SolverCall,
     call_forked,
     call_solver,
     can_fork,
@@ -218,7 +221,10 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._warm_solver: ca.Function | None = None
+        #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
+        self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
+        self._resolve_solver: ca.Function | None = None
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
 
@@ -316,7 +322,12 @@ class CompiledOcp:
         # a start that flew is near-feasible: IPOPT starts it as it starts a warm start
         # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet
         flown = cold is not None and cold.flown
-        solver = self.solver if warm_start is None and not flown else self._warm_started()
+        solver = (
+            self._resolver()
+            if warm_start is not None
+            else self._warm_started() if flown else self.solver
+        )
+        kept = self._keep_blocks(warm_start is not None)
         args = dict(
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
@@ -339,6 +350,17 @@ class CompiledOcp:
             call = call_forked(solver, args, until - start)
         else:
             call = call_solver(solver, args, self._deadline, until, first_iteration=done)
+            if kept and not _succeeded(call) and call.stall is None and not call.deadline_reached:
+                # the kept Hessian did not get there: on from where it stopped, exact
+                done = int(call.stats.get("iter_count", 0)) if call.stats else 0
+                self._keep_blocks(False)
+                if call.solution is not None and np.all(np.isfinite(call.solution[0])):
+                    w1, l1, m1 = call.solution
+                    args = {**args, "x0": w1, "lam_x0": l1, "lam_g0": m1}
+                call = call_solver(solver, args, self._deadline, until, first_iteration=done)
+                phase = f" (after {done} iterations with the kept Hessian)"
+                convex = None
+        self.last_solver = solver
         solve_time = time.perf_counter() - start
         w, lam_x, lam_g = call.solution or (w0, lam_x0, lam_g0)
         finite = bool(np.all(np.isfinite(w)))
@@ -346,7 +368,7 @@ class CompiledOcp:
         status, message, iterations = solver_status(call, self.options, violation)
         if not finite:
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
-        if convex is not None:
+        if convex is not None or phase:
             iterations += done
             message += phase
         if cold is not None and cold.flown:
@@ -421,6 +443,36 @@ class CompiledOcp:
                 {**base, "hess_lag": chain.hess_lag_convex, "ipopt": ipopt},
             )
         return self._convex_solver
+
+    def _keep_blocks(self, warm: bool) -> bool:
+        """Freeze Φ's Hessian blocks at those the last solve ended with for a re-solve from
+        a previous result (``OcpOptions.warm_hessian`` "kept", once a solve has evaluated
+        them), else let every iteration evaluate them; whether they are frozen."""
+        chain = self.chain
+        if chain is None:
+            return False
+        keep = (
+            warm
+            and self.options.warm_hessian is WarmHessian.KEPT
+            and chain.kept_blocks.has_blocks
+        )
+        chain.kept_blocks.frozen = keep
+        return keep
+
+    def _resolver(self) -> ca.Function:
+        """The solver for re-solves from a previous result (primal and dual): IPOPT started
+        at the result with a barrier parameter of 1e-9 and the bounds and multipliers
+        pushed by 1e-9 (:data:`RESOLVE_IPOPT`; built once, on first use); the others as
+        they are."""
+        if self.options.solver is not OcpSolver.IPOPT:
+            return self.solver
+        if self._resolve_solver is None:
+            setup = self._setup
+            ipopt = {**setup.options["ipopt"], **RESOLVE_IPOPT}
+            self._resolve_solver = ca.nlpsol(
+                "ocp_nlp_resolve", setup.plugin, setup.nlp, {**setup.options, "ipopt": ipopt}
+            )
+        return self._resolve_solver
 
     def _warm_started(self) -> ca.Function:
         """The solver for warm starts: IPOPT told to start from the given primal and dual
@@ -571,3 +623,8 @@ def solve(
     """
     compiled = CompiledOcp(problem, options, pulse_map=pulse_map)
     return compiled.solve(initial_guess=initial_guess, warm_start=warm_start)
+
+
+def _succeeded(call: SolverCall) -> bool:
+    """Whether the solver reported success for ``call``."""
+    return bool(call.stats and call.stats.get("success"))
