@@ -332,7 +332,7 @@ class CompiledOcp:
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
         start = time.perf_counter()
-        director = cold is not None and cold.kind is StartKind.DIRECTOR
+        director = cold is not None and cold.kind in (StartKind.DIRECTOR, StartKind.DIRECTOR_CALM)
         convex = self._convex_phase() if director else None
         phase, done = "", 0
         first = None

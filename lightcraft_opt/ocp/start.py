@@ -9,7 +9,10 @@ gaps, so the solver begins on the dynamics' manifold and only has to improve it:
   an input). It flies Φ pulse by pulse in closed loop from x0, every input the problem
   holds at its value, every free one clipped to its bounds and slew limits; the RCS off
   (held at the problem's values). Under the linear beam model the director loses Flight 5
-  above 30 m (docs/director.md), so it does not apply there.
+  above 30 m (docs/director.md), so it does not apply there. Where the director loses
+  the craft in the problem's wind (problems/beam_tracking_apogee.toml: the 3 m/s crosswind
+  over 10 s), its flight in calm air, whose gaps in the wind are again what the wind does
+  over one pulse.
 - **the nominal rollout** otherwise (:func:`rollout`): the beam under the craft, the
   flight's pulse energy, rolled forward through Φ in the problem's wind.
 - **the nominal rollout in calm air**, where the problem's wind blows the nominal rollout
@@ -60,6 +63,7 @@ class StartKind(Enum):
     """How the nodes of a cold start were made."""
 
     DIRECTOR = "director"  # the director's closed-loop flight through Φ
+    DIRECTOR_CALM = "director_calm"  # the same in calm air
     ROLLOUT = "rollout"  # the nominal policy rolled through Φ
     CALM = "calm"  # the nominal policy rolled through Φ in calm air
     GIVEN = "given"  # the caller's initial guess
@@ -87,7 +91,7 @@ class Start:
         """Whether the nodes are a flight that stayed in the beam under inputs the problem
         allows, near-feasible: the director's, or the nominal one in calm air (module
         docstring)."""
-        return self.kind in (StartKind.DIRECTOR, StartKind.CALM)
+        return self.kind in (StartKind.DIRECTOR, StartKind.DIRECTOR_CALM, StartKind.CALM)
 
     def describe(self) -> str:
         """One line: how it was made and how it flew (altitude, drift from the pad)."""
@@ -101,6 +105,7 @@ class Start:
 
 _FLIGHT_NAMES = {
     StartKind.DIRECTOR: "the director's flight",
+    StartKind.DIRECTOR_CALM: "the director's flight in calm air",
     StartKind.ROLLOUT: "the nominal rollout",
     StartKind.CALM: "the nominal flight in calm air",
     StartKind.GIVEN: "the given guess",
@@ -120,7 +125,9 @@ def director_applies(problem: OcpProblem) -> bool:
 def director_start(
     problem: OcpProblem, phi: PulseMap, x0: np.ndarray, p: np.ndarray, t0: float
 ) -> Start:
-    """The director's closed-loop flight of ``problem`` through ``phi`` (module docstring).
+    """The director's closed-loop flight of ``problem`` through ``phi``, in the problem's
+    wind if it stays in the beam there (every pulse catches at least
+    :data:`LEFT_BEAM_CAUGHT` of its energy), else in calm air (module docstring).
 
     Parameters
     ----------
@@ -130,6 +137,19 @@ def director_start(
         director is told the same wind); t0 : first pulse time [s].
     """
     start = time.perf_counter()
+    X, U, caught = _directed(problem, phi, x0, p, t0)
+    calm = wind_scaled(p, 0.0)
+    if np.array_equal(calm, p) or float(np.min(caught, initial=1.0)) >= LEFT_BEAM_CAUGHT:
+        return Start(StartKind.DIRECTOR, X, U, time.perf_counter() - start)
+    X, U, _ = _directed(problem, phi, x0, calm, t0)
+    return Start(StartKind.DIRECTOR_CALM, X, U, time.perf_counter() - start)
+
+
+def _directed(
+    problem: OcpProblem, phi: PulseMap, x0: np.ndarray, p: np.ndarray, t0: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The director's flight (X, U) of :func:`director_start` in the wind of ``p``, and (N,)
+    the fraction of each fired pulse's energy the optic caught (as :func:`_rolled`)."""
     lay, N = problem.inputs, problem.horizon
     e = lay.index("energy")
     energy = problem.model.flight.pulse_energy
@@ -141,7 +161,7 @@ def director_start(
     director = DirectorController(problem.model, lay, options, p=p)
     held = ~problem.free
     x = np.asarray(x0, dtype=float)
-    X, U = [x], []
+    X, U, caught = [x], [], []
     u_last = None if problem.u_previous is None else np.asarray(problem.u_previous, dtype=float)
     for k in range(N):
         t = t0 + k * phi.period
@@ -150,17 +170,16 @@ def director_start(
         if u_last is not None:
             u = np.clip(u, u_last - problem.slew, u_last + problem.slew)
         u = np.clip(u, problem.lower, problem.upper)
-        x_next = np.asarray(phi.step(x, u, p, t)[0], dtype=float).ravel()
-        x = x_next if np.all(np.isfinite(x_next)) else x
+        x_next, engine = (np.asarray(v, dtype=float).ravel() for v in phi.step(x, u, p, t))
+        finite = bool(np.all(np.isfinite(x_next)))
+        x = x_next if finite else x
+        fired = float(u[e][0])
+        share = float(ENGINE.get("energy_captured", engine)) / fired if fired > 0 else 1.0
         X.append(x)
         U.append(u)
+        caught.append(share if finite else 0.0)
         u_last = u
-    return Start(
-        StartKind.DIRECTOR,
-        np.array(X),
-        np.array(U).reshape(N, lay.size),
-        time.perf_counter() - start,
-    )
+    return np.array(X), np.array(U).reshape(N, lay.size), np.array(caught)
 
 
 def nominal_start(

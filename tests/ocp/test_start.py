@@ -155,3 +155,23 @@ def test_a_rollout_that_grazes_the_edge_keeps_its_wind():
     assert start.kind is StartKind.ROLLOUT
     X, _ = rollout(problem, phi)
     np.testing.assert_array_equal(start.X, X)
+
+
+def test_a_wind_the_director_loses_the_craft_in_starts_from_its_calm_flight(waist):
+    """In a 30 m/s gale the director loses the lateral problem's craft (a pulse catches
+    under 1 % of its energy), so the start is its flight in calm air: a flight of Φ with the
+    wind's speeds zeroed, every gap closed there, IPOPT started warm (``flown``)."""
+    problem, _, phi = waist
+    gale = np.array(problem.p, dtype=float)
+    gale[PARAMETERS.index("wind_speed_ref")] = 30.0
+    start = director_start(problem, phi, problem.x0, gale, problem.t0)
+    assert start.kind is StartKind.DIRECTOR_CALM and start.flown
+    calm = wind_scaled(gale, 0.0)
+    X, _ = rollout(problem, phi, start.U, p=calm)
+    np.testing.assert_allclose(start.X, X, rtol=0, atol=1e-12)
+    windy, _ = rollout(problem, phi, start.U, p=gale)
+    assert np.max(np.abs(windy - start.X)) > 1e-3  # the gale would have moved it
+    assert "director's flight in calm air" in start.describe()
+    assert director_start(problem, phi, problem.x0, problem.p, problem.t0).kind is (
+        StartKind.DIRECTOR
+    )
