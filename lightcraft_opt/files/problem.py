@@ -57,6 +57,7 @@ from lightcraft_opt.ocp.options import (
     OcpSolver,
     OcpStart,
     PredictionMap,
+    WarmHessian,
 )
 from lightcraft_opt.ocp.problem import (
     OcpProblem,
@@ -112,6 +113,7 @@ _SOLVER: Mapping[str, Spec] = {
     "prediction": choice(PredictionMap),
     "start": choice(OcpStart),
     "convex_iterations": INTEGER,
+    "warm_hessian": choice(WarmHessian),
     "linear_solver": choice(LinearSolver),
     "time_limit": quantity("time"),
     "stall_iterations": INTEGER,
