@@ -17,6 +17,8 @@ from collections.abc import Sequence
 
 from lightcraft_opt import __version__
 from lightcraft_opt.cli import calibrate, closed_loop, montecarlo, optimize, simulate
+from lightcraft_opt.cli.progress import build_line
+from lightcraft_opt.compiled.cache import reported_builds
 from lightcraft_opt.errors import LightcraftError
 
 DESCRIPTION = (
@@ -95,7 +97,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return stop.code if isinstance(stop.code, int) else 0 if stop.code is None else 2
     shown, warnings.formatwarning = warnings.formatwarning, _warning_line
     try:
-        return int(args.run(args))
+        with reported_builds(build_line):  # a first compile says what it builds, k/n
+            return int(args.run(args))
     except LightcraftError as err:
         print(f"lightcraft: error: {err}", file=sys.stderr)
         return 2
