@@ -39,11 +39,22 @@ from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
-from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
-from lightcraft_opt.files.ocp_outputs import node_flight, write_ocp_summary, write_solution_csv
+from lightcraft_opt.files.closed_loop_outputs import (
+    steps_table,
+    write_closed_loop_summary,
+    write_steps_csv,
+)
+from lightcraft_opt.files.ocp_outputs import (
+    node_flight,
+    solution_table,
+    write_ocp_summary,
+    write_solution_csv,
+)
 from lightcraft_opt.files.problem import ProblemFile
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import (
+    pulse_table,
+    trajectory_table,
     write_pulses_csv,
     write_summary,
     write_trajectory_csv,
@@ -145,6 +156,13 @@ def _flight_save(
     return folder
 
 
+def _flight_tables(result: SimulationResult, **_: Any) -> dict[str, dict[str, np.ndarray]]:
+    tables = {"trajectory": trajectory_table(result)}
+    if result.pulses is not None:
+        tables["pulses"] = pulse_table(result)
+    return tables
+
+
 # --------------------------------------------------------------------------- closed loops
 def _loop_plot(
     result: ClosedLoopResult,
@@ -195,6 +213,10 @@ def _loop_save(
     return folder
 
 
+def _loop_tables(result: ClosedLoopResult, **_: Any) -> dict[str, dict[str, np.ndarray]]:
+    return {**_flight_tables(result.flight), "steps": steps_table(result)}
+
+
 # --------------------------------------------------------------------------- solves
 def _problem_file(
     problem: ProblemFile | OcpProblem | None, options: OcpOptions | None, title: str
@@ -241,6 +263,16 @@ def _ocp_save(
     write_ocp_summary(result, pf, folder / "summary.json")
     _draw(figures, _ocp_plot, folder, result, problem=pf, title=title)
     return folder
+
+
+def _ocp_tables(
+    result: OcpResult,
+    *,
+    problem: ProblemFile | OcpProblem | None = None,
+    options: OcpOptions | None = None,
+    **_: Any,
+) -> dict[str, dict[str, np.ndarray]]:
+    return {"solution": solution_table(result, _problem_file(problem, options, "").problem)}
 
 
 # --------------------------------------------------------------------------- fits
@@ -307,8 +339,12 @@ def _campaign_save(
     return folder
 
 
-register(SimulationResult, plot=_flight_plot, save=_flight_save)
-register(ClosedLoopResult, plot=_loop_plot, save=_loop_save)
-register(OcpResult, plot=_ocp_plot, save=_ocp_save)
+def _campaign_tables(result: CampaignResult, **_: Any) -> dict[str, dict[str, np.ndarray]]:
+    return {"runs": result.table}
+
+
+register(SimulationResult, plot=_flight_plot, save=_flight_save, tables=_flight_tables)
+register(ClosedLoopResult, plot=_loop_plot, save=_loop_save, tables=_loop_tables)
+register(OcpResult, plot=_ocp_plot, save=_ocp_save, tables=_ocp_tables)
 register(CalibrationResult, plot=_fit_plot, save=_fit_save)
-register(CampaignResult, plot=_campaign_plot, save=_campaign_save)
+register(CampaignResult, plot=_campaign_plot, save=_campaign_save, tables=_campaign_tables)
