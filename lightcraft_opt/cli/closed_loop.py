@@ -92,7 +92,7 @@ def _fly(
     name = kind.value
     if kind is not ControllerKind.NONE:
         print(
-            f"building the {name} controller (its linear prediction model: ~25 s the first "
+            f"building the {name} controller (its linear prediction model: ~20 s the first "
             "time for a model, then read from the disk cache) ...",
             flush=True,
         )
@@ -140,7 +140,7 @@ def add(sub: argparse._SubParsersAction) -> None:
         "controller.step(x); x = plant(x, u), and write trajectory.csv, "
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
-        "model is built once per model and kept in the cache folder (~25 s the first time; "
+        "model is built once per model and kept in the cache folder (~20 s the first time; "
         "lightcraft --help: LIGHTCRAFT_CACHE). The flight depends only on its inputs: no "
         "solve has a wall-clock budget unless the file's time_budget_ms or --time-budget-ms "
         "makes a real-time study (a later solve is discarded, the shifted plan flies). Exit "

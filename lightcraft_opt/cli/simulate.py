@@ -243,7 +243,7 @@ def add(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="step the interpreted pulse map; by default it is compiled to C with gcc, kept "
         "in the cache folder (lightcraft --help: LIGHTCRAFT_CACHE; the first run of a model "
-        "structure compiles for 15-25 s and says so; LIGHTCRAFT_COMPILE=0 also turns it off)",
+        "structure compiles for 10-20 s and says so; LIGHTCRAFT_COMPILE=0 also turns it off)",
     )
     sim.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     flown = sim.add_mutually_exclusive_group()
