@@ -35,7 +35,9 @@ DESCRIPTION = (
 ENVIRONMENT = """environment:
   LIGHTCRAFT_CACHE     the cache folder: compiled pulse maps, the NLP's derivatives, the
                        MPC's models (default $XDG_CACHE_HOME/lightcraft_opt, else
-                       ~/.cache/lightcraft_opt); delete it to rebuild everything
+                       ~/.cache/lightcraft_opt); delete it to rebuild everything. A
+                       first run compiles into it and prints on stderr what gcc
+                       compiles, counted k/n as each library finishes
   XDG_CACHE_HOME       the base of the default cache folder
   LIGHTCRAFT_COMPILE   0, false, no or off: step interpreted pulse maps, compile nothing
   CC                   the C compiler (default gcc)
