@@ -1,5 +1,5 @@
 """``result.to_dataframe()``: the CSV tables the CLI writes, as pandas DataFrames (issue 29,
-item 7).
+item 7): a flight's, a closed loop's, a solve's and a campaign's.
 
 Reference: the CSV files themselves. Each table is built by the function that writes its
 file, so ``pd.read_csv`` of the written file gives the DataFrame back: the same columns in
@@ -17,6 +17,8 @@ from files.test_results import _ocp
 from support.paths import REPO_ROOT
 
 import lightcraft_opt as lc
+from lightcraft_opt.campaign.run_table import RunTable, read_table
+from lightcraft_opt.campaign.runner import CampaignResult
 from lightcraft_opt.control.result import (
     ClosedLoopResult,
     ControllerLog,
@@ -109,3 +111,17 @@ def test_without_pandas_to_dataframe_names_the_extra(flight, monkeypatch):
     monkeypatch.setitem(sys.modules, "pandas", None)  # import pandas raises ImportError
     with pytest.raises(ImportError, match=r'pip install -e "\.\[dataframe\]"'):
         flight.to_dataframe()
+
+
+def test_a_campaigns_table_is_its_runs_csv(tmp_path):
+    table = RunTable(tmp_path / "runs.csv", ("run", "status", "apogee_m", "message"))
+    table.append({"run": 1, "status": "left_beam", "apogee_m": 12.25, "message": "out, at 3 s"})
+    table.append({"run": 0, "status": "landed", "apogee_m": 41.5, "message": ""})
+    table.finish()
+    stats = {"title": "t", "runs": 2, "status_counts": {"landed": 1, "left_beam": 1}}
+    campaign = CampaignResult(
+        tmp_path, 2, 2, 0, True, read_table(tmp_path / "runs.csv"), stats, "serial", 1.0
+    )
+    frame = campaign.to_dataframe()
+    _same_table(frame, tmp_path / "runs.csv")
+    assert list(frame["run"]) == [0, 1] and frame["message"][1] == "out, at 3 s"
