@@ -4,7 +4,8 @@ Results live in the capability layers (simulation, ocp, control, calibration, ca
 which must not import the edges that write files and draw figures (files/, plots/). The
 edges register, per result type, a ``plot`` and a ``save`` function here (dependency
 inversion); a result's :meth:`Presentable.plot` and :meth:`Presentable.save` look theirs
-up. ``import lightcraft_opt`` fills the registry (lightcraft_opt/files/outputs.py).
+up, and :meth:`Presentable.to_dataframe` the ``tables`` of its CSV files. ``import
+lightcraft_opt`` fills the registry (lightcraft_opt/files/outputs.py).
 """
 
 from __future__ import annotations
@@ -16,13 +17,19 @@ from typing import Any
 
 from lightcraft_opt.errors import LightcraftError
 
-__all__ = ["Presentable", "Presenter", "presenter_for", "register"]
+__all__ = ["DATAFRAME_EXTRA", "Presentable", "Presenter", "presenter_for", "register"]
 
 #: ``plot(result, **context) -> {file name: matplotlib Figure}``.
 PlotFn = Callable[..., Mapping[str, Any]]
 #: ``save(result, folder, *, figures, **context) -> folder``: the CLI's files, and its
 #: figures when ``figures``.
 SaveFn = Callable[..., Path]
+#: ``tables(result, **context) -> {CSV file stem: {column: (n,) values}}``: the tables the
+#: CLI writes as CSV, built by the same functions that write them, the first the default.
+TablesFn = Callable[..., Mapping[str, Mapping[str, Any]]]
+
+#: What to install for :meth:`Presentable.to_dataframe`.
+DATAFRAME_EXTRA = 'pip install -e ".[dataframe]" (or pip install pandas)'
 
 
 @dataclass(frozen=True)
@@ -31,14 +38,18 @@ class Presenter:
 
     plot: PlotFn
     save: SaveFn
+    tables: TablesFn | None = None
 
 
 _REGISTRY: dict[type, Presenter] = {}
 
 
-def register(result_type: type, *, plot: PlotFn, save: SaveFn) -> None:
-    """Register how results of ``result_type`` (and its subclasses) plot and save."""
-    _REGISTRY[result_type] = Presenter(plot, save)
+def register(
+    result_type: type, *, plot: PlotFn, save: SaveFn, tables: TablesFn | None = None
+) -> None:
+    """Register how results of ``result_type`` (and its subclasses) plot and save, and
+    the tables of their CSV files (none: the result writes no CSV table)."""
+    _REGISTRY[result_type] = Presenter(plot, save, tables)
 
 
 def presenter_for(result: object) -> Presenter:
@@ -77,3 +88,35 @@ class Presentable:
         back exactly; returns the folder. ``figures=False`` skips the figures (drawing
         them takes seconds). ``context`` as in :meth:`plot`."""
         return presenter_for(self).save(self, Path(folder), figures=figures, **context)
+
+    def to_dataframe(self, table: str | None = None, **context: Any) -> Any:
+        """One of the CSV tables :meth:`save` writes, as a pandas DataFrame with the
+        file's columns (docs/outputs.md), built by the function that writes the file:
+        ``pd.read_csv`` of the file gives the same table, to the file's 12 digits.
+
+        Parameters
+        ----------
+        table : the file's stem: "trajectory" (the default of a flight and a closed
+            loop), "pulses", "steps" (a closed loop), "solution" (a solve, the default).
+        context : what the table needs beyond the result, as in :meth:`plot` (a solve:
+            ``problem=``).
+
+        Raises
+        ------
+        ImportError : without pandas, naming the extra to install.
+        LightcraftError : for a table the result does not write.
+        """
+        try:
+            import pandas as pd
+        except ImportError as err:  # optional: the CSV files need no pandas
+            raise ImportError(f"to_dataframe needs pandas: {DATAFRAME_EXTRA}") from err
+        tables_of = presenter_for(self).tables
+        if tables_of is None:
+            raise LightcraftError(f"{type(self).__name__} writes no CSV table to_dataframe reads")
+        tables = tables_of(self, **context)
+        name = next(iter(tables)) if table is None else table
+        if name not in tables:
+            raise LightcraftError(
+                f"{type(self).__name__} has no table {name!r}: choose from {', '.join(tables)}"
+            )
+        return pd.DataFrame(dict(tables[name]))

@@ -1,7 +1,7 @@
 """Shared fixtures; the helpers they use live in the importable ``support`` package.
 
 The suite steps the interpreted Φ unless a test asks for the compiled one
-(``LIGHTCRAFT_COMPILE=0`` below): each model structure would cost a 5-15 s gcc run in a
+(``LIGHTCRAFT_COMPILE=0`` below): each model structure would cost a 10-20 s gcc run in a
 clean CI cache, and most tests fly structures of their own. tests/test_compiled.py checks
 the compiled path and that the two agree to round-off.
 """

@@ -12,7 +12,7 @@ import numpy as np
 
 from lightcraft_opt.cli.args import output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
-from lightcraft_opt.cli.flags import BUDGET_MS, DURATION
+from lightcraft_opt.cli.flags import ANIMATE_HELP, BUDGET_MS, DURATION
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.factory import build_controller
 from lightcraft_opt.control.options import ControllerKind
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     results = []
     for kind in kinds:
         where = out if single else output_folder(out / kind.value)
-        results.append(_fly(problem, plant, kind, where))
+        results.append(_fly(problem, plant, kind, where, animate=args.animate))
     if not single:
         fig = compare_closed_loops(
             results, title=problem.title, capture_radius=model.craft.engine.capture_radius
@@ -79,14 +79,20 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _fly(
-    problem: ClosedLoopProblem, plant: PulseMap, kind: ControllerKind, out: Path
+    problem: ClosedLoopProblem,
+    plant: PulseMap,
+    kind: ControllerKind,
+    out: Path,
+    *,
+    animate: bool = False,
 ) -> ClosedLoopResult:
-    """Fly ``problem`` under the controller ``kind`` and save its files into ``out``."""
+    """Fly ``problem`` under the controller ``kind`` and save its files into ``out``
+    (flight.gif too when ``animate``)."""
     model = problem.model
     name = kind.value
     if kind is not ControllerKind.NONE:
         print(
-            f"building the {name} controller (its linear prediction model: ~25 s the first "
+            f"building the {name} controller (its linear prediction model: ~20 s the first "
             "time for a model, then read from the disk cache) ...",
             flush=True,
         )
@@ -105,7 +111,7 @@ def _fly(
         options=problem.loop,
     )
     # the files and figures below are written by the writers registered in files/outputs.py
-    result.save(out, problem=problem, inputs=plant.inputs)
+    result.save(out, problem=problem, inputs=plant.inputs, animate=animate)
     pulse = result.first_pulse_below(math.radians(0.5))
     settled = "never below 0.5 deg" if pulse is None else f"below 0.5 deg from pulse {pulse}"
     median = result.log.solve_time_percentiles()["median"]
@@ -134,7 +140,7 @@ def add(sub: argparse._SubParsersAction) -> None:
         "controller.step(x); x = plant(x, u), and write trajectory.csv, "
         "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
         "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
-        "model is built once per model and kept in the cache folder (~25 s the first time; "
+        "model is built once per model and kept in the cache folder (~20 s the first time; "
         "lightcraft --help: LIGHTCRAFT_CACHE). The flight depends only on its inputs: no "
         "solve has a wall-clock budget unless the file's time_budget_ms or --time-budget-ms "
         "makes a real-time study (a later solve is discarded, the shifted plan flies). Exit "
@@ -161,6 +167,7 @@ def add(sub: argparse._SubParsersAction) -> None:
     loop.add_argument(
         "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"
     )
+    loop.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     budget = loop.add_mutually_exclusive_group()
     budget.add_argument(
         "--deterministic",

@@ -62,3 +62,11 @@ RUNS = integer(1, 1_000_000, why="the summary reads every run's row into memory"
 
 #: What a command says when its solver stopped at its iteration limit.
 ITERATION_LIMIT = "iteration limit ({n}) reached: not converged; run again with a larger --max-iter"
+
+
+#: Help of --animate (simulate, closed-loop).
+ANIMATE_HELP = (
+    "also write flight.gif: the flight animated, at most 120 frames (the path, the craft's "
+    "body axis b1 and the beam the laser last fired, with the time); drawing it takes "
+    "seconds to a minute"
+)

@@ -17,6 +17,8 @@ from collections.abc import Sequence
 
 from lightcraft_opt import __version__
 from lightcraft_opt.cli import calibrate, closed_loop, montecarlo, optimize, simulate
+from lightcraft_opt.cli.progress import build_line
+from lightcraft_opt.compiled.cache import reported_builds
 from lightcraft_opt.errors import LightcraftError
 
 DESCRIPTION = (
@@ -33,7 +35,9 @@ DESCRIPTION = (
 ENVIRONMENT = """environment:
   LIGHTCRAFT_CACHE     the cache folder: compiled pulse maps, the NLP's derivatives, the
                        MPC's models (default $XDG_CACHE_HOME/lightcraft_opt, else
-                       ~/.cache/lightcraft_opt); delete it to rebuild everything
+                       ~/.cache/lightcraft_opt); delete it to rebuild everything. A
+                       first run compiles into it and prints on stderr what gcc
+                       compiles, counted k/n as each library finishes
   XDG_CACHE_HOME       the base of the default cache folder
   LIGHTCRAFT_COMPILE   0, false, no or off: step interpreted pulse maps, compile nothing
   CC                   the C compiler (default gcc)
@@ -95,7 +99,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return stop.code if isinstance(stop.code, int) else 0 if stop.code is None else 2
     shown, warnings.formatwarning = warnings.formatwarning, _warning_line
     try:
-        return int(args.run(args))
+        with reported_builds(build_line):  # a first compile says what it builds, k/n
+            return int(args.run(args))
     except LightcraftError as err:
         print(f"lightcraft: error: {err}", file=sys.stderr)
         return 2

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from typing import TextIO
 
 
 def build_line(message: str) -> None:
-    """The build's progress hook of ``lightcraft optimize``: each slow step of the build
-    (or its load from the cache) on a line of its own, indented under ``building ...``."""
-    print(f"  {message.strip()}", flush=True)
+    """The build's progress hook of every command (cli/main.py wraps each in
+    :func:`~lightcraft_opt.compiled.cache.reported_builds`): each slow step of a build, or
+    its load from the cache, on a line of its own on stderr, indented under what the
+    command is doing; gcc's libraries counted ``compiled k/n`` as they finish. A command
+    whose cache is warm prints none (the OCP's build: one ``loaded from the cache``)."""
+    print(f"  {message.rstrip()}", file=sys.stderr, flush=True)
 
 
 #: Iterations between two progress lines when they cannot be rewritten in place.

@@ -10,6 +10,7 @@ from pathlib import Path
 from lightcraft_opt.cli.args import finite, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import (
+    ANIMATE_HELP,
     DROPOUT,
     DURATION,
     LAUNCH_SPEED,
@@ -97,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
         model=model,
         record=load_record(args.model),
         track=track,
+        animate=args.animate,
         launch_speed_mps=args.launch_speed or 0.0,
     )
     print(
@@ -241,8 +243,9 @@ def add(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="step the interpreted pulse map; by default it is compiled to C with gcc, kept "
         "in the cache folder (lightcraft --help: LIGHTCRAFT_CACHE; the first run of a model "
-        "structure compiles for 5-15 s; LIGHTCRAFT_COMPILE=0 also turns it off)",
+        "structure compiles for 10-20 s and says so; LIGHTCRAFT_COMPILE=0 also turns it off)",
     )
+    sim.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     flown = sim.add_mutually_exclusive_group()
     flown.add_argument(
         "--coast-only",

@@ -203,7 +203,8 @@ def dense_sensitivity_for(
         if not want:
             return interpreted
         with _compilation_warned_once():
-            _, done, _ = compile_pieces(own, interpreted.functions())
+            what = "Φ's pieces and their sensitivities"
+            _, done, _ = compile_pieces(own, interpreted.functions(), what=what)
         return interpreted.replaced(tuple(done))
 
     key = (model, opts, want, n_directions)
@@ -234,7 +235,9 @@ def reduced_derivatives_for(
         flags = (DERIVATIVE_FLAGS, DERIVATIVE_FLAGS, DEFAULT_FLAGS, DEFAULT_FLAGS)
         jobs = list(zip(interpreted.pieces(), flags, strict=True))
         with _compilation_warned_once():
-            done, _ = compile_all(jobs, max_instructions=DERIVATIVE_INSTRUCTION_LIMIT)
+            done, _ = compile_all(
+                jobs, max_instructions=DERIVATIVE_INSTRUCTION_LIMIT, what="Ψ's Jacobian pieces"
+            )
         return interpreted.replaced((done[0], done[1], done[2], done[3]))
 
     return _remembered(_REDUCED, (model, opts, want), build)

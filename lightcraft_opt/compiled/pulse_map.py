@@ -89,7 +89,7 @@ def compile_pulse_map(
     same expression), so one library serves both and gcc runs once. If compiling fails,
     ``phi`` comes back unchanged (with the warning).
     """
-    dense = compile_function(phi.dense, compiler=compiler, flags=flags)
+    dense = compile_function(phi.dense, compiler=compiler, flags=flags, what="Φ, the pulse map")
     if dense is phi.dense:
         return phi
     x, u, p, t = (ca.MX.sym(dense.name_in(i), dense.sparsity_in(i)) for i in range(4))
@@ -140,7 +140,7 @@ def _compiled_derivatives(
         derivatives = build_derivative_pieces(phi.pieces)
     built = [f for f in derivatives.functions() if f is not None]
     fast, done, libraries = compile_pieces(
-        phi.pieces, built, compiler, workers, max_instructions, report
+        phi.pieces, built, compiler, workers, max_instructions, report, "Φ's derivative pieces"
     )
     compiled_derivatives = iter(done)
     replaced = tuple(
@@ -156,11 +156,13 @@ def compile_pieces(
     workers: int | None = None,
     max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
     report: BuildReport | None = None,
+    what: str = "Φ's pieces",
 ) -> tuple[PulseMapPieces, list[ca.Function], list[Path]]:
     """Φ's value pieces (``DEFAULT_FLAGS``) and the given derivative pieces
     (``DERIVATIVE_FLAGS``) compiled, each its own library, ``workers`` at a time (default:
     the cores); pieces over ``max_instructions`` SX instructions, or that do not compile,
-    stay interpreted. Returns the pieces, the derivative pieces and the libraries loaded."""
+    stay interpreted. Returns the pieces, the derivative pieces and the libraries loaded.
+    ``report`` and ``what`` as in :func:`~lightcraft_opt.compiled.cache.compile_all`."""
     values = (pieces.normalise, pieces.jump, pieces.substep, pieces.coning_rate)
     jobs = [(f, DEFAULT_FLAGS) for f in values] + [(f, DERIVATIVE_FLAGS) for f in derivatives]
     done, libraries = compile_all(
@@ -169,6 +171,7 @@ def compile_pieces(
         workers=workers,
         max_instructions=max_instructions,
         report=report,
+        what=what,
     )
     normalise, jump, substep, coning_rate = done[:4]
     fast = dataclasses.replace(

@@ -20,7 +20,7 @@ from lightcraft_opt.files.closed_loop import ClosedLoopProblem
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import flight_measures, model_hash
 
-__all__ = ["STEP_COLUMNS", "write_closed_loop_summary", "write_steps_csv"]
+__all__ = ["STEP_COLUMNS", "steps_table", "write_closed_loop_summary", "write_steps_csv"]
 
 STEP_COLUMNS = (
     "k",
@@ -38,28 +38,40 @@ STEP_COLUMNS = (
 )
 
 
+def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
+    """steps.csv as {column: (n,) values}, columns :data:`STEP_COLUMNS`: one row per
+    pulse k, the controller's status, solve and step time, iterations, then the coning
+    and tilt before pulse k, the beam offset at it, the propellant used before it,
+    whether the laser dropped it, and the solver's message (commas replaced)."""
+    log, pulses = result.log, range(result.pulses)
+    columns = [
+        np.arange(result.pulses),
+        np.array([result.pulse_t[k] for k in pulses], dtype=float),
+        np.array([log.status[k].value for k in pulses], dtype=object),
+        np.array([log.solve_time[k] * 1e3 for k in pulses], dtype=float),
+        np.array([log.step_time[k] * 1e3 for k in pulses], dtype=float),
+        np.array([int(log.iterations[k]) for k in pulses], dtype=int),
+        np.array([math.degrees(result.coning[k]) for k in pulses], dtype=float),
+        np.array([math.degrees(result.tilt[k]) for k in pulses], dtype=float),
+        np.array([result.offset[k] * 100 for k in pulses], dtype=float),
+        np.array([result.rcs_used[k] * 1e3 for k in pulses], dtype=float),
+        np.array([int(result.dropped[k]) for k in pulses], dtype=int),
+        np.array([log.messages[k].replace(",", ";") for k in pulses], dtype=object),
+    ]
+    return dict(zip(STEP_COLUMNS, columns, strict=True))
+
+
+#: How steps.csv writes each column of :func:`steps_table`, in its order.
+_STEP_CELLS = ("{}", "{:.9g}", "{}", "{:.6g}", "{:.6g}", "{}", *["{:.9g}"] * 4, "{}", "{}")
+
+
 def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
-    """One row per pulse k, columns :data:`STEP_COLUMNS`: the controller's status,
-    solve and step time, iterations, then the coning and tilt before pulse k, the beam
-    offset at it, the propellant used before it, whether the laser dropped it, and the
-    solver's message (commas replaced)."""
-    log = result.log
-    lines = [",".join(STEP_COLUMNS)]
+    """One row per pulse k, columns :data:`STEP_COLUMNS` (:func:`steps_table`)."""
+    table = steps_table(result)
+    columns = list(table.values())
+    lines = [",".join(table)]
     for k in range(result.pulses):
-        cells = [
-            str(k),
-            f"{result.pulse_t[k]:.9g}",
-            log.status[k].value,
-            f"{log.solve_time[k] * 1e3:.6g}",
-            f"{log.step_time[k] * 1e3:.6g}",
-            str(int(log.iterations[k])),
-            f"{math.degrees(result.coning[k]):.9g}",
-            f"{math.degrees(result.tilt[k]):.9g}",
-            f"{result.offset[k] * 100:.9g}",
-            f"{result.rcs_used[k] * 1e3:.9g}",
-            str(int(result.dropped[k])),
-            log.messages[k].replace(",", ";"),
-        ]
+        cells = (cell.format(c[k]) for cell, c in zip(_STEP_CELLS, columns, strict=True))
         lines.append(",".join(cells))
     path.write_text("\n".join(lines) + "\n")
 

@@ -44,6 +44,7 @@ __all__ = [
     "offsets_over_capture_radius",
     "replay_summary",
     "solution_columns",
+    "solution_table",
     "write_ocp_summary",
     "write_solution_csv",
 ]
@@ -100,15 +101,14 @@ def max_offset_over_capture_radius(result: OcpResult, problem: OcpProblem) -> fl
     return float(np.max(offsets)) if offsets.size else 0.0
 
 
-def write_solution_csv(result: OcpResult, problem: OcpProblem, path: Path) -> None:
-    """One row per node k = 0..N, columns :func:`solution_columns`: the state at node k
-    (with mass, tilt and coning as in trajectory.csv), then pulse k's inputs and engine
-    outputs, empty on the last node (no pulse fires there)."""
+def solution_table(result: OcpResult, problem: OcpProblem) -> dict[str, np.ndarray]:
+    """solution.csv as {column: (N + 1,) values}, columns :func:`solution_columns`: the
+    state at node k (with mass, tilt and coning as in trajectory.csv), then pulse k's
+    inputs and engine outputs, NaN on the last node (no pulse fires there)."""
     n = len(result.t)
     _, _, tilt, coning, mass = build_invariants().map(n)(result.x.T, problem.p)
     nodes = np.column_stack(
         [
-            np.arange(n),
             result.t,
             result.x,
             np.asarray(mass).ravel(),
@@ -119,10 +119,27 @@ def write_solution_csv(result: OcpResult, problem: OcpProblem, path: Path) -> No
     pulses = np.column_stack(
         [result.u, result.engine, offsets_over_capture_radius(result, problem)]
     )
-    lines = [",".join(solution_columns(result.inputs))]
+    pulses = np.vstack([pulses, np.full((1, pulses.shape[1]), np.nan)])
+    columns = [np.arange(n), *nodes.T, *pulses.T]
+    return dict(zip(solution_columns(result.inputs), columns, strict=True))
+
+
+def write_solution_csv(result: OcpResult, problem: OcpProblem, path: Path) -> None:
+    """One row per node k = 0..N, columns :func:`solution_columns`
+    (:func:`solution_table`); pulse k's cells are empty on the last node."""
+    table = solution_table(result, problem)
+    columns = list(table.values())
+    at_nodes = 1 + len(TRAJECTORY_COLUMNS)  # k, then the state's columns
+    n = len(result.t)
+    lines = [",".join(table)]
     for k in range(n):
-        cells = [_cell(v, integer=j == 0) for j, v in enumerate(nodes[k])]
-        cells += [_cell(v) for v in pulses[k]] if k < n - 1 else [""] * pulses.shape[1]
+        cells = [_cell(columns[0][k], integer=True)]
+        cells += [_cell(c[k]) for c in columns[1:at_nodes]]
+        cells += (
+            [_cell(c[k]) for c in columns[at_nodes:]]
+            if k < n - 1
+            else [""] * (len(columns) - at_nodes)
+        )
         lines.append(",".join(cells))
     path.write_text("\n".join(lines) + "\n")
 

@@ -10,10 +10,12 @@ most programs never draw.
 Context keywords (what a figure or a file needs beyond the result):
 
 * SimulationResult: ``model`` (summary.json's model hash, the capture circle in
-  track.png), ``capture_radius`` [m]; other keywords go into summary.json (as the CLI's
-  ``launch_speed_mps``).
+  track.png, the beam in flight.gif), ``capture_radius`` [m], ``animate`` (save writes
+  flight.gif too: :mod:`lightcraft_opt.plots.animation`, seconds to a minute); other
+  keywords go into summary.json (as the CLI's ``launch_speed_mps``).
 * ClosedLoopResult: ``problem`` (a ClosedLoopProblem: title, file, hash, duration, the
-  capture radius and the solve budget), or ``title``, ``capture_radius``, ``budget`` [s].
+  capture radius and the solve budget), or ``title``, ``capture_radius``, ``budget`` [s];
+  ``animate`` as for a flight.
 * OcpResult: ``problem``, a ProblemFile (from :func:`~lightcraft_opt.files.load_problem`)
   or an OcpProblem (then ``options`` and ``title`` may be given too): required to save.
 * CalibrationResult: ``model`` (the report's model and hash), ``model_file`` (then the
@@ -39,11 +41,22 @@ from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.calibration_outputs import write_calibration_report, write_fitted_model
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
-from lightcraft_opt.files.closed_loop_outputs import write_closed_loop_summary, write_steps_csv
-from lightcraft_opt.files.ocp_outputs import node_flight, write_ocp_summary, write_solution_csv
+from lightcraft_opt.files.closed_loop_outputs import (
+    steps_table,
+    write_closed_loop_summary,
+    write_steps_csv,
+)
+from lightcraft_opt.files.ocp_outputs import (
+    node_flight,
+    solution_table,
+    write_ocp_summary,
+    write_solution_csv,
+)
 from lightcraft_opt.files.problem import ProblemFile
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import (
+    pulse_table,
+    trajectory_table,
     write_pulses_csv,
     write_summary,
     write_trajectory_csv,
@@ -60,7 +73,7 @@ from lightcraft_opt.simulation.result import SimulationResult
 if TYPE_CHECKING:  # the plots load matplotlib: only on the first plot or save
     from lightcraft_opt.plots.figures import MeasuredTrack
 
-__all__ = ["beam_size_of", "save_figures"]
+__all__ = ["ANIMATION_FILE", "beam_size_of", "save_animation", "save_figures"]
 
 
 def beam_size_of(laser: Laser, p: np.ndarray) -> Callable[[np.ndarray, float], np.ndarray]:
@@ -75,6 +88,23 @@ def save_figures(figures: Mapping[str, Any], folder: Path) -> None:
 
     for name, fig in figures.items():
         fig.savefig(folder / name, dpi=PLOT_DPI)
+
+
+#: The animation save(animate=True) writes beside the figures.
+ANIMATION_FILE = "flight.gif"
+
+
+def save_animation(
+    flight: SimulationResult, folder: Path, laser: Laser | None, p: np.ndarray | None
+) -> Path:
+    """flight.gif in ``folder``: the flight's animation
+    (:func:`~lightcraft_opt.plots.animation.flight_animation`), with the beam each pulse
+    fired when the ``laser`` and the flight's parameters ``p`` are known."""
+    from lightcraft_opt.plots.animation import flight_animation, save_gif
+
+    beam_size = None if laser is None or p is None else beam_size_of(laser, p)
+    movie = flight_animation(flight, laser=laser, beam_size=beam_size)
+    return save_gif(movie, folder / ANIMATION_FILE)
 
 
 def _draw(figures: bool, plot: Any, folder: Path, *args: Any, **context: Any) -> None:
@@ -125,6 +155,7 @@ def _flight_save(
     capture_radius: float | None = None,
     record: FlightRecord | None = None,
     track: MeasuredTrack | None = None,
+    animate: bool = False,
     **extra: Any,
 ) -> Path:
     _folder(folder)
@@ -142,7 +173,17 @@ def _flight_save(
         record=record,
         track=track,
     )
+    if animate:
+        p = None if model is None else parameter_values(model)
+        save_animation(result, folder, None if model is None else model.laser, p)
     return folder
+
+
+def _flight_tables(result: SimulationResult, **_: Any) -> dict[str, dict[str, np.ndarray]]:
+    tables = {"trajectory": trajectory_table(result)}
+    if result.pulses is not None:
+        tables["pulses"] = pulse_table(result)
+    return tables
 
 
 # --------------------------------------------------------------------------- closed loops
@@ -184,6 +225,7 @@ def _loop_save(
     *,
     figures: bool = True,
     problem: ClosedLoopProblem | None = None,
+    animate: bool = False,
     **context: Any,
 ) -> Path:
     _folder(folder)
@@ -192,7 +234,14 @@ def _loop_save(
     write_steps_csv(result, folder / "steps.csv")
     write_closed_loop_summary(result, problem, folder / "summary.json")
     _draw(figures, _loop_plot, folder, result, problem=problem, **context)
+    if animate:
+        laser = None if problem is None else problem.model.laser
+        save_animation(result.flight, folder, laser, result.p_plant)
     return folder
+
+
+def _loop_tables(result: ClosedLoopResult, **_: Any) -> dict[str, dict[str, np.ndarray]]:
+    return {**_flight_tables(result.flight), "steps": steps_table(result)}
 
 
 # --------------------------------------------------------------------------- solves
@@ -241,6 +290,16 @@ def _ocp_save(
     write_ocp_summary(result, pf, folder / "summary.json")
     _draw(figures, _ocp_plot, folder, result, problem=pf, title=title)
     return folder
+
+
+def _ocp_tables(
+    result: OcpResult,
+    *,
+    problem: ProblemFile | OcpProblem | None = None,
+    options: OcpOptions | None = None,
+    **_: Any,
+) -> dict[str, dict[str, np.ndarray]]:
+    return {"solution": solution_table(result, _problem_file(problem, options, "").problem)}
 
 
 # --------------------------------------------------------------------------- fits
@@ -307,8 +366,12 @@ def _campaign_save(
     return folder
 
 
-register(SimulationResult, plot=_flight_plot, save=_flight_save)
-register(ClosedLoopResult, plot=_loop_plot, save=_loop_save)
-register(OcpResult, plot=_ocp_plot, save=_ocp_save)
+def _campaign_tables(result: CampaignResult, **_: Any) -> dict[str, dict[str, np.ndarray]]:
+    return {"runs": result.table}
+
+
+register(SimulationResult, plot=_flight_plot, save=_flight_save, tables=_flight_tables)
+register(ClosedLoopResult, plot=_loop_plot, save=_loop_save, tables=_loop_tables)
+register(OcpResult, plot=_ocp_plot, save=_ocp_save, tables=_ocp_tables)
 register(CalibrationResult, plot=_fit_plot, save=_fit_save)
-register(CampaignResult, plot=_campaign_plot, save=_campaign_save)
+register(CampaignResult, plot=_campaign_plot, save=_campaign_save, tables=_campaign_tables)

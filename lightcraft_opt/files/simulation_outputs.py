@@ -25,6 +25,8 @@ __all__ = [
     "finite_or_none",
     "flight_measures",
     "model_hash",
+    "pulse_table",
+    "trajectory_table",
     "write_pulses_csv",
     "write_summary",
     "write_trajectory_csv",
@@ -65,14 +67,25 @@ def model_hash(model: Model) -> str:
     return hashlib.sha256(repr(model).encode()).hexdigest()[:16]
 
 
-def write_trajectory_csv(result: SimulationResult, path: Path) -> None:
-    """One row per output time, columns :data:`TRAJECTORY_COLUMNS`."""
+def trajectory_table(result: SimulationResult) -> dict[str, np.ndarray]:
+    """trajectory.csv as {column: (n,) values}, columns :data:`TRAJECTORY_COLUMNS`:
+    one row per output time (``result.to_dataframe()``'s table)."""
     table = np.column_stack(
         [result.t, result.x, result.mass, np.degrees(result.tilt), np.degrees(result.coning)]
     )
-    np.savetxt(
-        path, table, delimiter=",", header=",".join(TRAJECTORY_COLUMNS), comments="", fmt="%.12g"
-    )
+    return dict(zip(TRAJECTORY_COLUMNS, table.T, strict=True))
+
+
+def _write_table(table: dict[str, np.ndarray], path: Path) -> None:
+    """``table``'s columns as CSV, 12 significant digits, its keys the header."""
+    rows = np.column_stack(list(table.values()))
+    np.savetxt(path, rows, delimiter=",", header=",".join(table), comments="", fmt="%.12g")
+
+
+def write_trajectory_csv(result: SimulationResult, path: Path) -> None:
+    """One row per output time, columns :data:`TRAJECTORY_COLUMNS`
+    (:func:`trajectory_table`)."""
+    _write_table(trajectory_table(result), path)
 
 
 PULSE_COLUMNS = (
@@ -97,10 +110,10 @@ PULSE_COLUMNS = (
 )
 
 
-def write_pulses_csv(result: SimulationResult, path: Path) -> None:
-    """One row per pulse, columns :data:`PULSE_COLUMNS` (impulses in B, offsets in L;
-    beam_gap_m: the beam-to-optic clearance, negative while they overlap, NaN for a pulse
-    not fired)."""
+def pulse_table(result: SimulationResult) -> dict[str, np.ndarray]:
+    """pulses.csv as {column: (n,) values}, columns :data:`PULSE_COLUMNS`: one row per
+    pulse (impulses in B, offsets in L; beam_gap_m: the beam-to-optic clearance, negative
+    while they overlap, NaN for a pulse not fired)."""
     rec = result.pulses
     if rec is None:
         raise ValueError("this result has no pulse record (a coast without the laser)")
@@ -117,7 +130,12 @@ def write_pulses_csv(result: SimulationResult, path: Path) -> None:
             np.full(n, np.nan) if rec.beam_gap is None else rec.beam_gap,
         ]
     )
-    np.savetxt(path, table, delimiter=",", header=",".join(PULSE_COLUMNS), comments="", fmt="%.12g")
+    return {"k": np.arange(n), **dict(zip(PULSE_COLUMNS[1:], table.T[1:], strict=True))}
+
+
+def write_pulses_csv(result: SimulationResult, path: Path) -> None:
+    """One row per pulse, columns :data:`PULSE_COLUMNS` (:func:`pulse_table`)."""
+    _write_table(pulse_table(result), path)
 
 
 def flight_measures(result: SimulationResult) -> dict[str, Any]:

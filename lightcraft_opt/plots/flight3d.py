@@ -37,6 +37,7 @@ __all__ = [
     "FiredBeam",
     "beam_outline",
     "fired_beam",
+    "fit_box",
     "flight3d_figure",
     "plot_flight3d",
 ]
@@ -119,7 +120,7 @@ def fired_beam(result: SimulationResult, laser: Laser, beam_size: BeamSize) -> F
     )
 
 
-def _box(ax3: Any, points: list[np.ndarray], margin: float = 0.05) -> None:
+def fit_box(ax3: Any, points: list[np.ndarray], margin: float = 0.05) -> None:
     """3-D limits around ``points`` ((n, 3) arrays [m]), ``margin`` of each span beyond
     (a span of zero opened to 1 mm)."""
     xyz = np.vstack(points)
@@ -170,7 +171,7 @@ def plot_flight3d(
         )
         zz = np.repeat(beam.axis[:, 2:], beam.east.shape[1], axis=1)
         held.append(np.c_[beam.east.ravel(), beam.north.ravel(), zz.ravel()])
-    _box(ax3, held)
+    fit_box(ax3, held)
     for axis in (ax3.xaxis, ax3.yaxis):  # fewer ticks: their labels reach the axis label
         axis.set_major_locator(MaxNLocator(nbins=5))
     ax3.set_xlabel(state_label("east", "r_L", "east"))

@@ -21,6 +21,7 @@ from __future__ import annotations
 import functools
 import os
 import subprocess
+import time
 import warnings
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -34,6 +35,7 @@ from lightcraft_opt.compiled.cache.entries import (
     cache_dir,
     check_entry,
     entry_file,
+    reporter,
     structure_key,
 )
 
@@ -127,7 +129,12 @@ def _library_path(f: ca.Function, cc: str, flags: Sequence[str]) -> Path:
 
 
 def compile_function(
-    f: ca.Function, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
+    f: ca.Function,
+    *,
+    compiler: str | None = None,
+    flags: Sequence[str] = DEFAULT_FLAGS,
+    report: BuildReport | None = None,
+    what: str | None = None,
 ) -> ca.Function:
     """``f`` compiled to C and loaded back, from the cache when it is there and whole.
 
@@ -136,6 +143,10 @@ def compile_function(
     f : an SX or MX Function (e.g. ``PulseMap.dense``).
     compiler : C compiler command; default ``$CC``, else ``gcc``.
     flags : optimisation flags (see :data:`DEFAULT_FLAGS` for why -O2).
+    report : told, when the library is not in the cache, what is compiled and when it is
+        done (as :func:`compile_all` does); default: the enclosing
+        :func:`~.entries.reported_builds`, else nothing.
+    what : what ``f`` is, for the report (default: its name).
 
     Returns
     -------
@@ -143,7 +154,27 @@ def compile_function(
     expressions natively (no derivatives); ``f`` itself, with a
     :class:`CompilationWarning` naming the cause, when compiling is not possible.
     """
-    return _compiled(f, _compiler_command(compiler), flags)[0]
+    cc = _compiler_command(compiler)
+    report = reporter(report)
+    if report is None or not _missing_libraries([(f, tuple(flags))], cc):
+        return _compiled(f, cc, flags)[0]
+    report(_compiling_line(what or f.name(), 1, cc))
+    start = time.perf_counter()
+    out = _compiled(f, cc, flags)[0]
+    report(_compiled_line(1, 1, f.name(), start))
+    return out
+
+
+def _compiling_line(what: str, n: int, cc: str) -> str:
+    """The report's first line of a build that compiles ``n`` libraries of ``what``."""
+    libraries = "1 library" if n == 1 else f"{n} libraries"
+    return f"compiling {what}: {libraries} with {cc} (once per structure, then the disk cache) ..."
+
+
+def _compiled_line(k: int, n: int, name: str, start: float) -> str:
+    """The report's line when the ``k``-th of ``n`` libraries, ``name``'s, is compiled
+    (the time since ``start``, a :func:`time.perf_counter`)."""
+    return f"  compiled {k}/{n}: {name} ({time.perf_counter() - start:.1f} s)"
 
 
 def _compiled(f: ca.Function, cc: str, flags: Sequence[str]) -> tuple[ca.Function, Path | None]:
@@ -185,11 +216,14 @@ def compile_all(
     workers: int | None = None,
     max_instructions: int | None = None,
     report: BuildReport | None = None,
+    what: str = "casadi Functions",
 ) -> tuple[list[ca.Function], list[Path]]:
     """Each (Function, flags) compiled, its own library, ``workers`` at a time (default: the
     cores), in order; a Function over ``max_instructions`` SX instructions, or one that
-    does not compile, stays interpreted. ``report`` (if any) hears how many libraries are
-    not in the cache, then each one compiled.
+    does not compile, stays interpreted. ``report`` (default: the enclosing
+    :func:`~.entries.reported_builds`, else none) hears how many libraries of ``what``
+    are not in the cache, then each one compiled, as ``compiled k/n``; nothing when all
+    are.
 
     Returns
     -------
@@ -202,13 +236,12 @@ def compile_all(
     def small(f: ca.Function) -> bool:
         return limit is None or f.n_instructions() <= limit
 
+    report = reporter(report)
     missing = _missing_libraries([j for j in jobs if small(j[0])], cc) if report else set()
     if report is not None and missing:
-        report(
-            f"compiling {len(missing)} libraries with {cc} "
-            "(a minute or more, once per structure) ..."
-        )
+        report(_compiling_line(what, len(missing), cc))
     count = iter(range(1, len(missing) + 1))  # next() is atomic under the GIL
+    start = time.perf_counter()
 
     def compiled_or_not(job: CompileJob) -> tuple[ca.Function, Path | None]:
         f, flags = job
@@ -216,7 +249,7 @@ def compile_all(
             return f, None
         out = _compiled(f, cc, flags)
         if report is not None and id(f) in missing:
-            report(f"  compiled {next(count)}/{len(missing)}: {f.name()}")
+            report(_compiled_line(next(count), len(missing), f.name(), start))
         return out
 
     n = workers or os.cpu_count() or 1

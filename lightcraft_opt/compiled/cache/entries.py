@@ -26,6 +26,7 @@ A cache that cannot be read or written costs a warning, never the run.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import enum
 import hashlib
 import os
@@ -57,6 +58,8 @@ __all__ = [
     "entry_file",
     "load_entry",
     "read_entry",
+    "reported_builds",
+    "reporter",
     "source_digest",
     "structure_key",
     "write_entry",
@@ -64,6 +67,35 @@ __all__ = [
 
 #: A build's progress report: called with one line saying what the build is doing.
 BuildReport = Callable[[str], None]
+
+#: The report of builds that were given none, set by :func:`reported_builds`.
+_AMBIENT_REPORT: contextvars.ContextVar[BuildReport | None] = contextvars.ContextVar(
+    "lightcraft_build_report", default=None
+)
+
+
+@contextlib.contextmanager
+def reported_builds(report: BuildReport | None) -> Iterator[None]:
+    """Inside, every compile that was given no ``report`` of its own tells ``report``
+    what it builds (the CLI's progress lines: cli/progress.py).
+
+    Scoped like :func:`warnings.catch_warnings`, not a global default: the CLI wraps a
+    command in it, so a first ``lightcraft simulate`` or ``calibrate`` says what gcc is
+    compiling without a ``report`` argument on every function between the command and
+    the compiler (simulate, the closed loop, the controllers, the fit, the campaign).
+    A report passed explicitly (the OCP's build) still wins."""
+    token = _AMBIENT_REPORT.set(report)
+    try:
+        yield
+    finally:
+        _AMBIENT_REPORT.reset(token)
+
+
+def reporter(report: BuildReport | None = None) -> BuildReport | None:
+    """``report`` if given, else the one of the enclosing :func:`reported_builds`, else
+    None (a build that says nothing)."""
+    return report if report is not None else _AMBIENT_REPORT.get()
+
 
 #: Format of the entries; part of every key, so entries of another format are never read.
 _FORMAT = b"lightcraft_opt.compiled.cache 2"
