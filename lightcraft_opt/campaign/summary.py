@@ -115,6 +115,14 @@ def campaign_summary(
         "apogee_time_s": _stats(col("apogee_time_s")),
         "landing": _points(col("landing_x_m"), col("landing_y_m")),
         "final_position": _points(col("final_x_m"), col("final_y_m")),
+        # each outcome apart: those that stay in the beam and those that leave it are two
+        # clouds, not one Gaussian (end_points.png draws these ellipses)
+        "final_position_by_status": {
+            str(name): _points(
+                col("final_x_m")[status[flown] == name], col("final_y_m")[status[flown] == name]
+            )
+            for name in np.unique(status[flown])
+        },
         "left_beam": {
             "count": left,
             "probability": left / n if n else math.nan,

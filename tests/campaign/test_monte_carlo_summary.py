@@ -102,6 +102,18 @@ def test_summary_reads_the_table():
     e = s["final_position"]["ellipse_1sigma"]
     assert e["major_m"] == pytest.approx(0.3, rel=0.15) and abs(e["angle_deg"]) < 15
     assert e["minor_m"] == pytest.approx(0.1, rel=0.15)
+    # each outcome apart, as end_points.png draws it: the runs of that status alone
+    by = s["final_position_by_status"]
+    assert set(by) == {"landed", "left_beam"}
+    for name, points in by.items():
+        sel = t["status"] == name
+        assert points["n"] == int(sel.sum())
+        np.testing.assert_allclose(
+            points["mean_m"], [np.mean(t["final_x_m"][sel]), np.mean(t["final_y_m"][sel])]
+        )
+        np.testing.assert_allclose(
+            points["covariance_m2"], np.cov(t["final_x_m"][sel], t["final_y_m"][sel]), rtol=1e-12
+        )
 
 
 def test_run_table_repairs_a_cut_line_and_sorts_when_finished(tmp_path):
