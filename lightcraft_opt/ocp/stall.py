@@ -5,7 +5,7 @@ iterations with its constraint violation flat (its restoration phase failing aga
 again) before it says ``Restoration_Failed`` or reaches its iteration limit; fatrop may spin
 for ever. The rule here stops such a solve early: at iteration k >= 2W - 1,
 
-    stall  <=>  min(v_{k-W+1} .. v_k) > FALL * min(v_{k-2W+1} .. v_{k-W})
+    stall  <=>  min(v_{k-W+1} .. v_k) > FALL * min(v_{max(k-2W+1, 1)} .. v_{k-W})
 
 with v_i the largest constraint violation of iterate i (scaled units, as
 ``OcpResult.constraint_violation``), W the window (``OcpOptions.stall_iterations``) and
@@ -13,7 +13,11 @@ with v_i the largest constraint violation of iterate i (scaled units, as
 of the W before them. Window minima, not single iterates, are compared, so the spikes of a
 restoration phase or a line search neither trigger nor hide a stall, and a violation that
 first rises (the solver leaves the rollout, whose dynamics gaps are closed) and then falls
-is not stopped while it falls. A solve whose violation ever reached the tolerance never
+is not stopped while it falls. The start, v_0, is not the solver's iterate and is left out
+of the comparison: a flown start is near-feasible by design, and IPOPT's first step from it
+may multiply its violation (problems/beam_tracking_apogee.toml from the director's calm
+flight: 2.0, then 4.8, falling to 2.6 by iteration 59), which compared with v_0 would look
+like no progress at all. A solve whose violation ever reached the tolerance never
 stalls, nor one whose window minimum is under :data:`FLOOR` (1 in scaled units: a metre of
 altitude, a metre or a metre per second of dynamics gap): from a start that flies (the
 director's flight, ocp/start.py) IPOPT walks through iterates violated by 0.01-0.3 for
@@ -62,8 +66,8 @@ class Stall:
     ----------
     iteration : the iteration (from 0) at which the rule stopped the solve.
     window : W, iterations.
-    before : least violation of iterations ``iteration - 2W + 1 .. iteration - W``
-        (scaled units).
+    before : least violation of iterations ``max(iteration - 2W + 1, 1) .. iteration - W``
+        (scaled units; the start, iteration 0, left out).
     violation : least violation of the last W iterations (scaled units), > FALL * before.
     """
 
@@ -75,11 +79,12 @@ class Stall:
     def describe(self) -> str:
         """The stall in words, for a result's message."""
         k, w = self.iteration, self.window
+        first = max(k - 2 * w + 1, 1)
         fall = 1.0 - self.violation / self.before if math.isfinite(self.before) else 0.0
         return (
             f"stalled: the least constraint violation of iterations {k - w + 1}-{k}, "
             f"{self.violation:.3g} (scaled), is only {100 * max(fall, 0.0):.1f} % below that "
-            f"of iterations {k - 2 * w + 1}-{k - w}, {self.before:.3g}: less than "
+            f"of iterations {first}-{k - w}, {self.before:.3g}: less than "
             f"{100 * (1 - FALL):.0f} % in {w} iterations"
         )
 
@@ -102,10 +107,10 @@ def find_stall(violations: Sequence[float] | np.ndarray, window: int, tol: float
     v = np.where(np.isnan(v), np.inf, v)
     if np.min(v) <= tol:
         return None
-    now, before = (
-        float(np.min(v[k - window + 1 :])),
-        float(np.min(v[k - 2 * window + 1 : k - window + 1])),
-    )
+    earlier = v[max(k - 2 * window + 1, 1) : k - window + 1]  # never the start, v_0
+    if not earlier.size:
+        return None
+    now, before = float(np.min(v[k - window + 1 :])), float(np.min(earlier))
     if now <= FALL * before or now < FLOOR:
         return None
     return Stall(k, window, before, now)
