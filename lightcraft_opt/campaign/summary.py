@@ -128,7 +128,7 @@ def campaign_summary(
     }
     fallbacks = col("fallbacks")
     iterations = col("iterations_total")
-    pulses = col("pulses")
+    pulses = col("pulses_commanded")
     out["controller"] = {
         "fallbacks_total": int(np.sum(fallbacks)) if n else 0,
         "runs_with_fallback": int(np.sum(fallbacks > 0)),

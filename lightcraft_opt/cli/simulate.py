@@ -100,8 +100,9 @@ def run(args: argparse.Namespace) -> int:
         launch_speed_mps=args.launch_speed or 0.0,
     )
     print(
-        f"{result.status.value}: apogee {result.apogee:.2f} m, air time "
-        f"{result.air_time:.2f} s -> {out}/"
+        f"{result.status.value}: apogee {result.apogee:.3f} m, air time "
+        f"{result.air_time:.3f} s, max tilt {math.degrees(result.max_tilt_rad):.3f} deg, "
+        f"pulses {result.pulses_fired} fired, {result.pulses_dropped} dropped -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
 

@@ -18,7 +18,7 @@ import numpy as np
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
 from lightcraft_opt.files.result_archive import write_archive
-from lightcraft_opt.files.simulation_outputs import flight_measures, model_hash
+from lightcraft_opt.files.simulation_outputs import finite_or_none, flight_measures, model_hash
 
 __all__ = ["STEP_COLUMNS", "write_closed_loop_summary", "write_steps_csv"]
 
@@ -45,7 +45,7 @@ def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
     solver's message (commas replaced)."""
     log = result.log
     lines = [",".join(STEP_COLUMNS)]
-    for k in range(result.pulses):
+    for k in range(result.pulses_commanded):
         cells = [
             str(k),
             f"{result.pulse_t[k]:.9g}",
@@ -89,22 +89,24 @@ def write_closed_loop_summary(
         "controller": result.controller,
         "status": result.flight.status.value,
         "message": result.flight.message,
-        "pulses": result.pulses,
+        "pulses_commanded": result.pulses_commanded,
+        "pulses_fired": result.pulses_fired,
+        "pulses_dropped": result.pulses_dropped,
         "duration_s": None if problem is None else problem.duration,
         "coning_initial_deg": math.degrees(result.coning[0]),
         "coning_final_deg": math.degrees(result.coning[-1]),
         "coning_below_0.5deg_from_pulse": settled,
         "max_coning_after_pulse_25_deg": (
-            math.degrees(result.max_coning_after(25)) if result.coning.size > 25 else None
+            math.degrees(result.max_coning_after_rad(25)) if result.coning.size > 25 else None
         ),
-        "max_coning_deg": math.degrees(float(np.max(result.coning))),
-        "max_tilt_deg": math.degrees(float(np.max(result.tilt))),
+        "max_coning_deg": finite_or_none(math.degrees(result.max_coning_rad)),
+        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt_rad)),
         "final_tilt_deg": math.degrees(result.tilt[-1]),
         "max_offset_cm": float(np.max(result.offset)) * 100 if result.offset.size else None,
-        "max_altitude_m": float(np.max(result.flight.state("r_L")[:, 2])),
         **{
             k: flight[k]
             for k in (
+                "apogee_m",
                 "apogee_time_s",
                 "top_speed_mps",
                 "landing_speed_mps",
@@ -113,7 +115,6 @@ def write_closed_loop_summary(
             )
         },
         "rcs_used_g": float(result.rcs_used[-1]) * 1e3,
-        "pulses_dropped": int(np.sum(result.dropped)),
         "final_position_m": result.flight.state("r_L")[-1].tolist(),
         "steps_by_status": {s.value: log.count(s) for s in ControllerStatus if log.count(s)},
         "fallbacks": int(np.sum(log.fallbacks)),

@@ -123,7 +123,7 @@ def write_pulses_csv(result: SimulationResult, path: Path) -> None:
 def flight_measures(result: SimulationResult) -> dict[str, Any]:
     """The figures of a flight that summary.json holds, the unit in each key: apogee and
     its time, air time, top speed, landing speed (null unless it landed), largest tilt
-    and coning, pulses fired, energy captured (sum over the pulses), capture margin
+    and coning, pulses fired and dropped, energy captured (sum over the pulses), capture margin
     (:attr:`~lightcraft_opt.simulation.result.SimulationResult.capture_margin`, null
     without a fired pulse), final position."""
     margin, landing = result.capture_margin, result.landing_speed
@@ -134,9 +134,10 @@ def flight_measures(result: SimulationResult) -> dict[str, Any]:
         "top_speed_mps": result.top_speed,
         "landing_speed_mps": landing,
         "final_position_m": result.state("r_L")[-1].tolist(),
-        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt)),
-        "max_coning_deg": finite_or_none(math.degrees(result.max_coning)),
+        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt_rad)),
+        "max_coning_deg": finite_or_none(math.degrees(result.max_coning_rad)),
         "pulses_fired": result.pulses_fired,
+        "pulses_dropped": result.pulses_dropped,
         "energy_captured_J": result.energy_captured,
         "capture_margin_m": margin,
     }

@@ -339,7 +339,7 @@ def closed_loop_figures(
     )
     hist = Figure(figsize=(6.5, 4.5), layout="constrained")
     plot_solve_times(result, ax=hist.add_subplot(), budget=budget)
-    hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses} pulses)")
+    hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses_commanded} pulses)")
     return {
         "closed_loop.png": fig,
         "closed_loop_inputs.png": inputs_figure(result, inputs=inputs, title=title),

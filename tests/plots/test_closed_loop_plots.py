@@ -83,7 +83,7 @@ def test_inputs_figure_draws_altitude_and_the_inputs_that_vary(looped):
     np.testing.assert_array_equal(ax_z.lines[0].get_ydata(), z)
     assert ax_z.get_ylabel().endswith("[m]")
     east = ax_pointing.lines[0]
-    k = looped.pulses
+    k = looped.pulses_commanded
     np.testing.assert_allclose(east.get_ydata()[:k], 0.1 * np.arange(k))  # cm
     np.testing.assert_allclose(east.get_xdata()[:k], looped.pulse_t)
     assert ax_pointing.get_ylabel() == "pointing_L [cm]"
@@ -104,7 +104,7 @@ def test_fallback_pulses_are_ticked_on_every_axes(looped):
 @pytest.fixture(scope="module")
 def compared(looped) -> list[ClosedLoopResult]:
     """``looped`` as three controllers: coning falling (mpc, lqr) and rising (none) [rad]."""
-    k = looped.pulses + 1
+    k = looped.pulses_commanded + 1
     coning = {
         "mpc": np.radians(np.linspace(5.0, 0.2, k)),
         "lqr": np.radians(np.linspace(5.0, 0.4, k)),
@@ -151,7 +151,7 @@ def test_compare_labels_its_reference_lines_in_a_legend_off_the_curves(compared)
         for line in ax.get_lines():
             assert not np.any(covered(box, display_points(line))), line.get_label()
     none_line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "none")
-    k = compared[0].pulses + 1
+    k = compared[0].pulses_commanded + 1
     np.testing.assert_allclose(none_line.get_ydata(), np.linspace(5.0, 9.0, k))
     assert none_line.get_linestyle() == "--"  # an mpc that flies the open loop shows beneath
 
