@@ -55,13 +55,12 @@ def run(args: argparse.Namespace) -> int:
     )
     # the files and figures below are written by the writers registered in files/outputs.py
     result.save(out, model=model, model_file=source, track_file=args.track, flights=flights)
-    for name, value, sd, unit in zip(
-        result.names, result.values, result.std, result.units, strict=True
-    ):
-        std = "not identifiable" if not math.isfinite(sd) else f"± {sd:.3g}"
+    for name, value, sd in zip(result.names, result.values, result.std, strict=True):
+        unit, factor = result.shown(name)  # angles in degrees, as in every file
+        std = "not identifiable" if not math.isfinite(sd) else f"± {factor * sd:.3g}"
         kinds = [f.kind.value for f in result.flags_of(name)]
         flags = f"  [{', '.join(kinds)}]" if kinds else ""
-        print(f"  {name:15s} {value:.6g} {std} {unit}{flags}")
+        print(f"  {name:15s} {factor * value:.6g} {std} {unit}{flags}")
     for flag in result.flags:
         print(f"  {flag.parameter}: {flag.reason}")
     print(

@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import dataclasses as dc
 import json
+import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 from support.paths import REPO_ROOT
 
+import lightcraft_opt as lc
 from lightcraft_opt.cli import main
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
@@ -70,7 +73,16 @@ def test_calibrate_writes_model_report_and_plots(tmp_path, capsys):
 
     fitted = load_model(out / "flight5-fitted.toml")
     assert fitted.flight.impulse_per_pulse == cm["value"] * model.flight.pulse_energy
-    assert fitted.laser.divergence == report["parameters"]["divergence"]["value"]
+    # an angle is in degrees in the report, the printout and summary(), one number in each
+    divergence = report["parameters"]["divergence"]
+    assert divergence["unit"] == "deg"
+    assert fitted.laser.divergence == pytest.approx(math.radians(divergence["value"]), rel=1e-15)
+    shown = f"{divergence['value']:.6g} ± {divergence['std']:.3g} deg"
+    assert f"divergence      {shown}" in printed
+    again = lc.load_result(out)
+    assert isinstance(again, lc.CalibrationResult)
+    assert f"divergence  {shown}" in again.summary()
+    assert again.value("divergence") == fitted.laser.divergence  # SI inside
     p_fit, p_model = parameter_values(fitted), parameter_values(model)
     changed = {PARAMETERS.labels()[i] for i in np.flatnonzero(p_fit != p_model)}
     # Cm, the spent-liner coupling that defaults to it, and the divergence; nothing else
