@@ -191,7 +191,8 @@ def plot_commanded(
     lines: list[Any] = []
     names = inputs.slot(slot).components
     for i in range(values.shape[1]):
-        label = names[i] if names and len(names) == values.shape[1] else f"{slot}[{i}]"
+        name = names[i] if names and len(names) == values.shape[1] else str(i + 1)
+        label = f"thruster {name}" if slot.startswith("rcs_") else name
         lines += ax.step(t, np.append(values[:, i], values[-1:, i]), where="post", label=label)
     if values.shape[1] > 1:
         ax.legend(loc="best", fontsize=8, ncol=2)

@@ -181,3 +181,29 @@ def test_closed_loop_png_labels_its_lines_and_fits_the_figure(looped):
     assert not any(box.overlaps(ax.bbox) for ax in fig.axes)
     assert outside_figure(fig) == {}
     assert outside_axes(fig) == {}
+
+
+def test_thrusters_are_numbered_from_one_in_every_place(looped):
+    """One numbering for people: the layout's entry names (a StateSpace's inputs), the
+    columns of solution.csv and of a plan, and the closed-loop and optimize legends all
+    say thruster 1 to 4 (the optimize plot always did); Python's indices stay 0-based."""
+    from lightcraft_opt.files.ocp_outputs import input_columns
+    from lightcraft_opt.layout import RcsProfile
+    from lightcraft_opt.linear.signal_names import entry_names
+    from lightcraft_opt.plots.closed_loop import plot_commanded
+
+    lay = map_input_layout(4, False, RcsProfile.PHASE_LOCKED)
+    numbers = ["1", "2", "3", "4"]
+    for slot in ("rcs_thrust", "rcs_cos", "rcs_sin"):
+        assert [n for n in entry_names(lay) if n.startswith(slot)] == [
+            f"{slot}[{i}]" for i in numbers
+        ]
+        assert [c for c in input_columns(lay) if c.startswith(slot)] == [
+            f"{slot}_{i}_N" for i in numbers
+        ]
+    k = looped.pulses_commanded
+    commanded = np.zeros((k, lay.size))
+    commanded[:, lay.index("rcs_cos")] = [0.01, 0.02, 0.03, 0.04]  # thruster i at i / 100
+    lines = plot_commanded(replace(looped, commanded=commanded), "rcs_cos", inputs=lay)
+    assert [ln.get_label() for ln in lines] == [f"thruster {i}" for i in numbers]
+    assert [ln.get_ydata()[0] for ln in lines] == pytest.approx([0.01, 0.02, 0.03, 0.04])
