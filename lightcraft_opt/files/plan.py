@@ -8,7 +8,7 @@ input columns, named as solution.csv names them for the model's map input
 ``motor_torque_Nm`` when the model has them; SI, L frame for the pointing,
 docs/frames.md); other columns are ignored. Trailing rows whose input cells are all empty
 (solution.csv's last node, where no pulse fires) end the plan. When the file also has
-``t_s`` and the state columns of trajectory.csv (``x_m`` ... ``pulses``), row 0 gives the
+``t_s`` and the state columns of trajectory.csv (``x_m`` ... ``engine_load``), row 0 gives the
 plan's start: the time of its first pulse and the state there.
 
 Anything wrong (a missing input column, a blank, text or non-finite cell inside the plan,
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.errors import ProblemFileError, renamed
 from lightcraft_opt.files.csv_cells import cell_number, csv_text
 from lightcraft_opt.files.ocp_outputs import input_columns
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS
@@ -32,7 +32,11 @@ from lightcraft_opt.layout import STATE, VectorLayout
 
 __all__ = ["Plan", "read_plan"]
 
-#: trajectory.csv's columns of the state, in STATE's order (x_m ... pulses).
+#: Columns renamed (issue 29), refused with the new name: an old file's state would
+#: otherwise go unread.
+FORMER_COLUMNS = {"pulses": "engine_load"}
+
+#: trajectory.csv's columns of the state, in STATE's order (x_m ... engine_load).
 STATE_COLUMNS = TRAJECTORY_COLUMNS[1 : 1 + STATE.size]
 
 
@@ -69,6 +73,14 @@ def read_plan(path: str | Path, inputs: VectorLayout, period: float) -> Plan:
     if not rows:
         raise ProblemFileError(src, None, f"empty file: needs a header with {','.join(wanted)}")
     header = [h.strip() for h in rows[0]]
+    for former, new in FORMER_COLUMNS.items():
+        if former in header and new not in header:
+            raise ProblemFileError(
+                src,
+                f"line 1, column {former}",
+                f"{renamed(former, new)} (the energy delivered over the reference pulse "
+                f"energy, not a count of pulses): write {new}, or optimize again",
+            )
     missing = [c for c in wanted if c not in header]
     if missing:
         raise ProblemFileError(

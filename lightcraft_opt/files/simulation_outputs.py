@@ -48,7 +48,7 @@ TRAJECTORY_COLUMNS = (
     "spin_radps",
     "liner_mass_kg",
     "rcs_mass_kg",
-    "pulses",
+    "engine_load",
     "mass_kg",
     "tilt_deg",
     "coning_deg",

@@ -61,6 +61,11 @@ B123 = ("b1", "b2", "b3")
 #: The horizontal components of an L vector.
 EAST_NORTH = ENU[:2]
 
+#: The state x (17 entries; docs/frames.md#state-vector). ``engine_load`` is not a count of
+#: pulses: it is the laser energy delivered so far over the reference pulse energy E_ref
+#: (each pulse adds E / E_ref, a dropped one 0; 0.723 after one pulse of 0.723 E_ref), the
+#: heat load the engine's health reads (docs/physics.md#health). Pulses fired are counted
+#: by a result (``SimulationResult.pulses_fired``).
 STATE = VectorLayout(
     "state",
     [
@@ -71,7 +76,7 @@ STATE = VectorLayout(
         ("spin", 1, "rad/s", "B", ()),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
+        ("engine_load", 1, "-", "", ()),
     ],
 )
 
@@ -88,7 +93,7 @@ ERROR_STATE = VectorLayout(
         ("spin", 1, "rad/s", "B", ()),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
+        ("engine_load", 1, "-", "", ()),
     ],
 )
 
@@ -107,7 +112,7 @@ REDUCED_STATE = VectorLayout(
         ("coning", 2, "-", "T_H", ("e1", "e2")),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
+        ("engine_load", 1, "-", "", ()),
     ],
 )
 

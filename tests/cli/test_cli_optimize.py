@@ -125,7 +125,7 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     assert t == pytest.approx(np.arange(5) / 26.0, rel=1e-11)
 
     # the states written are Φ's rollout of the inputs written, to the NLP's tolerance
-    x_columns = slice(col["x_m"], col["pulses"] + 1)
+    x_columns = slice(col["x_m"], col["engine_load"] + 1)
     X = np.vstack([values[:, x_columns], last[x_columns]])
     U = values[:, col["pointing_x_m"] : col["energy_J"] + 1]
     assert X[0] == pytest.approx(problem.x0, rel=1e-11, abs=1e-12)

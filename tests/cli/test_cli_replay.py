@@ -147,6 +147,10 @@ def _energy_as_text(text: str) -> str:
     [
         (lambda text: text.replace("energy_J", "energy_kJ"), "line 1, column energy_J: missing"),
         (_energy_as_text, "line 4, column energy_J: must be a number, got 'lots'"),
+        (  # solution.csv of before issue 29: its state column refused with its new name
+            lambda text: text.replace("engine_load", "pulses"),
+            "line 1, column pulses: 'pulses' was renamed 'engine_load'",
+        ),
     ],
 )
 def test_a_bad_plan_file_is_exit_2_naming_the_column(solved, tmp_path, capsys, edit, where):
