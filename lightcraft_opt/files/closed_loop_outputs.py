@@ -110,7 +110,7 @@ def write_closed_loop_summary(
                 "apogee_time_s",
                 "top_speed_mps",
                 "landing_speed_mps",
-                "energy_captured_J",
+                "energy_captured_j",
                 "capture_margin_m",
             )
         },

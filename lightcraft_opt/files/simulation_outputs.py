@@ -1,6 +1,6 @@
 """Writing a simulated flight to disk: CSV, JSON summary (the edge).
 
-Column names carry their units (``z_m``, ``w1_radps``, angles in degrees); positions are
+Column names carry their units (``z_m``, ``w1_rad_per_s``, angles in degrees); positions are
 in L (x east, y north, z up), as docs/frames.md says, vectors in B have components b1, b2,
 b3. The names are solution.csv's too (:mod:`.ocp_outputs`); docs/outputs.md lists every
 column and key of every file.
@@ -42,10 +42,10 @@ TRAJECTORY_COLUMNS = (
     "qx",
     "qy",
     "qz",
-    "w1_radps",
-    "w2_radps",
-    "w3_radps",
-    "spin_radps",
+    "w1_rad_per_s",
+    "w2_rad_per_s",
+    "w3_rad_per_s",
+    "spin_rad_per_s",
     "liner_mass_kg",
     "rcs_mass_kg",
     "engine_load",
@@ -78,14 +78,14 @@ def write_trajectory_csv(result: SimulationResult, path: Path) -> None:
 PULSE_COLUMNS = (
     "k",
     "t_s",
-    "energy_J",
-    "energy_captured_J",
-    "impulse_b1_Ns",
-    "impulse_b2_Ns",
-    "impulse_b3_Ns",
-    "angular_impulse_b1_Nms",
-    "angular_impulse_b2_Nms",
-    "angular_impulse_b3_Nms",
+    "energy_j",
+    "energy_captured_j",
+    "impulse_b1_ns",
+    "impulse_b2_ns",
+    "impulse_b3_ns",
+    "angular_impulse_b1_nms",
+    "angular_impulse_b2_nms",
+    "angular_impulse_b3_nms",
     "offset_x_m",
     "offset_y_m",
     "liner_loss_kg",
@@ -138,7 +138,7 @@ def flight_measures(result: SimulationResult) -> dict[str, Any]:
         "max_coning_deg": finite_or_none(math.degrees(result.max_coning_rad)),
         "pulses_fired": result.pulses_fired,
         "pulses_dropped": result.pulses_dropped,
-        "energy_captured_J": result.energy_captured,
+        "energy_captured_j": result.energy_captured,
         "capture_margin_m": margin,
     }
 

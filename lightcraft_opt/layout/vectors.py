@@ -170,7 +170,7 @@ class RcsProfile(Enum):
 
 def thruster_numbers(n_thrusters: int) -> tuple[str, ...]:
     """The thrusters' names as people number them, "1" to "n": the components of the RCS
-    slots (``rcs_thrust[1]``), the columns ``rcs_thrust_1_N`` and the plots' legends.
+    slots (``rcs_thrust[1]``), the columns ``rcs_thrust_1_n`` and the plots' legends.
     Python's array indices into them stay 0-based."""
     return tuple(str(i + 1) for i in range(n_thrusters))
 

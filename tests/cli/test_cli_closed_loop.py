@@ -154,10 +154,10 @@ def test_none_writes_every_file(tmp_path, capsys):
     assert isinstance(loaded, ClosedLoopResult) and loaded.pulses_commanded == 26
     assert summary["coning_final_deg"] == math.degrees(loaded.coning[-1])
     assert summary["max_coning_deg"] == math.degrees(loaded.max_coning_rad)
-    assert summary["energy_captured_J"] == np.sum(loaded.flight.pulses.energy_captured)
+    assert summary["energy_captured_j"] == np.sum(loaded.flight.pulses.energy_captured)
     pulses = np.genfromtxt(out / "pulses.csv", delimiter=",", names=True)
-    assert summary["energy_captured_J"] == pytest.approx(np.sum(pulses["energy_captured_J"]))
-    fired = pulses["energy_J"] > 0
+    assert summary["energy_captured_j"] == pytest.approx(np.sum(pulses["energy_captured_j"]))
+    fired = pulses["energy_j"] > 0
     assert summary["capture_margin_m"] == pytest.approx(-np.max(pulses["beam_gap_m"][fired]))
     z = loaded.flight.state("r_L")[:, 2]
     assert summary["apogee_time_s"] == loaded.flight.t[np.argmax(z)]

@@ -114,11 +114,11 @@ def test_a_simulated_flights_tilt_coning_and_pulses_read_the_same_everywhere(tmp
     assert dropped >= 1 and fired + dropped == len(result.pulses.t)  # type: ignore[union-attr]
     assert summary["pulses_fired"] == fired and summary["pulses_dropped"] == dropped
     pulses = np.genfromtxt(out / "pulses.csv", delimiter=",", names=True)
-    assert int(np.sum(pulses["energy_J"] > 0)) == fired
+    assert int(np.sum(pulses["energy_j"] > 0)) == fired
     # the state's engine_load is energy over the reference pulse energy, not a count
     e_ref = parameter_values(lc.load_model(FLIGHT5))[PARAMETERS.index("reference_pulse_energy")]
     load = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)["engine_load"]
-    assert load[-1] == pytest.approx(np.sum(pulses["energy_J"]) / e_ref[0], rel=1e-12)
+    assert load[-1] == pytest.approx(np.sum(pulses["energy_j"]) / e_ref[0], rel=1e-12)
     assert result.state("engine_load")[-1] == load[-1]
     assert f"pulses           {fired} fired, {dropped} dropped" in text
     assert f"{fired} pulses fired" in line

@@ -199,7 +199,7 @@ def test_thrusters_are_numbered_from_one_in_every_place(looped):
             f"{slot}[{i}]" for i in numbers
         ]
         assert [c for c in input_columns(lay) if c.startswith(slot)] == [
-            f"{slot}_{i}_N" for i in numbers
+            f"{slot}_{i}_n" for i in numbers
         ]
     k = looped.pulses_commanded
     commanded = np.zeros((k, lay.size))
