@@ -31,8 +31,8 @@ STEP_COLUMNS = (
     "iterations",
     "coning_deg",
     "tilt_deg",
-    "offset_cm",
-    "rcs_used_g",
+    "offset_m",
+    "rcs_used_kg",
     "dropped",
     "message",
 )
@@ -55,8 +55,8 @@ def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
             str(int(log.iterations[k])),
             f"{math.degrees(result.coning[k]):.9g}",
             f"{math.degrees(result.tilt[k]):.9g}",
-            f"{result.offset[k] * 100:.9g}",
-            f"{result.rcs_used[k] * 1e3:.9g}",
+            f"{result.offset[k]:.9g}",
+            f"{result.rcs_used[k]:.9g}",
             str(int(result.dropped[k])),
             log.messages[k].replace(",", ";"),
         ]
@@ -102,7 +102,7 @@ def write_closed_loop_summary(
         "max_coning_deg": finite_or_none(math.degrees(result.max_coning_rad)),
         "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt_rad)),
         "final_tilt_deg": math.degrees(result.tilt[-1]),
-        "max_offset_cm": float(np.max(result.offset)) * 100 if result.offset.size else None,
+        "max_offset_m": float(np.max(result.offset)) if result.offset.size else None,
         **{
             k: flight[k]
             for k in (
@@ -114,7 +114,7 @@ def write_closed_loop_summary(
                 "capture_margin_m",
             )
         },
-        "rcs_used_g": float(result.rcs_used[-1]) * 1e3,
+        "rcs_used_kg": float(result.rcs_used[-1]),
         "final_position_m": result.flight.state("r_L")[-1].tolist(),
         "steps_by_status": {s.value: log.count(s) for s in ControllerStatus if log.count(s)},
         "fallbacks": int(np.sum(log.fallbacks)),

@@ -197,7 +197,7 @@ def test_director_flies_its_crosswind_problem(tmp_path):
     assert main([*args, "--duration", "0.5", "--deterministic", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["controller"] == "director" and summary["pulses_commanded"] == 13
-    assert summary["status"] == "duration_reached" and summary["max_offset_cm"] < 5.0
+    assert summary["status"] == "duration_reached" and summary["max_offset_m"] < 0.05
     assert summary["apogee_m"] > 1.0
     assert summary["steps_by_status"] == {"solved": 13}
 

@@ -90,6 +90,12 @@ def test_a_closed_loops_tilt_coning_and_pulses_read_the_same_everywhere(looped):
     assert f"{fired} pulses fired" in line
     assert f"pulses {fired} fired, {dropped} dropped" in printed
     assert len(re.findall(r"pulses", text)) == 1  # one row of pulses, not two
+    # the beam offset and the propellant: SI in every file, cm and g on the screen
+    steps = np.genfromtxt(out / "steps.csv", delimiter=",", names=True)
+    assert summary["max_offset_m"] == pytest.approx(float(np.max(steps["offset_m"])), rel=1e-8)
+    assert summary["max_offset_m"] == float(np.max(result.offset))
+    assert summary["rcs_used_kg"] == float(result.rcs_used[-1])
+    assert f"max beam offset  {100 * summary['max_offset_m']:.2f} cm" in text
 
 
 def test_a_simulated_flights_tilt_coning_and_pulses_read_the_same_everywhere(tmp_path, capsys):
