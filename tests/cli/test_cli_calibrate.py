@@ -123,3 +123,25 @@ def test_calibrate_bad_input_exits_2(tmp_path, capsys):
     track.write_text("t_s,x_m,z_m\n0.1,0,0\n")
     assert main(["calibrate", *argv, "--fit", "cm"]) == 2
     assert "line 1, column y: missing" in capsys.readouterr().err
+
+
+def test_an_angle_goes_in_and_comes_out_in_degrees(tmp_path, capsys):
+    """--initial launch_tilt_x_deg=0.5: the fit starts at 0.5 degrees (stopped there by a
+    1 us time limit), and the report and the printout give it back as 0.5 deg: one unit
+    for an angle in and out, SI inside."""
+    track = tmp_path / "track.csv"
+    write_track(track)
+    out = tmp_path / "fit"
+    argv = [str(MODEL_FILE), "--track", str(track), "--fit", "tilt", "--out", str(out)]
+    start = ["--initial", "launch_tilt_x_deg=0.5", "--initial", "launch_tilt_y_rad=0.01"]
+    assert main(["calibrate", *argv, *start, "--substeps", "8", "--time-limit", "1e-6"]) == 1
+    printed = capsys.readouterr().out
+    report = json.loads((out / "fit_report.json").read_text())["parameters"]
+    tilt_x, tilt_y = report["launch_tilt_x"], report["launch_tilt_y"]
+    assert tilt_x["unit"] == tilt_y["unit"] == "deg"
+    assert tilt_x["initial"] == pytest.approx(0.5, rel=1e-15) == tilt_x["value"]
+    assert tilt_y["initial"] == pytest.approx(math.degrees(0.01), rel=1e-15)
+    assert "  launch_tilt_x   0.5 " in printed and printed.count(" deg") >= 2
+    again = lc.load_result(out)
+    assert isinstance(again, lc.CalibrationResult)
+    assert again.value("launch_tilt_x") == pytest.approx(math.radians(0.5), rel=1e-15)
