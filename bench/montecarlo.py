@@ -51,7 +51,7 @@ def breakdown(campaign, seed: int) -> None:
         walls.append(time.perf_counter() - t0)
         steps.append(float(np.sum(result.log.step_time)))
         solves.append(float(np.sum(result.log.solve_time)))
-        pulses.append(result.pulses)
+        pulses.append(result.pulses_commanded)
     wall, step, solve, k = (float(np.mean(v)) for v in (walls, steps, solves, pulses))
     print(f"one run, in this process (mean of 3): {wall * 1e3:.0f} ms for {k:.0f} pulses "
           f"({wall / k * 1e3:.2f} ms a pulse)")  # fmt: skip

@@ -205,7 +205,7 @@ def main(argv: list[str] | None = None) -> None:
         finally:
             gc.enable()
     rec = np.array(mpc.records)
-    print(f"\n{len(rec)} pulses ({args.repeat} flights of {runs[0].pulses}):")
+    print(f"\n{len(rec)} pulses ({args.repeat} flights of {runs[0].pulses_commanded}):")
     print(f"  MPC solve  {_stats(rec[:, 0])}   iterations <= {int(rec[:, 3].max())}")
     print(f"  MPC step   {_stats(rec[:, 1])}")
     print(f"  IPOPT      {_stats(rec[:, 2])}   iterations <= {int(rec[:, 4].max())}")

@@ -85,9 +85,9 @@ fly = dict(
 runs = {c.name: closed_loop(model, c, problem.duration, **fly) for c in controllers}
 for name, run in runs.items():
     print(
-        f"{name:5s} {run.flight.status.value:17s} {run.pulses} pulses: max tilt "
-        f"{math.degrees(run.tilt.max()):.2f} deg, "
-        f"max coning {math.degrees(run.coning.max()):.2f} deg, "
+        f"{name:5s} {run.flight.status.value:17s} {run.pulses_fired} pulses fired: max tilt "
+        f"{math.degrees(run.max_tilt_rad):.2f} deg, "
+        f"max coning {math.degrees(run.max_coning_rad):.2f} deg, "
         f"max offset {run.offset.max() * 100:.2f} cm, propellant {run.rcs_used[-1] * 1e3:.3f} g"
     )
 
@@ -139,7 +139,7 @@ rows = []
 for seed in seeds:
     options = replace(problem.loop, seed=seed)
     run = closed_loop(model, mpc, problem.duration, **{**fly, "options": options})
-    tilt, coning = math.degrees(run.tilt.max()), math.degrees(run.coning.max())
+    tilt, coning = math.degrees(run.max_tilt_rad), math.degrees(run.max_coning_rad)
     rows.append((seed, run.flight.status.value, tilt, coning))
 for seed, status, tilt, coning in rows:
     print(f"seed {seed}: {status}, max tilt {tilt:.2f} deg, max coning {coning:.2f} deg")

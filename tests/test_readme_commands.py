@@ -139,7 +139,7 @@ def test_the_closed_loop_line_flies_the_mpc_and_reports_each_step(workspace, cap
     assert summary["controller"] == "mpc"  # named by the file, no --controller on the line
     with open(out / "steps.csv", newline="") as handle:
         steps = list(csv.DictReader(handle))
-    assert len(steps) == summary["pulses"] > 0
+    assert len(steps) == summary["pulses_commanded"] > 0
     fallbacks = [s for s in steps if s["status"].startswith("fallback")]
     assert summary["fallbacks"] == len(fallbacks)
     assert summary["coning_initial_deg"] == pytest.approx(5.0, abs=0.05)  # the file's 5 deg

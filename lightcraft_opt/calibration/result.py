@@ -11,7 +11,11 @@ import numpy as np
 
 from lightcraft_opt.presenters import Presentable
 
-__all__ = ["CalibrationResult", "CalibrationStatus", "FitFlag", "FlagKind"]
+__all__ = ["SHOWN_UNITS", "CalibrationResult", "CalibrationStatus", "FitFlag", "FlagKind"]
+
+#: The unit a fitted component is printed and written in, and its factor from SI, where it
+#: is not SI: angles in degrees, as in every file (docs/outputs.md).
+SHOWN_UNITS: dict[str, tuple[str, float]] = {"rad": ("deg", 180.0 / np.pi)}
 
 
 class CalibrationStatus(Enum):
@@ -120,6 +124,13 @@ class CalibrationResult(Presentable):
         """Standard deviation of component ``name`` [SI]."""
         return float(self.std[self.names.index(name)])
 
+    def shown(self, name: str) -> tuple[str, float]:
+        """The unit component ``name`` is printed and written in (summary(), the CLI,
+        fit_report.json: degrees for an angle, else its SI unit), and the factor that
+        takes its SI values there."""
+        unit = self.units[self.names.index(name)]
+        return SHOWN_UNITS.get(unit, (unit, 1.0))
+
     def flags_of(self, name: str) -> tuple[FitFlag, ...]:
         """The flags raised on component ``name``."""
         return tuple(f for f in self.flags if f.parameter == name)
@@ -146,16 +157,22 @@ class CalibrationResult(Presentable):
         ]
         width = max(len(n) for n in self.names) if self.names else 0
         for i, name in enumerate(self.names):
-            std = "not identifiable" if not np.isfinite(self.std[i]) else f"± {self.std[i]:.3g}"
+            unit, factor = self.shown(name)
+            sd = factor * self.std[i]
+            std = "not identifiable" if not np.isfinite(sd) else f"± {sd:.3g}"
             flags = ", ".join(f.kind.value for f in self.flags_of(name))
             lines.append(
-                f"  {name:<{width}}  {self.values[i]:.6g} {std} {self.units[i]}"
+                f"  {name:<{width}}  {factor * self.values[i]:.6g} {std} {unit}"
                 + (f"  [{flags}]" if flags else "")
             )
         return "\n".join(lines)
 
     def __repr__(self) -> str:
-        fitted = ", ".join(f"{n}={v:.4g}" for n, v in zip(self.names, self.values, strict=True))
+        fitted = ", ".join(
+            f"{n}={self.shown(n)[1] * v:.4g}"
+            + (f" {self.shown(n)[0]}" if self.shown(n)[0] != u else "")
+            for n, v, u in zip(self.names, self.values, self.units, strict=True)
+        )
         return (
             f"<CalibrationResult {self.status.value}: {fitted}; sigma "
             f"{1e3 * self.sigma:.3f} mm, {self.iterations} iterations>"

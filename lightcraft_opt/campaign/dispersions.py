@@ -51,7 +51,7 @@ DISPERSED: dict[str, tuple[str, str]] = {
     "mass": ("mass_kg", "rotor_mass_dry: the dry mass of the craft [kg]"),
     "inertia_axial": ("inertia_axial_kg_m2", "rotor_axial_inertia_dry [kg m^2]"),
     "inertia_transverse": ("inertia_transverse_kg_m2", "rotor_transverse_inertia_dry [kg m^2]"),
-    "coupling": ("impulse_per_pulse_Ns", "impulse_per_pulse: the engine's coupling [N s]"),
+    "coupling": ("impulse_per_pulse_ns", "impulse_per_pulse: the engine's coupling [N s]"),
     "dropout_rate": (
         "dropout_rate",
         "probability that the laser drops a pulse, clipped to [0, 0.99]",

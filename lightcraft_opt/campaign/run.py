@@ -54,7 +54,7 @@ from lightcraft_opt.layout import (
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
-__all__ = ["RunOutcome", "row_problem", "run_one"]
+__all__ = ["RunOutcome", "flight_outputs", "row_problem", "run_one"]
 
 _MAX_DROPOUT = 0.99
 #: The statuses a row may hold.
@@ -82,12 +82,12 @@ def run_one(campaign: Campaign, seed: int, index: int) -> RunOutcome:
         flyer = _flyer(campaign)  # built once per process and thread: not the run's time
         start = time.perf_counter()
         result = flyer.fly(draws, inputs["loop_seed"])
-        outputs = _outputs(result)
+        outputs = flight_outputs(result)
         solve = result.log.solve_time
     except Exception as err:  # a run's failure is a row, not a crashed campaign
         outputs = {c: math.nan for c in OUTPUT_COLUMNS}
         outputs.update(status="error", message=f"{type(err).__name__}: {err}")
-        for c in ("left_beam", "pulses", "dropped_pulses", "fallbacks"):
+        for c in ("left_beam", "pulses_commanded", "pulses_fired", "pulses_dropped", "fallbacks"):
             outputs[c] = -1
         outputs["iterations_total"] = outputs["iterations_max"] = -1
         solve = np.empty(0)
@@ -149,7 +149,9 @@ def _float(text: str) -> float | None:
     return value if repr(value) == text else None
 
 
-def _outputs(result: ClosedLoopResult) -> dict[str, Any]:
+def flight_outputs(result: ClosedLoopResult) -> dict[str, Any]:
+    """A run's :data:`~lightcraft_opt.campaign.spec.OUTPUT_COLUMNS` from its closed loop
+    (the result's own properties: the same figures as its summary.json)."""
     flight = result.flight
     r = flight.state("r_L")
     k = int(np.argmax(r[:, 2]))
@@ -167,10 +169,11 @@ def _outputs(result: ClosedLoopResult) -> dict[str, Any]:
         "landing_x_m": float(r[-1, 0]) if landed else math.nan,
         "landing_y_m": float(r[-1, 1]) if landed else math.nan,
         "left_beam": int(flight.status is SimulationStatus.LEFT_BEAM),
-        "pulses": result.pulses,
-        "dropped_pulses": int(np.sum(result.dropped)),
-        "max_tilt_deg": math.degrees(float(np.max(flight.tilt))),
-        "max_coning_deg": math.degrees(float(np.max(flight.coning))),
+        "pulses_commanded": result.pulses_commanded,
+        "pulses_fired": result.pulses_fired,
+        "pulses_dropped": result.pulses_dropped,
+        "max_tilt_deg": math.degrees(result.max_tilt_rad),
+        "max_coning_deg": math.degrees(result.max_coning_rad),
         "final_coning_deg": math.degrees(float(result.coning[-1])),
         "max_offset_m": float(np.max(result.offset)) if result.offset.size else math.nan,
         "rcs_used_kg": float(result.rcs_used[-1]),

@@ -119,19 +119,20 @@ class CampaignResult(Presentable):
             f"  left the beam    {beam['count']} of {s['runs']} (95 % "
             + "{:.3f}-{:.3f})".format(*(math.nan if v is None else v for v in beam["wilson_95"])),
         ]
-        for key, name, unit in (
-            ("apogee_m", "apogee", "m"),
-            ("apogee_time_s", "apogee time", "s"),
-            ("max_tilt_deg", "max tilt", "deg"),
-            ("max_coning_deg", "max coning", "deg"),
-            ("max_offset_cm", "max beam offset", "cm"),
-            ("rcs_used_g", "RCS propellant", "g"),
+        for key, name, unit, f in (  # the file's SI (angles: deg) times f, shown in unit
+            ("apogee_m", "apogee", "m", 1.0),
+            ("apogee_time_s", "apogee time", "s", 1.0),
+            ("max_tilt_deg", "max tilt", "deg", 1.0),
+            ("max_coning_deg", "max coning", "deg", 1.0),
+            ("max_offset_m", "max beam offset", "cm", 100.0),
+            ("rcs_used_kg", "RCS propellant", "g", 1000.0),
         ):
             st = s.get(key) or {}
             if st.get("mean") is not None:
                 lines.append(
-                    f"  {name:<15}  {st['mean']:.4g} ± {_or_nan(st.get('std')):.3g} {unit} "
-                    f"(range {_or_nan(st.get('min')):.4g} .. {_or_nan(st.get('max')):.4g})"
+                    f"  {name:<15}  {f * st['mean']:.4g} ± {f * _or_nan(st.get('std')):.3g} "
+                    f"{unit} (range {f * _or_nan(st.get('min')):.4g} .. "
+                    f"{f * _or_nan(st.get('max')):.4g})"
                 )
         return "\n".join(lines)
 

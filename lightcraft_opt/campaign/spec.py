@@ -32,7 +32,7 @@ __all__ = [
     "Campaign",
 ]
 
-#: Outputs of a run, after its index and drawn inputs (SI; angles in rad).
+#: Outputs of a run, after its index and drawn inputs (SI but angles, in degrees).
 OUTPUT_COLUMNS = (
     "status",
     "message",
@@ -45,8 +45,9 @@ OUTPUT_COLUMNS = (
     "landing_x_m",
     "landing_y_m",
     "left_beam",
-    "pulses",
-    "dropped_pulses",
+    "pulses_commanded",
+    "pulses_fired",
+    "pulses_dropped",
     "max_tilt_deg",
     "max_coning_deg",
     "final_coning_deg",
@@ -59,7 +60,15 @@ OUTPUT_COLUMNS = (
 #: Outputs written as integers (-1 in an error row), and as text; the others are floats,
 #: NaN where a run has no value (an error row; a landing point of a run that did not land).
 INTEGER_OUTPUTS = frozenset(
-    ("left_beam", "pulses", "dropped_pulses", "fallbacks", "iterations_total", "iterations_max")
+    (
+        "left_beam",
+        "pulses_commanded",
+        "pulses_fired",
+        "pulses_dropped",
+        "fallbacks",
+        "iterations_total",
+        "iterations_max",
+    )
 )
 TEXT_OUTPUTS = frozenset(("status", "message"))
 #: Wall-clock columns of timings.csv (machine-dependent, never in the run table).

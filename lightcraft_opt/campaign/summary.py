@@ -131,12 +131,12 @@ def campaign_summary(
         "max_tilt_deg": _stats(col("max_tilt_deg")),
         "max_coning_deg": _stats(col("max_coning_deg")),
         "final_coning_deg": _stats(col("final_coning_deg")),
-        "max_offset_cm": _stats(100.0 * col("max_offset_m")),
-        "rcs_used_g": _stats(1000.0 * col("rcs_used_kg")),
+        "max_offset_m": _stats(col("max_offset_m")),
+        "rcs_used_kg": _stats(col("rcs_used_kg")),
     }
     fallbacks = col("fallbacks")
     iterations = col("iterations_total")
-    pulses = col("pulses")
+    pulses = col("pulses_commanded")
     out["controller"] = {
         "fallbacks_total": int(np.sum(fallbacks)) if n else 0,
         "runs_with_fallback": int(np.sum(fallbacks > 0)),

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from lightcraft_opt.calibration.fit import CalibrationOptions, calibrate
 from lightcraft_opt.calibration.flights import fit_flights
-from lightcraft_opt.calibration.parameters import FORMER_NAMES
+from lightcraft_opt.calibration.parameters import FIT_GROUPS, FORMER_NAMES
 from lightcraft_opt.cli.args import integer, name_value, output_folder, substeps
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import ITERATION_LIMIT, TIME_LIMIT
@@ -55,13 +55,12 @@ def run(args: argparse.Namespace) -> int:
     )
     # the files and figures below are written by the writers registered in files/outputs.py
     result.save(out, model=model, model_file=source, track_file=args.track, flights=flights)
-    for name, value, sd, unit in zip(
-        result.names, result.values, result.std, result.units, strict=True
-    ):
-        std = "not identifiable" if not math.isfinite(sd) else f"± {sd:.3g}"
+    for name, value, sd in zip(result.names, result.values, result.std, strict=True):
+        unit, factor = result.shown(name)  # angles in degrees, as in every file
+        std = "not identifiable" if not math.isfinite(sd) else f"± {factor * sd:.3g}"
         kinds = [f.kind.value for f in result.flags_of(name)]
         flags = f"  [{', '.join(kinds)}]" if kinds else ""
-        print(f"  {name:15s} {value:.6g} {std} {unit}{flags}")
+        print(f"  {name:15s} {factor * value:.6g} {std} {unit}{flags}")
     for flag in result.flags:
         print(f"  {flag.parameter}: {flag.reason}")
     print(
@@ -73,13 +72,27 @@ def run(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
+#: The components that are angles (rad inside): their --initial carries its unit,
+#: ``launch_tilt_x_deg=0.1`` (degrees, as calibrate prints them) or ``..._rad=``.
+ANGLES = frozenset(c.name for group in FIT_GROUPS.values() for c in group if c.unit == "rad")
+
+
 def _initial_value(text: str) -> tuple[str, float]:
-    """``--initial NAME=VALUE`` (:func:`name_value`), a component's former name refused
-    with its new one."""
+    """``--initial NAME=VALUE`` (:func:`name_value`) in SI, an angle ``NAME_deg=VALUE`` or
+    ``NAME_rad=VALUE``; a component's former name refused with its new one, an angle
+    without its unit refused with the two spellings. Returns the name and the SI value."""
     name, value = name_value(text)
     if name in FORMER_NAMES:
+        new = FORMER_NAMES[name]
+        key = f"{new}_rad" if new in ANGLES else new
+        raise argparse.ArgumentTypeError(f"{renamed(name, new)}: write {key}={value:g}")
+    base, _, unit = name.rpartition("_")
+    if base in ANGLES and unit in ("deg", "rad"):
+        return base, math.radians(value) if unit == "deg" else value
+    if name in ANGLES:
         raise argparse.ArgumentTypeError(
-            f"{renamed(name, FORMER_NAMES[name])}: write {FORMER_NAMES[name]}={value:g}"
+            f"{name} is an angle and needs its unit: write {name}_deg={value:g} (degrees, "
+            f"as calibrate prints it) or {name}_rad={value:g}"
         )
     return name, value
 
@@ -129,7 +142,8 @@ def add(sub: argparse._SubParsersAction) -> None:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="start value of a fitted component in SI, e.g. cm=1.5e-4 (repeatable)",
+        help="start value of a fitted component in SI, e.g. cm=1.5e-4, an angle with its "
+        "unit, e.g. launch_tilt_x_deg=0.5 (repeatable)",
     )
     cal.add_argument(
         "--interpreted",

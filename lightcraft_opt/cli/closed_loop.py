@@ -119,13 +119,12 @@ def _fly(
         "no solves" if not math.isfinite(median) else f"solve time median {median * 1e3:.2f} ms"
     )
     coning = math.degrees(result.coning[0]), math.degrees(result.coning[-1])
-    tilt = math.degrees(float(np.max(result.tilt)))
     fallbacks = int(np.sum(result.log.fallbacks))
     print(
-        f"{name}: {result.flight.status.value}: coning {coning[0]:.2f} -> "
+        f"{name}: {result.flight.status.value}: coning {coning[0]:.3f} -> "
         f"{coning[1]:.3f} deg ({settled}), max tilt "
-        f"{tilt:.2f} deg, {fallbacks} fallbacks, {solves} "
-        f"-> {out}/"
+        f"{math.degrees(result.max_tilt_rad):.3f} deg, pulses {result.pulses_fired} fired, "
+        f"{result.pulses_dropped} dropped, {fallbacks} fallbacks, {solves} -> {out}/"
     )
     return result
 

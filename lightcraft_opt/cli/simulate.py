@@ -102,8 +102,9 @@ def run(args: argparse.Namespace) -> int:
         launch_speed_mps=args.launch_speed or 0.0,
     )
     print(
-        f"{result.status.value}: apogee {result.apogee:.2f} m, air time "
-        f"{result.air_time:.2f} s -> {out}/"
+        f"{result.status.value}: apogee {result.apogee:.3f} m, air time "
+        f"{result.air_time:.3f} s, max tilt {math.degrees(result.max_tilt_rad):.3f} deg, "
+        f"pulses {result.pulses_fired} fired, {result.pulses_dropped} dropped -> {out}/"
     )
     return 0 if result.status.value != "failed" else 2
 
@@ -257,7 +258,7 @@ def add(sub: argparse._SubParsersAction) -> None:
         default=None,
         metavar="FILE",
         help="fly a saved plan: pulse k takes row k's inputs (the columns pointing_x_m, "
-        "pointing_y_m, focus_m, energy_J[, rcs_thrust_<i>_N, motor_torque_Nm] of the "
+        "pointing_y_m, focus_m, energy_j[, rcs_thrust_<i>_n, motor_torque_nm] of the "
         "solution.csv lightcraft optimize writes), the last row held after the plan's end; "
         "the flight starts from the plan's row k = 0 (t_s and the state columns) when the "
         "file has them, else from the initial-state flags; wind and every other parameter "

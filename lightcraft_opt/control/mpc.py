@@ -132,7 +132,7 @@ def input_constraints(
 
     zero = np.zeros(CONING.size)
     for i, top in enumerate(max_thrust):
-        im, ic, i_s = (names.index(f"{s}[{i}]") for s in ("rcs_thrust", "rcs_cos", "rcs_sin"))
+        im, ic, i_s = (names.index(f"{s}[{i + 1}]") for s in ("rcs_thrust", "rcs_cos", "rcs_sin"))
         for phi in phis:
             a = np.zeros(m)
             a[ic], a[i_s] = math.cos(phi), math.sin(phi)

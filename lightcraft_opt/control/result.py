@@ -151,8 +151,35 @@ class ClosedLoopResult(Presentable):
         return self.log.controller
 
     @property
-    def pulses(self) -> int:
+    def pulses_commanded(self) -> int:
+        """Pulse instants the loop stepped: the controller commanded a pulse at each,
+        :attr:`pulses_fired` of them carried energy, :attr:`pulses_dropped` did not."""
         return int(self.pulse_t.size)
+
+    @property
+    def pulses_fired(self) -> int:
+        """Pulses that carried energy to the craft (the flight's
+        :attr:`~lightcraft_opt.simulation.result.SimulationResult.pulses_fired`)."""
+        return self.flight.pulses_fired
+
+    @property
+    def pulses_dropped(self) -> int:
+        """Pulse instants that carried no energy (the laser dropped them: ``dropped``);
+        the flight's :attr:`~lightcraft_opt.simulation.result.SimulationResult.pulses_dropped`."""
+        return self.flight.pulses_dropped
+
+    @property
+    def max_tilt_rad(self) -> float:
+        """Largest tilt of b1 from L up over the flight's dense samples [rad]: the flight's
+        :attr:`~lightcraft_opt.simulation.result.SimulationResult.max_tilt_rad` (``tilt``,
+        sampled before each pulse only, can miss the largest)."""
+        return self.flight.max_tilt_rad
+
+    @property
+    def max_coning_rad(self) -> float:
+        """Largest coning angle over the flight's dense samples [rad]: the flight's
+        :attr:`~lightcraft_opt.simulation.result.SimulationResult.max_coning_rad`."""
+        return self.flight.max_coning_rad
 
     def first_pulse_below(self, angle: float) -> int | None:
         """The first pulse index k at which the coning angle before pulse k is below
@@ -161,8 +188,9 @@ class ClosedLoopResult(Presentable):
         k = 0 if not above.size else int(above[-1]) + 1
         return k if k < self.coning.size else None
 
-    def max_coning_after(self, pulse: int) -> float:
-        """Largest coning angle from pulse ``pulse`` on [rad]."""
+    def max_coning_after_rad(self, pulse: int) -> float:
+        """Largest coning angle before each pulse from pulse ``pulse`` on (``coning``, the
+        pulse instants: what the controller acts on) [rad]."""
         return float(np.max(self.coning[pulse:]))
 
     def rms(self, name: str, start: int = 0) -> float:
@@ -191,7 +219,6 @@ class ClosedLoopResult(Presentable):
             "  max beam offset  "
             + (f"{100 * float(np.max(self.offset)):.2f} cm" if self.offset.size else "-"),
             f"  RCS propellant   {1e3 * float(self.rcs_used[-1]):.3f} g",
-            f"  pulses           {self.pulses} ({int(np.sum(self.dropped))} dropped by the laser)",
             f"  fallbacks        {int(np.sum(self.log.fallbacks))}",
             f"  solve time       {solves}",
         ]
@@ -206,7 +233,7 @@ class ClosedLoopResult(Presentable):
     def __repr__(self) -> str:
         return (
             f"<ClosedLoopResult {self.controller} on {self.flight.model_name}: "
-            f"{self.flight.status.value}, {self.pulses} pulses, coning "
-            f"{math.degrees(self.coning[0]):.2f} -> {math.degrees(self.coning[-1]):.3f} deg, "
-            f"max tilt {math.degrees(float(np.max(self.tilt))):.2f} deg>"
+            f"{self.flight.status.value}, {self.pulses_fired} pulses fired, coning "
+            f"{math.degrees(self.coning[0]):.3f} -> {math.degrees(self.coning[-1]):.3f} deg, "
+            f"max tilt {math.degrees(self.max_tilt_rad):.3f} deg>"
         )

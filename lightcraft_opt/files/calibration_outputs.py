@@ -239,8 +239,10 @@ def write_fitted_model(
             continue
         file, where, table, field, slot = MODEL_KEYS[name]
         value = float(result.p[PARAMETERS.slot(slot).start])
-        std = "not identifiable" if not np.isfinite(result.std[i]) else f"± {result.std[i]:.3g}"
-        note = f"fitted: {name} = {result.values[i]:.6g} {std} {result.units[i]} (calibrate{track})"
+        unit, factor = result.shown(name)  # angles in degrees; the key's value stays SI
+        sd = factor * result.std[i]
+        std = "not identifiable" if not np.isfinite(sd) else f"± {sd:.3g}"
+        note = f"fitted: {name} = {factor * result.values[i]:.6g} {std} {unit} (calibrate{track})"
         if file == "laser":
             laser = laser if laser is not None else _read(laser_path)
             _put(laser, where, table, field, value)
@@ -266,20 +268,22 @@ def write_calibration_report(
     path: Path,
     **extra: Any,
 ) -> dict[str, Any]:
-    """The fit report (JSON) at ``path``; returns it as a dict. ``extra`` entries (file
+    """The fit report (JSON) at ``path``; returns it as a dict. Each fitted component's
+    value, std, start and bounds are in the entry's ``unit``: SI, but degrees for an angle
+    (:meth:`~lightcraft_opt.calibration.result.CalibrationResult.shown`). ``extra`` entries (file
     names, options) are added at the top level; without ``model`` its name and hash are
     null. Beside it, result.json and result.npz: the exact result, trajectories included
     (:mod:`.result_archive`)."""
     parameters: dict[str, Any] = {}
     for i, name in enumerate(result.names):
-        unit = result.units[i]
+        unit, factor = result.shown(name)  # angles in degrees (docs/outputs.md)
         entry: dict[str, Any] = {
             "unit": unit,
-            "value": float(result.values[i]),
-            "std": finite_or_none(result.std[i]),
-            "initial": float(result.initial[i]),
-            "lower": float(result.lower[i]),
-            "upper": float(result.upper[i]),
+            "value": factor * float(result.values[i]),
+            "std": finite_or_none(factor * result.std[i]),
+            "initial": factor * float(result.initial[i]),
+            "lower": factor * float(result.lower[i]),
+            "upper": factor * float(result.upper[i]),
             "identifiable": name not in result.unidentified,
             "flags": [f.kind.value for f in result.flags_of(name)],
         }

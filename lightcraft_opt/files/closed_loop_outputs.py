@@ -18,7 +18,7 @@ import numpy as np
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
 from lightcraft_opt.files.result_archive import write_archive
-from lightcraft_opt.files.simulation_outputs import flight_measures, model_hash
+from lightcraft_opt.files.simulation_outputs import finite_or_none, flight_measures, model_hash
 
 __all__ = ["STEP_COLUMNS", "steps_table", "write_closed_loop_summary", "write_steps_csv"]
 
@@ -31,8 +31,8 @@ STEP_COLUMNS = (
     "iterations",
     "coning_deg",
     "tilt_deg",
-    "offset_cm",
-    "rcs_used_g",
+    "offset_m",
+    "rcs_used_kg",
     "dropped",
     "message",
 )
@@ -43,9 +43,9 @@ def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
     pulse k, the controller's status, solve and step time, iterations, then the coning
     and tilt before pulse k, the beam offset at it, the propellant used before it,
     whether the laser dropped it, and the solver's message (commas replaced)."""
-    log, pulses = result.log, range(result.pulses)
+    log, pulses = result.log, range(result.pulses_commanded)
     columns = [
-        np.arange(result.pulses),
+        np.arange(result.pulses_commanded),
         np.array([result.pulse_t[k] for k in pulses], dtype=float),
         np.array([log.status[k].value for k in pulses], dtype=object),
         np.array([log.solve_time[k] * 1e3 for k in pulses], dtype=float),
@@ -53,8 +53,8 @@ def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
         np.array([int(log.iterations[k]) for k in pulses], dtype=int),
         np.array([math.degrees(result.coning[k]) for k in pulses], dtype=float),
         np.array([math.degrees(result.tilt[k]) for k in pulses], dtype=float),
-        np.array([result.offset[k] * 100 for k in pulses], dtype=float),
-        np.array([result.rcs_used[k] * 1e3 for k in pulses], dtype=float),
+        np.array([result.offset[k] for k in pulses], dtype=float),
+        np.array([result.rcs_used[k] for k in pulses], dtype=float),
         np.array([int(result.dropped[k]) for k in pulses], dtype=int),
         np.array([log.messages[k].replace(",", ";") for k in pulses], dtype=object),
     ]
@@ -70,7 +70,7 @@ def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
     table = steps_table(result)
     columns = list(table.values())
     lines = [",".join(table)]
-    for k in range(result.pulses):
+    for k in range(result.pulses_commanded):
         cells = (cell.format(c[k]) for cell, c in zip(_STEP_CELLS, columns, strict=True))
         lines.append(",".join(cells))
     path.write_text("\n".join(lines) + "\n")
@@ -101,31 +101,32 @@ def write_closed_loop_summary(
         "controller": result.controller,
         "status": result.flight.status.value,
         "message": result.flight.message,
-        "pulses": result.pulses,
+        "pulses_commanded": result.pulses_commanded,
+        "pulses_fired": result.pulses_fired,
+        "pulses_dropped": result.pulses_dropped,
         "duration_s": None if problem is None else problem.duration,
         "coning_initial_deg": math.degrees(result.coning[0]),
         "coning_final_deg": math.degrees(result.coning[-1]),
         "coning_below_0.5deg_from_pulse": settled,
         "max_coning_after_pulse_25_deg": (
-            math.degrees(result.max_coning_after(25)) if result.coning.size > 25 else None
+            math.degrees(result.max_coning_after_rad(25)) if result.coning.size > 25 else None
         ),
-        "max_coning_deg": math.degrees(float(np.max(result.coning))),
-        "max_tilt_deg": math.degrees(float(np.max(result.tilt))),
+        "max_coning_deg": finite_or_none(math.degrees(result.max_coning_rad)),
+        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt_rad)),
         "final_tilt_deg": math.degrees(result.tilt[-1]),
-        "max_offset_cm": float(np.max(result.offset)) * 100 if result.offset.size else None,
-        "max_altitude_m": float(np.max(result.flight.state("r_L")[:, 2])),
+        "max_offset_m": float(np.max(result.offset)) if result.offset.size else None,
         **{
             k: flight[k]
             for k in (
+                "apogee_m",
                 "apogee_time_s",
                 "top_speed_mps",
                 "landing_speed_mps",
-                "energy_captured_J",
+                "energy_captured_j",
                 "capture_margin_m",
             )
         },
-        "rcs_used_g": float(result.rcs_used[-1]) * 1e3,
-        "pulses_dropped": int(np.sum(result.dropped)),
+        "rcs_used_kg": float(result.rcs_used[-1]),
         "final_position_m": result.flight.state("r_L")[-1].tolist(),
         "steps_by_status": {s.value: log.count(s) for s in ControllerStatus if log.count(s)},
         "fallbacks": int(np.sum(log.fallbacks)),

@@ -53,9 +53,24 @@ __all__ = [
 _COMPONENTS = {"L": ("x", "y", "z"), "B": ("b1", "b2", "b3")}
 
 
+#: A layout unit's suffix in a column name, spelt as the input files spell it
+#: (docs/files.md#units: lower case, a product written together, ``_per_`` a quotient).
+COLUMN_SUFFIXES: dict[str, str] = {
+    "m": "m",
+    "m/s": "mps",
+    "rad/s": "rad_per_s",
+    "kg": "kg",
+    "J": "j",
+    "N": "n",
+    "N m": "nm",
+    "N s": "ns",
+    "N m s": "nms",
+}
+
+
 def _unit(unit: str) -> str:
-    """A layout unit as a column suffix: "N m" -> "_Nm", "-" -> ""."""
-    return "" if unit in ("", "-") else "_" + unit.replace(" ", "")
+    """A layout unit as a column suffix: "N m" -> "_nm", "-" -> "" (:data:`COLUMN_SUFFIXES`)."""
+    return "" if unit in ("", "-") else "_" + COLUMN_SUFFIXES[unit]
 
 
 def _columns(name: str, size: int, unit: str, components: tuple[str, ...] = ()) -> list[str]:
@@ -69,13 +84,13 @@ def _columns(name: str, size: int, unit: str, components: tuple[str, ...] = ()) 
 
 
 def input_columns(inputs: VectorLayout) -> list[str]:
-    """Column names of a map input: pointing_x_m, pointing_y_m, focus_m, energy_J, then
-    rcs_thrust_1_N ... and motor_torque_Nm when the model has them."""
+    """Column names of a map input: pointing_x_m, pointing_y_m, focus_m, energy_j, then
+    rcs_thrust_1_n ... and motor_torque_nm when the model has them."""
     return [c for s in inputs.slots for c in _columns(s.name, s.size, s.unit)]
 
 
 def engine_columns() -> list[str]:
-    """Column names of Φ's engine outputs (energy_captured_J, impulse_b1_Ns ...,
+    """Column names of Φ's engine outputs (energy_captured_j, impulse_b1_ns ...,
     offset_x_m, offset_y_m, liner_loss_kg, health), then offset_over_capture_radius."""
     return [c for s in ENGINE.slots for c in _columns(s.name, s.size, s.unit)] + [
         "offset_over_capture_radius"
@@ -297,7 +312,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "dynamics_gap": finite_or_none(result.dynamics_gap),
         "horizon_pulses": result.horizon,
         "pulse_period_s": problem.period,
-        "laser_energy_J": result.laser_energy,
+        "laser_energy_j": result.laser_energy,
         "final_altitude_m": float(r_L[-1, 2]),
         "final_position_m": r_L[-1].tolist(),
         "max_drift_m": float(np.max(np.hypot(r_L[:, 0], r_L[:, 1]))),

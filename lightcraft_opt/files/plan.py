@@ -4,11 +4,11 @@ The file ``lightcraft optimize`` writes, solution.csv (:mod:`.ocp_outputs`), is 
 header naming the columns, one row per pulse node k. The inputs of pulse k are row k's
 input columns, named as solution.csv names them for the model's map input
 (:func:`~lightcraft_opt.files.ocp_outputs.input_columns`: ``pointing_x_m``,
-``pointing_y_m``, ``focus_m``, ``energy_J``, then ``rcs_thrust_1_N`` ... and
-``motor_torque_Nm`` when the model has them; SI, L frame for the pointing,
+``pointing_y_m``, ``focus_m``, ``energy_j``, then ``rcs_thrust_1_n`` ... and
+``motor_torque_nm`` when the model has them; SI, L frame for the pointing,
 docs/frames.md); other columns are ignored. Trailing rows whose input cells are all empty
 (solution.csv's last node, where no pulse fires) end the plan. When the file also has
-``t_s`` and the state columns of trajectory.csv (``x_m`` ... ``pulses``), row 0 gives the
+``t_s`` and the state columns of trajectory.csv (``x_m`` ... ``engine_load``), row 0 gives the
 plan's start: the time of its first pulse and the state there.
 
 Anything wrong (a missing input column, a blank, text or non-finite cell inside the plan,
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lightcraft_opt.errors import ProblemFileError
+from lightcraft_opt.errors import ProblemFileError, renamed
 from lightcraft_opt.files.csv_cells import cell_number, csv_text
 from lightcraft_opt.files.ocp_outputs import input_columns
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS
@@ -32,7 +32,34 @@ from lightcraft_opt.layout import STATE, VectorLayout
 
 __all__ = ["Plan", "read_plan"]
 
-#: trajectory.csv's columns of the state, in STATE's order (x_m ... pulses).
+#: Unit suffixes of the columns before issue 29 spelt them as the input files do: new ->
+#: old (``energy_j`` was ``energy_J``). An old file's column is refused with its new name;
+#: without that, an old file's state would go unread.
+FORMER_SUFFIXES = {
+    "_rad_per_s": "_radps",
+    "_j": "_J",
+    "_n": "_N",
+    "_nm": "_Nm",
+    "_ns": "_Ns",
+    "_nms": "_Nms",
+}
+#: Columns renamed whole: new -> old, and why.
+FORMER_NAMES = {"engine_load": "pulses"}
+FORMER_WHY = {"pulses": "the energy delivered over the reference pulse energy, not a count"}
+SPELLING = "units spelt as the input files spell them"
+
+
+def former_column(column: str) -> str:
+    """What ``column`` was called before issue 29 (itself if it was not renamed)."""
+    if column in FORMER_NAMES:
+        return FORMER_NAMES[column]
+    for new, old in FORMER_SUFFIXES.items():
+        if column.endswith(new):
+            return column[: -len(new)] + old
+    return column
+
+
+#: trajectory.csv's columns of the state, in STATE's order (x_m ... engine_load).
 STATE_COLUMNS = TRAJECTORY_COLUMNS[1 : 1 + STATE.size]
 
 
@@ -69,6 +96,15 @@ def read_plan(path: str | Path, inputs: VectorLayout, period: float) -> Plan:
     if not rows:
         raise ProblemFileError(src, None, f"empty file: needs a header with {','.join(wanted)}")
     header = [h.strip() for h in rows[0]]
+    for new in [*wanted, *STATE_COLUMNS]:
+        former = former_column(new)
+        if new not in header and former in header:
+            raise ProblemFileError(
+                src,
+                f"line 1, column {former}",
+                f"{renamed(former, new)} ({FORMER_WHY.get(former, SPELLING)}): write {new}, "
+                "or optimize again",
+            )
     missing = [c for c in wanted if c not in header]
     if missing:
         raise ProblemFileError(

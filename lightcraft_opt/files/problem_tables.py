@@ -5,7 +5,7 @@ unknown-key hints. A key of an ``[[objective]]``, ``[[constraint]]`` or ``[[cont
 is in the unit of the slot the table names (``lower``, ``reference``, ``path``) carries a
 unit of the slot's quantity (:data:`SLOT_QUANTITY`: ``lower_cm`` for pointing_L,
 ``upper_kj`` for energy), a slew rate one of its rate (``slew_rate_mps``,
-``slew_rate_j_per_s``); only slots without a unit (q_LB, pulses) take bare numbers.
+``slew_rate_j_per_s``); only slots without a unit (q_LB, engine_load) take bare numbers.
 :func:`read_item` turns one table into its ocp.problem dataclass (:data:`OBJECTIVES`,
 :data:`CONSTRAINTS`, :data:`CONTROL`). Errors are
 :class:`~lightcraft_opt.errors.ProblemFileError` naming the key as written, or the schema's
@@ -81,6 +81,10 @@ __all__ = [
     "slot_spec",
 ]
 
+#: State slots renamed (issue 29: ``pulses`` held the energy delivered over the reference
+#: pulse energy, not a count of pulses), refused with the new name.
+FORMER_STATES: Mapping[str, str] = {"pulses": "engine_load"}
+
 SLOT = Spec("in the unit of its slot")  # one number or one per component, inf allowed
 SLOT_RATE = Spec("in the unit of its slot per second")
 NUMBERS = Spec("dimensionless", "numbers")  # one number or one per component
@@ -100,7 +104,7 @@ def _slot_quantities() -> dict[str, str]:
 
 #: Quantity of each slot with a unit (schema.QUANTITIES): its bounds, reference, path and
 #: initial guess carry a unit of it in the key (``lower_cm``), its slew rate one of
-#: RATE_OF[quantity] (``slew_rate_mps``); the other slots (q_LB, pulses) are bare numbers.
+#: RATE_OF[quantity] (``slew_rate_mps``); the other slots (q_LB, engine_load) are bare numbers.
 SLOT_QUANTITY: Mapping[str, str] = _slot_quantities()
 
 
@@ -246,6 +250,11 @@ def read_item(
 ) -> tuple[Table, Any]:
     """One objective term, constraint or control bound and where its keys were written."""
     slot = raw.get(kind.slot, kind.default_slot) if kind.slot else None
+    if kind.slot == "state" and isinstance(slot, str) and slot in FORMER_STATES:
+        new = FORMER_STATES[slot]
+        raise ProblemFileError(
+            src, f"{where}.state", f'state {renamed(slot, new)}: write state = "{new}"'
+        )
     if (
         kind.slot == "state"
         and slot is not None

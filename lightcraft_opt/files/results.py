@@ -71,7 +71,10 @@ def _csv(path: Path, columns: tuple[str, ...]) -> np.ndarray:
     except (OSError, ValueError) as err:
         raise LightcraftError(f"{path}: cannot read it: {err}") from err
     if tuple(header[: len(columns)]) != columns:
-        raise LightcraftError(f"{path}: header is not {','.join(columns)}")
+        raise LightcraftError(
+            f"{path}: header is not {','.join(columns)} (a folder written before its columns "
+            "were renamed, e.g. w1_radps to w1_rad_per_s, pulses to engine_load: run it again)"
+        )
     return rows.reshape(-1, len(header))
 
 
@@ -88,12 +91,12 @@ def _flight(where: Path) -> SimulationResult:
             :, [pc["pointing_x_m"], pc["pointing_y_m"]]
         ]
         u[:, PULSE_INPUT.slot("focus").start] = rows[:, pc["focus_m"]]
-        u[:, PULSE_INPUT.slot("energy").start] = rows[:, pc["energy_J"]]
+        u[:, PULSE_INPUT.slot("energy").start] = rows[:, pc["energy_j"]]
         gap = rows[:, pc["beam_gap_m"]] if rows.shape[1] > pc["beam_gap_m"] else None
         pulses = PulseRecord(
             t=rows[:, pc["t_s"]],
             u=u,
-            engine=rows[:, pc["energy_captured_J"] : pc["health"] + 1],
+            engine=rows[:, pc["energy_captured_j"] : pc["health"] + 1],
             beam_gap=gap,
         )
     return SimulationResult(

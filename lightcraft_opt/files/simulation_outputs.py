@@ -1,6 +1,6 @@
 """Writing a simulated flight to disk: CSV, JSON summary (the edge).
 
-Column names carry their units (``z_m``, ``w1_radps``, angles in degrees); positions are
+Column names carry their units (``z_m``, ``w1_rad_per_s``, angles in degrees); positions are
 in L (x east, y north, z up), as docs/frames.md says, vectors in B have components b1, b2,
 b3. The names are solution.csv's too (:mod:`.ocp_outputs`); docs/outputs.md lists every
 column and key of every file.
@@ -44,13 +44,13 @@ TRAJECTORY_COLUMNS = (
     "qx",
     "qy",
     "qz",
-    "w1_radps",
-    "w2_radps",
-    "w3_radps",
-    "spin_radps",
+    "w1_rad_per_s",
+    "w2_rad_per_s",
+    "w3_rad_per_s",
+    "spin_rad_per_s",
     "liner_mass_kg",
     "rcs_mass_kg",
-    "pulses",
+    "engine_load",
     "mass_kg",
     "tilt_deg",
     "coning_deg",
@@ -91,14 +91,14 @@ def write_trajectory_csv(result: SimulationResult, path: Path) -> None:
 PULSE_COLUMNS = (
     "k",
     "t_s",
-    "energy_J",
-    "energy_captured_J",
-    "impulse_b1_Ns",
-    "impulse_b2_Ns",
-    "impulse_b3_Ns",
-    "angular_impulse_b1_Nms",
-    "angular_impulse_b2_Nms",
-    "angular_impulse_b3_Nms",
+    "energy_j",
+    "energy_captured_j",
+    "impulse_b1_ns",
+    "impulse_b2_ns",
+    "impulse_b3_ns",
+    "angular_impulse_b1_nms",
+    "angular_impulse_b2_nms",
+    "angular_impulse_b3_nms",
     "offset_x_m",
     "offset_y_m",
     "liner_loss_kg",
@@ -141,7 +141,7 @@ def write_pulses_csv(result: SimulationResult, path: Path) -> None:
 def flight_measures(result: SimulationResult) -> dict[str, Any]:
     """The figures of a flight that summary.json holds, the unit in each key: apogee and
     its time, air time, top speed, landing speed (null unless it landed), largest tilt
-    and coning, pulses fired, energy captured (sum over the pulses), capture margin
+    and coning, pulses fired and dropped, energy captured (sum over the pulses), capture margin
     (:attr:`~lightcraft_opt.simulation.result.SimulationResult.capture_margin`, null
     without a fired pulse), final position."""
     margin, landing = result.capture_margin, result.landing_speed
@@ -152,10 +152,11 @@ def flight_measures(result: SimulationResult) -> dict[str, Any]:
         "top_speed_mps": result.top_speed,
         "landing_speed_mps": landing,
         "final_position_m": result.state("r_L")[-1].tolist(),
-        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt)),
-        "max_coning_deg": finite_or_none(math.degrees(result.max_coning)),
+        "max_tilt_deg": finite_or_none(math.degrees(result.max_tilt_rad)),
+        "max_coning_deg": finite_or_none(math.degrees(result.max_coning_rad)),
         "pulses_fired": result.pulses_fired,
-        "energy_captured_J": result.energy_captured,
+        "pulses_dropped": result.pulses_dropped,
+        "energy_captured_j": result.energy_captured,
         "capture_margin_m": margin,
     }
 

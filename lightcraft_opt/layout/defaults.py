@@ -275,6 +275,6 @@ def initial_state(
             "spin": spin,
             "liner_mass": craft.liner.mass if craft.liner else 0.0,
             "rcs_mass": craft.rcs.propellant_mass if craft.rcs else 0.0,
-            "pulses": 0.0,
+            "engine_load": 0.0,
         }
     )

@@ -166,6 +166,6 @@ class VectorLayout:
             if s.size == 1:
                 out.append(f"{s.name}{unit}")
             else:
-                comps = s.components or tuple(str(i) for i in range(s.size))
+                comps = s.components or tuple(str(i + 1) for i in range(s.size))
                 out.extend(f"{s.name}[{c}]{unit}" for c in comps)
         return out

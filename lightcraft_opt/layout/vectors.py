@@ -51,6 +51,7 @@ __all__ = [
     "map_input_layout",
     "rcs_levels",
     "substep_input_layout",
+    "thruster_numbers",
 ]
 
 #: Components of an L vector (docs/frames.md): east, north, up.
@@ -60,6 +61,11 @@ B123 = ("b1", "b2", "b3")
 #: The horizontal components of an L vector.
 EAST_NORTH = ENU[:2]
 
+#: The state x (17 entries; docs/frames.md#state-vector). ``engine_load`` is not a count of
+#: pulses: it is the laser energy delivered so far over the reference pulse energy E_ref
+#: (each pulse adds E / E_ref, a dropped one 0; 0.723 after one pulse of 0.723 E_ref), the
+#: heat load the engine's health reads (docs/physics.md#health). Pulses fired are counted
+#: by a result (``SimulationResult.pulses_fired``).
 STATE = VectorLayout(
     "state",
     [
@@ -70,7 +76,7 @@ STATE = VectorLayout(
         ("spin", 1, "rad/s", "B", ()),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
+        ("engine_load", 1, "-", "", ()),
     ],
 )
 
@@ -87,7 +93,7 @@ ERROR_STATE = VectorLayout(
         ("spin", 1, "rad/s", "B", ()),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
+        ("engine_load", 1, "-", "", ()),
     ],
 )
 
@@ -106,7 +112,7 @@ REDUCED_STATE = VectorLayout(
         ("coning", 2, "-", "T_H", ("e1", "e2")),
         ("liner_mass", 1, "kg", "", ()),
         ("rcs_mass", 1, "kg", "", ()),
-        ("pulses", 1, "-", "", ()),
+        ("engine_load", 1, "-", "", ()),
     ],
 )
 
@@ -162,6 +168,13 @@ class RcsProfile(Enum):
     PHASE_LOCKED = "phase_locked"
 
 
+def thruster_numbers(n_thrusters: int) -> tuple[str, ...]:
+    """The thrusters' names as people number them, "1" to "n": the components of the RCS
+    slots (``rcs_thrust[1]``), the columns ``rcs_thrust_1_n`` and the plots' legends.
+    Python's array indices into them stay 0-based."""
+    return tuple(str(i + 1) for i in range(n_thrusters))
+
+
 def map_input_layout(
     n_thrusters: int,
     has_carrier: bool,
@@ -207,13 +220,13 @@ def map_input_layout(
         )
     spec = [(s.name, s.size, s.unit, s.frame, s.components) for s in PULSE_INPUT.slots]
     if n_thrusters and rcs_profile is RcsProfile.SUBINTERVALS:
-        comps = tuple(f"sub{j}.thr{i}" for j in range(m) for i in range(n_thrusters))
+        comps = tuple(f"sub{j + 1}.thr{i}" for j in range(m) for i in thruster_numbers(n_thrusters))
         spec.append(("rcs_thrust", n_thrusters * m, "N", "", comps))
     elif n_thrusters:
-        spec.append(("rcs_thrust", n_thrusters, "N", "", ()))
+        spec.append(("rcs_thrust", n_thrusters, "N", "", thruster_numbers(n_thrusters)))
         if rcs_profile is RcsProfile.PHASE_LOCKED:
-            spec.append(("rcs_cos", n_thrusters, "N", "", ()))
-            spec.append(("rcs_sin", n_thrusters, "N", "", ()))
+            spec.append(("rcs_cos", n_thrusters, "N", "", thruster_numbers(n_thrusters)))
+            spec.append(("rcs_sin", n_thrusters, "N", "", thruster_numbers(n_thrusters)))
     if has_carrier:
         spec.append(("motor_torque", 1, "N m", "B", ()))
     return VectorLayout("map input", spec)
@@ -241,7 +254,7 @@ def input_layout(n_thrusters: int, has_carrier: bool) -> VectorLayout:
     on the rotor about b1 [N m]."""
     spec: list[tuple[str, int, str, str, tuple[str, ...]]] = []
     if n_thrusters:
-        spec.append(("rcs_thrust", n_thrusters, "N", "", ()))
+        spec.append(("rcs_thrust", n_thrusters, "N", "", thruster_numbers(n_thrusters)))
     if has_carrier:
         spec.append(("motor_torque", 1, "N m", "B", ()))
     return VectorLayout("input", spec)
@@ -259,9 +272,9 @@ def substep_input_layout(n_thrusters: int, has_carrier: bool, profile: RcsProfil
     if profile is not RcsProfile.PHASE_LOCKED:
         return input_layout(n_thrusters, has_carrier)
     spec: list[tuple[str, int, str, str, tuple[str, ...]]] = [
-        ("rcs_thrust", n_thrusters, "N", "", ()),
-        ("rcs_cos", n_thrusters, "N", "", ()),
-        ("rcs_sin", n_thrusters, "N", "", ()),
+        ("rcs_thrust", n_thrusters, "N", "", thruster_numbers(n_thrusters)),
+        ("rcs_cos", n_thrusters, "N", "", thruster_numbers(n_thrusters)),
+        ("rcs_sin", n_thrusters, "N", "", thruster_numbers(n_thrusters)),
     ]
     if has_carrier:
         spec.append(("motor_torque", 1, "N m", "B", ()))

@@ -18,7 +18,7 @@ def entry_names(layout: VectorLayout) -> list[str]:
     """``slot[component]`` per entry (``slot`` for scalars): the signal names."""
     out: list[str] = []
     for s in layout.slots:
-        comps = s.components or tuple(str(i) for i in range(s.size))
+        comps = s.components or tuple(str(i + 1) for i in range(s.size))
         out.extend([s.name] if s.size == 1 else [f"{s.name}[{c}]" for c in comps])
     return out
 

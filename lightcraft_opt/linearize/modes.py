@@ -41,7 +41,7 @@ _KIND_OF_SLOT = {
     "spin": ModeKind.AXIAL,
     "liner_mass": ModeKind.CONSUMABLE,
     "rcs_mass": ModeKind.CONSUMABLE,
-    "pulses": ModeKind.CONSUMABLE,
+    "engine_load": ModeKind.CONSUMABLE,
 }
 
 

@@ -81,7 +81,7 @@ def entry_rows(
     unit of each entry (default 1)."""
     out: list[ConstraintRow] = []
     for s in layout.slots:
-        comps = s.components or tuple(str(i) for i in range(s.size))
+        comps = s.components or tuple(str(i + 1) for i in range(s.size))
         for i in range(s.size):
             name = s.name if s.size == 1 else f"{s.name}[{comps[i]}]"
             size = 1.0 if scale is None else float(scale[s.start + i])

@@ -68,11 +68,13 @@ def hardware_limits(model: Model, inputs: VectorLayout) -> HardwareLimits:
     if rcs is not None:
         top = np.array([t.max_thrust for t in rcs.thrusters], dtype=float)
         field = [f"craft.rcs.thrusters[{i}].max_thrust" for i in range(top.size)]
+        # thruster i (numbered from 1, docs/frames.md) is Python's thrusters[i - 1]
+        said = [f"thruster {i + 1}'s force ({f}" for i, f in enumerate(field)]
         levels = inputs.slot("rcs_thrust").size // top.size
         put("rcs_thrust", 0.0, np.tile(top, levels),
-            [f"thruster {i}'s force ({f})" for i, f in enumerate(field)])  # fmt: skip
+            [f"{t})" for t in said])  # fmt: skip
         for name in ("rcs_cos", "rcs_sin"):
             if name in inputs:
                 put(name, -top / 2, top / 2,
-                    [f"thruster {i}'s force ({f} / 2)" for i, f in enumerate(field)])  # fmt: skip
+                    [f"{t} / 2)" for t in said])  # fmt: skip
     return HardwareLimits(lower, upper, tuple(limit))

@@ -29,15 +29,15 @@ def build_node_measures() -> ca.Function:
         L frame [m].
     cos_tilt : cosine of the angle between b1 and L up, b1 . z_L [-] (exact for a unit
         quaternion, as Φ returns).
-    energy_fired : laser energy fired since the counter was 0, ``pulses`` times
-        ``reference_pulse_energy`` [J] (the counter advances by E / E_ref a pulse:
+    energy_fired : laser energy fired since the engine load was 0, ``engine_load`` times
+        ``reference_pulse_energy`` [J] (the load advances by E / E_ref a pulse:
         symbolic/maps/pulse_jump.py).
     """
     x = ca.SX.sym("x", STATE.size)
     p = ca.SX.sym("p", PARAMETERS.size)
     r_L = STATE.get("r_L", x)
     R_LB = dcm(STATE.get("q_LB", x))
-    energy = STATE.get("pulses", x) * PARAMETERS.get("reference_pulse_energy", p)
+    energy = STATE.get("engine_load", x) * PARAMETERS.get("reference_pulse_energy", p)
     return ca.Function(
         "ocp_node_measures",
         [x, p],

@@ -680,6 +680,6 @@ class OcpProblem:
                 if amp > min(m, mx - m):
                     raise ParameterError(
                         name,
-                        f"thruster {i}'s held inputs (mean {m}, amplitude {amp:.6g} N) leave "
+                        f"thruster {i + 1}'s held inputs (mean {m}, amplitude {amp:.6g} N) leave "
                         f"[0, {mx}] N over a coning period",
                     )

@@ -113,7 +113,7 @@ def state_scale(problem: OcpProblem) -> np.ndarray:
         "spin": max(1.0, spin),
         "liner_mass": mass,
         "rcs_mass": mass,
-        "pulses": float(problem.horizon),
+        "engine_load": float(problem.horizon),
     }
     return STATE.pack({k: np.full(STATE.slot(k).size, v) for k, v in natural.items()})
 

@@ -191,7 +191,8 @@ def plot_commanded(
     lines: list[Any] = []
     names = inputs.slot(slot).components
     for i in range(values.shape[1]):
-        label = names[i] if names and len(names) == values.shape[1] else f"{slot}[{i}]"
+        name = names[i] if names and len(names) == values.shape[1] else str(i + 1)
+        label = f"thruster {name}" if slot.startswith("rcs_") else name
         lines += ax.step(t, np.append(values[:, i], values[-1:, i]), where="post", label=label)
     if values.shape[1] > 1:
         ax.legend(loc="best", fontsize=8, ncol=2)
@@ -339,7 +340,7 @@ def closed_loop_figures(
     )
     hist = Figure(figsize=(6.5, 4.5), layout="constrained")
     plot_solve_times(result, ax=hist.add_subplot(), budget=budget)
-    hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses} pulses)")
+    hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses_commanded} pulses)")
     return {
         "closed_loop.png": fig,
         "closed_loop_inputs.png": inputs_figure(result, inputs=inputs, title=title),

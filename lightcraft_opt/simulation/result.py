@@ -134,21 +134,36 @@ class SimulationResult(Presentable):
         return float(np.linalg.norm(self.state("v_L")[-1]))
 
     @property
-    def max_tilt(self) -> float:
-        """Largest angle of b1 from L up [rad] (NaN without the derived measures)."""
+    def max_tilt_rad(self) -> float:
+        """Largest angle of b1 from L up over the flight's samples ``t`` [rad] (NaN without
+        the derived measures).
+
+        The one definition of a flight's largest tilt: summary(), summary.json, the CLI's
+        lines, a closed loop's and a campaign's figures all read this property. The samples
+        are the dense ones (a few per pulse interval and the state at every pulse), so a
+        body axis coning faster than they resolve can tilt a little further between them.
+        """
         return float(np.max(self.tilt)) if self.tilt.size else math.nan
 
     @property
-    def max_coning(self) -> float:
-        """Largest angle of b1 from the angular momentum [rad] (NaN without them)."""
+    def max_coning_rad(self) -> float:
+        """Largest angle of b1 from the angular momentum over the flight's samples ``t``
+        [rad] (NaN without them); the one definition, as :attr:`max_tilt_rad`."""
         return float(np.max(self.coning)) if self.coning.size else math.nan
 
     @property
     def pulses_fired(self) -> int:
-        """Pulses that carried energy (not dropped)."""
+        """Pulses that carried energy to the craft: the pulse instants of the record less
+        :attr:`pulses_dropped`."""
         if self.pulses is None:
             return 0
         return int(np.sum(self.pulses.u[:, _ENERGY] > 0))
+
+    @property
+    def pulses_dropped(self) -> int:
+        """Pulse instants that carried no energy (the laser dropped the pulse, or the
+        input asked for none): the record's pulses less :attr:`pulses_fired`."""
+        return 0 if self.pulses is None else len(self.pulses.t) - self.pulses_fired
 
     @property
     def energy_captured(self) -> float:
@@ -172,16 +187,15 @@ class SimulationResult(Presentable):
         r = self.state("r_L")[-1]
         landing = self.landing_speed
         margin = self.capture_margin
-        dropped = 0 if self.pulses is None else len(self.pulses.t) - self.pulses_fired
         rows = [
             ("status", self.status.value + (f" ({self.message})" if self.message else "")),
             ("air time", f"{self.air_time:.3f} s"),
             ("apogee", f"{self.apogee:.3f} m at {self.apogee_time:.3f} s"),
             ("top speed", f"{self.top_speed:.3f} m/s"),
             ("landing speed", "-" if landing is None else f"{landing:.3f} m/s"),
-            ("max tilt", f"{math.degrees(self.max_tilt):.3f} deg"),
-            ("max coning", f"{math.degrees(self.max_coning):.3f} deg"),
-            ("pulses fired", f"{self.pulses_fired} ({dropped} dropped)"),
+            ("max tilt", f"{math.degrees(self.max_tilt_rad):.3f} deg"),
+            ("max coning", f"{math.degrees(self.max_coning_rad):.3f} deg"),
+            ("pulses", f"{self.pulses_fired} fired, {self.pulses_dropped} dropped"),
             ("energy captured", f"{self.energy_captured:.2f} J"),
             ("capture margin", "-" if margin is None else f"{100 * margin:.2f} cm"),
             ("final position", f"({r[0]:.3f}, {r[1]:.3f}, {r[2]:.3f}) m (east, north, up)"),
@@ -191,7 +205,8 @@ class SimulationResult(Presentable):
     def __repr__(self) -> str:
         return (
             f"<SimulationResult {self.model_name}: {self.status.value}, apogee "
-            f"{self.apogee:.3f} m, air time {self.air_time:.3f} s, {self.pulses_fired} pulses>"
+            f"{self.apogee:.3f} m, air time {self.air_time:.3f} s, "
+            f"{self.pulses_fired} pulses fired>"
         )
 
 

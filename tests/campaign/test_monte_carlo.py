@@ -62,7 +62,7 @@ def test_serial_campaign_is_complete_and_physical(serial, campaign):
     # climbs less under the same pulses (apogee falls with mass, all else drawn too)
     assert np.all(np.abs(t["mass_kg"] / campaign.model.craft.mass - 1) <= 3 * 0.02 + 1e-12)
     assert np.corrcoef(t["mass_kg"], t["apogee_m"])[0, 1] < 0
-    assert np.all(t["pulses"] == 8)
+    assert np.all(t["pulses_commanded"] == 8)
     assert np.all(t["max_tilt_deg"] >= np.abs(t["tilt_deg"]) - np.degrees(1e-9))
     # the launch offset drawn (x, y in L; sigma 3 mm truncated at 3 sigma), the end in L
     for name in ("launch_offset_x_m", "launch_offset_y_m"):

@@ -75,7 +75,7 @@ def _table(n: int, rng: np.random.Generator) -> dict[str, np.ndarray]:
         "fallbacks",
         "iterations_total",
         "iterations_max",
-        "pulses",
+        "pulses_commanded",
     ):
         t[name] = rng.random(n)  # fmt: skip
     t["apogee_m"][0] = np.nan  # the error row

@@ -73,7 +73,11 @@ RENAMED = [
      "'offset_east' was renamed 'launch_offset_x': write launch_offset_x=0.01"),
     (["calibrate", "m.toml", "--track", "t.csv", "--fit", "tilt", "--initial",
       "tilt_north=-0.02"], "--initial",
-     "'tilt_north' was renamed 'launch_tilt_y': write launch_tilt_y=-0.02"),
+     "'tilt_north' was renamed 'launch_tilt_y': write launch_tilt_y_rad=-0.02"),
+    (["calibrate", "m.toml", "--track", "t.csv", "--fit", "tilt", "--initial",
+      "launch_tilt_y=0.5"], "--initial",
+     "launch_tilt_y is an angle and needs its unit: write launch_tilt_y_deg=0.5 (degrees, "
+     "as calibrate prints it) or launch_tilt_y_rad=0.5"),
 ]  # fmt: skip
 
 

@@ -9,11 +9,14 @@ from __future__ import annotations
 
 import dataclasses as dc
 import json
+import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 from support.paths import REPO_ROOT
 
+import lightcraft_opt as lc
 from lightcraft_opt.cli import main
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import PARAMETERS, parameter_values
@@ -70,7 +73,16 @@ def test_calibrate_writes_model_report_and_plots(tmp_path, capsys):
 
     fitted = load_model(out / "flight5-fitted.toml")
     assert fitted.flight.impulse_per_pulse == cm["value"] * model.flight.pulse_energy
-    assert fitted.laser.divergence == report["parameters"]["divergence"]["value"]
+    # an angle is in degrees in the report, the printout and summary(), one number in each
+    divergence = report["parameters"]["divergence"]
+    assert divergence["unit"] == "deg"
+    assert fitted.laser.divergence == pytest.approx(math.radians(divergence["value"]), rel=1e-15)
+    shown = f"{divergence['value']:.6g} ± {divergence['std']:.3g} deg"
+    assert f"divergence      {shown}" in printed
+    again = lc.load_result(out)
+    assert isinstance(again, lc.CalibrationResult)
+    assert f"divergence  {shown}" in again.summary()
+    assert again.value("divergence") == fitted.laser.divergence  # SI inside
     p_fit, p_model = parameter_values(fitted), parameter_values(model)
     changed = {PARAMETERS.labels()[i] for i in np.flatnonzero(p_fit != p_model)}
     # Cm, the spent-liner coupling that defaults to it, and the divergence; nothing else
@@ -111,3 +123,25 @@ def test_calibrate_bad_input_exits_2(tmp_path, capsys):
     track.write_text("t_s,x_m,z_m\n0.1,0,0\n")
     assert main(["calibrate", *argv, "--fit", "cm"]) == 2
     assert "line 1, column y: missing" in capsys.readouterr().err
+
+
+def test_an_angle_goes_in_and_comes_out_in_degrees(tmp_path, capsys):
+    """--initial launch_tilt_x_deg=0.5: the fit starts at 0.5 degrees (stopped there by a
+    1 us time limit), and the report and the printout give it back as 0.5 deg: one unit
+    for an angle in and out, SI inside."""
+    track = tmp_path / "track.csv"
+    write_track(track)
+    out = tmp_path / "fit"
+    argv = [str(MODEL_FILE), "--track", str(track), "--fit", "tilt", "--out", str(out)]
+    start = ["--initial", "launch_tilt_x_deg=0.5", "--initial", "launch_tilt_y_rad=0.01"]
+    assert main(["calibrate", *argv, *start, "--substeps", "8", "--time-limit", "1e-6"]) == 1
+    printed = capsys.readouterr().out
+    report = json.loads((out / "fit_report.json").read_text())["parameters"]
+    tilt_x, tilt_y = report["launch_tilt_x"], report["launch_tilt_y"]
+    assert tilt_x["unit"] == tilt_y["unit"] == "deg"
+    assert tilt_x["initial"] == pytest.approx(0.5, rel=1e-15) == tilt_x["value"]
+    assert tilt_y["initial"] == pytest.approx(math.degrees(0.01), rel=1e-15)
+    assert "  launch_tilt_x   0.5 " in printed and printed.count(" deg") >= 2
+    again = lc.load_result(out)
+    assert isinstance(again, lc.CalibrationResult)
+    assert again.value("launch_tilt_x") == pytest.approx(math.radians(0.5), rel=1e-15)

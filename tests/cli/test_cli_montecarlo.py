@@ -32,7 +32,7 @@ def test_cli_writes_the_table_summary_and_figures(tmp_path, capsys):
     t = read_table(out / "runs.csv")
     assert list(t["run"]) == [0, 1, 2]
     assert set(t["status"]) == {"duration_reached"}
-    assert np.all(t["pulses"] == 24)
+    assert np.all(t["pulses_commanded"] == 24)
     assert np.all(t["fallbacks"] == 2)  # the injected late solves, and no other
     assert np.all(t["iterations_total"] > 0) and np.all(t["rcs_used_kg"] > 0)
     summary = json.loads((out / "summary.json").read_text())

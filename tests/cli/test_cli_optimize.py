@@ -117,17 +117,17 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     col = {name: i for i, name in enumerate(header)}
     nu = problem.inputs.size
     inputs = header[col["coning_deg"] + 1 : col["coning_deg"] + 1 + nu]
-    assert inputs == ["pointing_x_m", "pointing_y_m", "focus_m", "energy_J"]
+    assert inputs == ["pointing_x_m", "pointing_y_m", "focus_m", "energy_j"]
     assert all(cell == "" for cell in rows[-1][col["pointing_x_m"] :])  # no pulse at N
-    values = np.array([[float(v) for v in r[: col["energy_J"] + 1]] for r in rows[:-1]])
+    values = np.array([[float(v) for v in r[: col["energy_j"] + 1]] for r in rows[:-1]])
     last = np.array([float(v) for v in rows[-1][: col["coning_deg"] + 1]])
     t = np.append(values[:, col["t_s"]], last[col["t_s"]])
     assert t == pytest.approx(np.arange(5) / 26.0, rel=1e-11)
 
     # the states written are Φ's rollout of the inputs written, to the NLP's tolerance
-    x_columns = slice(col["x_m"], col["pulses"] + 1)
+    x_columns = slice(col["x_m"], col["engine_load"] + 1)
     X = np.vstack([values[:, x_columns], last[x_columns]])
-    U = values[:, col["pointing_x_m"] : col["energy_J"] + 1]
+    U = values[:, col["pointing_x_m"] : col["energy_j"] + 1]
     assert X[0] == pytest.approx(problem.x0, rel=1e-11, abs=1e-12)
     phi = build_pulse_map(problem.model, pf.options.pulse_map)
     X_sim, _ = rollout(problem, phi, U)
@@ -139,20 +139,20 @@ def test_optimize_writes_a_solution_that_resimulates(problem_file, tmp_path, cap
     assert np.max(steps) <= 0.2 * (1 + 1e-6)  # slew limit, m/s
 
     # offset over the capture radius: |offset| / R_c from the engine columns, within the constraint
-    pulses = np.array([[float(v) for v in r[col["energy_captured_J"] :]] for r in rows[:-1]])
+    pulses = np.array([[float(v) for v in r[col["energy_captured_j"] :]] for r in rows[:-1]])
     eng = {
-        name: pulses[:, col[name] - col["energy_captured_J"]]
-        for name in header[col["energy_captured_J"] :]
+        name: pulses[:, col[name] - col["energy_captured_j"]]
+        for name in header[col["energy_captured_j"] :]
     }
     fraction = np.hypot(eng["offset_x_m"], eng["offset_y_m"]) / CAPTURE_RADIUS
     assert eng["offset_over_capture_radius"] == pytest.approx(fraction, rel=1e-10)
     assert np.max(fraction) <= 0.2 * (1 + 1e-6)
-    assert np.all((eng["energy_captured_J"] > 0) & (eng["energy_captured_J"] <= 420.0))
+    assert np.all((eng["energy_captured_j"] > 0) & (eng["energy_captured_j"] <= 420.0))
 
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "solved" and summary["success"] is True
     assert summary["solver"] == "ipopt" and summary["horizon_pulses"] == 4
-    assert summary["laser_energy_J"] == pytest.approx(4 * 420.0, rel=1e-12)
+    assert summary["laser_energy_j"] == pytest.approx(4 * 420.0, rel=1e-12)
     assert summary["final_altitude_m"] == pytest.approx(X[-1, 2], rel=1e-11)
     assert summary["dynamics_closed"] is True and summary["dynamics_gap"] < 1e-8
     assert summary["max_offset_over_capture_radius"] == pytest.approx(np.max(fraction), rel=1e-10)
@@ -184,8 +184,11 @@ def test_an_unconverged_solve_exits_1_and_still_writes_its_files(problem_file, t
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "max_iter" and summary["success"] is False
     assert summary["solver"] == "sqp_qrqp" and summary["iterations"] == 1
-    _, rows = read_csv(out / "solution.csv")
+    header, rows = read_csv(out / "solution.csv")
     assert len(rows) == 4
+    # one largest tilt: summary.json's is that of solution.csv's nodes, to the digit
+    tilt = [float(r[header.index("tilt_deg")]) for r in rows]
+    assert summary["max_tilt_deg"] == pytest.approx(max(tilt), rel=1e-11)
     for name in FIGURES:
         assert (out / name).exists()
 
@@ -214,7 +217,7 @@ def test_an_infeasible_problem_names_its_constraint_and_no_final_altitude(tmp_pa
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "infeasible" and summary["success"] is False
     assert summary["dynamics_closed"] is False and summary["dynamics_gap"] > 1.0
-    assert "final_altitude_m" in summary and "laser_energy_J" in summary
+    assert "final_altitude_m" in summary and "laser_energy_j" in summary
     assert "terminal_altitude" in summary["message"]
 
 

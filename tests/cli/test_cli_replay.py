@@ -135,7 +135,7 @@ def test_a_plan_that_does_not_fly_prints_a_warning(solved, monkeypatch, capsys):
 def _energy_as_text(text: str) -> str:
     """solution.csv with the energy of pulse 2 (line 4) written as a word."""
     lines = text.splitlines()
-    col = lines[0].split(",").index("energy_J")
+    col = lines[0].split(",").index("energy_j")
     cells = lines[3].split(",")
     cells[col] = "lots"
     lines[3] = ",".join(cells)
@@ -145,8 +145,16 @@ def _energy_as_text(text: str) -> str:
 @pytest.mark.parametrize(
     ("edit", "where"),
     [
-        (lambda text: text.replace("energy_J", "energy_kJ"), "line 1, column energy_J: missing"),
-        (_energy_as_text, "line 4, column energy_J: must be a number, got 'lots'"),
+        (lambda text: text.replace("energy_j", "energy_kJ"), "line 1, column energy_j: missing"),
+        (_energy_as_text, "line 4, column energy_j: must be a number, got 'lots'"),
+        (  # solution.csv of before issue 29: its columns refused with their new names
+            lambda text: text.replace("energy_j", "energy_J"),
+            "line 1, column energy_J: 'energy_J' was renamed 'energy_j' (units spelt as",
+        ),
+        (
+            lambda text: text.replace("engine_load", "pulses"),
+            "line 1, column pulses: 'pulses' was renamed 'engine_load' (the energy delivered",
+        ),
     ],
 )
 def test_a_bad_plan_file_is_exit_2_naming_the_column(solved, tmp_path, capsys, edit, where):

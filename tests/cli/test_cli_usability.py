@@ -146,6 +146,6 @@ def test_one_vocabulary_across_the_files_and_its_page():
     page = (REPO_ROOT / "docs" / "outputs.md").read_text()
     named = {c for c in every if f"`{c}`" in page}
     # ranges written once: w1..w3, impulse and angular impulse b1..b3, RCS thrusters
-    ranged = {"w2_radps", "impulse_b2_Ns", "angular_impulse_b2_Nms", "angular_impulse_b3_Nms"}
-    ranged |= {f"rcs_thrust_{i}_N" for i in (2, 3, 4)}
+    ranged = {"w2_rad_per_s", "impulse_b2_ns", "angular_impulse_b2_nms", "angular_impulse_b3_nms"}
+    ranged |= {f"rcs_thrust_{i}_n" for i in (2, 3, 4)}
     assert every - named <= ranged, sorted(every - named - ranged)

@@ -68,7 +68,7 @@ def test_the_fitted_file_keeps_the_comments_and_marks_the_fitted_values(source, 
     fitted_lines = [x for x in text if "# fitted:" in x]
     assert len(fitted_lines) == 3  # cm, blast angle, wind speed; the divergence: the laser's
     assert (
-        "blast_angle_rad = 0.45  # fitted: blast_angle = 0.45 ± 0.01 rad (calibrate, t.csv); "
+        "blast_angle_rad = 0.45  # fitted: blast_angle = 25.7831 ± 0.573 deg (calibrate, t.csv); "
         "was blast_angle_deg = 28.6"
     ) in text
     assert (
@@ -88,7 +88,8 @@ def test_the_fitted_file_keeps_the_comments_and_marks_the_fitted_values(source, 
     assert data["site"] == "../models/white_sands.toml" and data["laser"] == "plvts-fitted.toml"
 
     laser = (out / "plvts-fitted.toml").read_text()
-    assert "divergence_rad = 0.0012  # fitted: divergence = 0.0012 ± 0.0001 rad" in laser
+    # the key in SI (it reloads to the very float), the comment in degrees as calibrate prints
+    assert "divergence_rad = 0.0012  # fitted: divergence = 0.0687549 ± 0.00573 deg" in laser
     assert 'size_model = "linear"         # guess: a(z) = side + divergence z' in laser
 
 

@@ -114,7 +114,7 @@ def test_mpc_removes_5_degrees_of_coning_in_25_pulses_and_beats_lqr(prediction, 
     }
     for run in runs.values():
         assert run.flight.status is SimulationStatus.DURATION_REACHED
-        assert run.pulses == 26
+        assert run.pulses_commanded == 26
         assert math.degrees(run.coning[0]) == pytest.approx(5.0, rel=1e-9)
     m, lqr, none = runs["mpc"], runs["lqr"], runs["none"]
     settled = m.first_pulse_below(HALF_DEGREE)
@@ -144,7 +144,7 @@ def test_mpc_keeps_it_on_a_dispersed_noisy_plant_that_drops_pulses(prediction, p
     assert not np.array_equal(run.p_plant, parameter_values(MODEL))
     settled = run.first_pulse_below(HALF_DEGREE)
     assert settled is not None and settled <= 25
-    assert run.log.count(ControllerStatus.SOLVED) == run.pulses
+    assert run.log.count(ControllerStatus.SOLVED) == run.pulses_commanded
 
 
 @pytest.mark.slow
@@ -210,7 +210,7 @@ def test_injected_solver_failures_are_counted_answered_by_the_shifted_plan_and_s
     )
     assert [k for k, s in enumerate(run.log.status) if s.fallback] == list(faults)
     assert run.log.count(kind) == len(faults)
-    assert run.log.count(ControllerStatus.SOLVED) == run.pulses - len(faults)
+    assert run.log.count(ControllerStatus.SOLVED) == run.pulses_commanded - len(faults)
     for k, age in ((2, 1), (3, 2), (4, 3), (9, 1)):
         plan = controller.plans[k]  # the plan held when pulse k came
         assert plan is not None
@@ -257,7 +257,7 @@ def test_the_deterministic_mode_ignores_a_slow_solve(prediction, plant):
     slow = MpcController(MODEL, NO_CLOCK, prediction=prediction)
     _SlowAt(slow, 3)
     stalled = closed_loop(MODEL, slow, 0.3, x0=x0, pulse_map=plant)
-    assert calm.pulses == stalled.pulses == 8
+    assert calm.pulses_commanded == stalled.pulses_commanded == 8
     assert stalled.log.solve_time[3] > 0.05
     np.testing.assert_array_equal(calm.flight.x, stalled.flight.x)
     np.testing.assert_array_equal(calm.commanded, stalled.commanded)

@@ -189,7 +189,7 @@ def test_linearisation_takes_the_input_layout_of_the_pulse_map(jac):
     assert point.inputs == jac.pulse_map.inputs and point.u.size == 16
     sys = linearize(MODEL, point, inputs=("rcs_thrust", "rcs_cos", "rcs_sin"), pulse_map=jac)
     names = list(sys.input_labels)
-    assert names[4:6] == ["rcs_cos[0]", "rcs_cos[1]"]
+    assert names[4:6] == ["rcs_cos[1]", "rcs_cos[2]"]  # thrusters numbered from 1
     w = [list(sys.state_labels).index(f"w_B[{b}]") for b in ("b2", "b3")]
     B = np.asarray(sys.B)[w]
     assert np.max(np.abs(B[:, 4:])) > 10 * np.max(np.abs(B[:, :4]))
@@ -287,9 +287,9 @@ def test_prediction_error_is_second_order_and_measured_at_5_degrees(mpc):
     du = np.zeros(len(names))
     du[names.index("pointing_L[east]")] = 0.005
     for i in range(4):
-        du[names.index(f"rcs_thrust[{i}]")] = 0.02
-        du[names.index(f"rcs_cos[{i}]")] = 0.02 * math.cos(i)
-        du[names.index(f"rcs_sin[{i}]")] = 0.02 * math.sin(i)
+        du[names.index(f"rcs_thrust[{i + 1}]")] = 0.02
+        du[names.index(f"rcs_cos[{i + 1}]")] = 0.02 * math.cos(i)
+        du[names.index(f"rcs_sin[{i + 1}]")] = 0.02 * math.sin(i)
     x = coned(MODEL, 1.0, **climb)
     meas = mpc.frame.measure(x)
     A, B = pred.horizon(meas.spin, meas.omega, meas.altitude, meas.climb_rate, 1)

@@ -73,7 +73,7 @@ def test_a_solves_table_is_its_solution_csv(model, tmp_path):
     folder = result.save(tmp_path / "solve", problem=problem, figures=False)
     frame = result.to_dataframe(problem=problem)
     _same_table(frame, folder / "solution.csv")
-    assert frame["energy_J"].isna().tolist() == [False, False, False, True]  # no last pulse
+    assert frame["energy_j"].isna().tolist() == [False, False, False, True]  # no last pulse
     with pytest.raises(LightcraftError, match="problem"):
         result.to_dataframe()
 

@@ -114,7 +114,7 @@ def test_a_thrust_beyond_a_thruster_is_refused(tmp_path: Path, key: str, value: 
     )
     assert err.field == f"control[0].{key}"
     assert err.reason == (
-        f"{value * THRUST_N:g} N is beyond thruster 0's force "
+        f"{value * THRUST_N:g} N is beyond thruster 1's force "
         f"(craft.rcs.thrusters[0].max_thrust): 0 to {THRUST_N:g} N"
     )
 

@@ -290,6 +290,13 @@ BAD = [
     ),
     ("max_tilt_deg = 10", "max_tilt_deg = 200", "constraint[1].max_tilt_deg", "(converted to SI)"),
     ('state = "v_L"', 'state = "v"', "constraint[3].state", "no such state"),
+    # the state that held the energy over the reference pulse energy, not a count (issue 29)
+    (
+        'state = "v_L"',
+        'state = "pulses"',
+        "constraint[3].state",
+        "state 'pulses' was renamed 'engine_load': write state = \"engine_load\"",
+    ),
     ("lower_cm = -5.0", "lower_cm = 6.0", "control[0].lower_cm", "exceeds upper"),
     ("lower_kj = 0.42", "lower_kj = 0.5", "control[1].lower_kj", "exceeds upper"),
     (

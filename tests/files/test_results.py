@@ -112,13 +112,13 @@ def test_summary_json_figures_agree_with_the_trajectory_and_the_pulses(flight, s
     assert s["landing_speed_mps"] is None  # it did not land
     rows = np.loadtxt(saved / "pulses.csv", delimiter=",", skiprows=1)
     col = {c: i for i, c in enumerate(PULSE_COLUMNS)}
-    captured = rows[:, col["energy_captured_J"]]
-    assert s["energy_captured_J"] == pytest.approx(np.sum(captured), rel=1e-11)
-    assert s["energy_captured_J"] == np.sum(flight.pulses.energy_captured)
+    captured = rows[:, col["energy_captured_j"]]
+    assert s["energy_captured_j"] == pytest.approx(np.sum(captured), rel=1e-11)
+    assert s["energy_captured_j"] == np.sum(flight.pulses.energy_captured)
     # the capture margin from scratch: beam size at the craft at each fired pulse
     p = parameter_values(model)
     radius = model.craft.engine.capture_radius
-    fired = rows[:, col["energy_J"]] > 0
+    fired = rows[:, col["energy_j"]] > 0
     assert np.sum(~fired) == 1 and s["pulses_fired"] == len(rows) - 1
     gaps = []
     for row in rows[fired]:

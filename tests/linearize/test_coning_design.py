@@ -148,7 +148,7 @@ def test_a_design_on_held_thrust_barely_moves_the_coning(held):
     lay = point.input_layout(MODEL)
     bare = lqr_policy(MODEL, point, gains, saturate=False)(0, 0.0, coned())
     assert np.min(lay.get("rcs_thrust", bare)) < -0.3
-    with pytest.warns(SaturationWarning, match=r"rcs_thrust\[0\] -0\.375\d* -> 0"):
+    with pytest.warns(SaturationWarning, match=r"rcs_thrust\[1\] -0\.375\d* -> 0"):
         run = simulate(MODEL, 1.0, x0=coned(), inputs=lqr_policy(MODEL, point, gains),
                        pulse_map=held.pulse_map)  # fmt: skip
     assert run.status is SimulationStatus.DURATION_REACHED

@@ -489,7 +489,7 @@ def test_ocp_measures_values_and_jacobians():
     model = table1_flight5()
     p = parameter_values(model)
     x = initial_state(model, r_L=(0.3, -0.2, 5.0), tilt=0.2, tilt_azimuth=1.0)
-    x[STATE.index("pulses")] = 2.5
+    x[STATE.index("engine_load")] = 2.5
     node = build_node_measures()
     altitude, drift, cos_tilt, fired = (np.asarray(v).ravel() for v in node(x, p))
     assert altitude[0] == 5.0

@@ -83,7 +83,7 @@ def test_inputs_figure_draws_altitude_and_the_inputs_that_vary(looped):
     np.testing.assert_array_equal(ax_z.lines[0].get_ydata(), z)
     assert ax_z.get_ylabel().endswith("[m]")
     east = ax_pointing.lines[0]
-    k = looped.pulses
+    k = looped.pulses_commanded
     np.testing.assert_allclose(east.get_ydata()[:k], 0.1 * np.arange(k))  # cm
     np.testing.assert_allclose(east.get_xdata()[:k], looped.pulse_t)
     assert ax_pointing.get_ylabel() == "pointing_L [cm]"
@@ -104,7 +104,7 @@ def test_fallback_pulses_are_ticked_on_every_axes(looped):
 @pytest.fixture(scope="module")
 def compared(looped) -> list[ClosedLoopResult]:
     """``looped`` as three controllers: coning falling (mpc, lqr) and rising (none) [rad]."""
-    k = looped.pulses + 1
+    k = looped.pulses_commanded + 1
     coning = {
         "mpc": np.radians(np.linspace(5.0, 0.2, k)),
         "lqr": np.radians(np.linspace(5.0, 0.4, k)),
@@ -151,7 +151,7 @@ def test_compare_labels_its_reference_lines_in_a_legend_off_the_curves(compared)
         for line in ax.get_lines():
             assert not np.any(covered(box, display_points(line))), line.get_label()
     none_line = next(ln for ln in fig.axes[0].get_lines() if ln.get_label() == "none")
-    k = compared[0].pulses + 1
+    k = compared[0].pulses_commanded + 1
     np.testing.assert_allclose(none_line.get_ydata(), np.linspace(5.0, 9.0, k))
     assert none_line.get_linestyle() == "--"  # an mpc that flies the open loop shows beneath
 
@@ -181,3 +181,29 @@ def test_closed_loop_png_labels_its_lines_and_fits_the_figure(looped):
     assert not any(box.overlaps(ax.bbox) for ax in fig.axes)
     assert outside_figure(fig) == {}
     assert outside_axes(fig) == {}
+
+
+def test_thrusters_are_numbered_from_one_in_every_place(looped):
+    """One numbering for people: the layout's entry names (a StateSpace's inputs), the
+    columns of solution.csv and of a plan, and the closed-loop and optimize legends all
+    say thruster 1 to 4 (the optimize plot always did); Python's indices stay 0-based."""
+    from lightcraft_opt.files.ocp_outputs import input_columns
+    from lightcraft_opt.layout import RcsProfile
+    from lightcraft_opt.linear.signal_names import entry_names
+    from lightcraft_opt.plots.closed_loop import plot_commanded
+
+    lay = map_input_layout(4, False, RcsProfile.PHASE_LOCKED)
+    numbers = ["1", "2", "3", "4"]
+    for slot in ("rcs_thrust", "rcs_cos", "rcs_sin"):
+        assert [n for n in entry_names(lay) if n.startswith(slot)] == [
+            f"{slot}[{i}]" for i in numbers
+        ]
+        assert [c for c in input_columns(lay) if c.startswith(slot)] == [
+            f"{slot}_{i}_n" for i in numbers
+        ]
+    k = looped.pulses_commanded
+    commanded = np.zeros((k, lay.size))
+    commanded[:, lay.index("rcs_cos")] = [0.01, 0.02, 0.03, 0.04]  # thruster i at i / 100
+    lines = plot_commanded(replace(looped, commanded=commanded), "rcs_cos", inputs=lay)
+    assert [ln.get_label() for ln in lines] == [f"thruster {i}" for i in numbers]
+    assert [ln.get_ydata()[0] for ln in lines] == pytest.approx([0.01, 0.02, 0.03, 0.04])

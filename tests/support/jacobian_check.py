@@ -73,6 +73,6 @@ def state_step_scale(craft_mass: float) -> np.ndarray:
         "spin": 1.0,
         "liner_mass": craft_mass,
         "rcs_mass": craft_mass,
-        "pulses": 1.0,
+        "engine_load": 1.0,
     }
     return STATE.pack({k: np.full(STATE.slot(k).size, v) for k, v in natural.items()})

@@ -242,7 +242,7 @@ def test_air_mode_health_steps_down_near_pulse_100() -> None:
     assert np.all(np.diff(gs[:200]) < 0.0) and np.all(np.diff(gs) <= 0.0)
     first = _run(F5, initial_state(F5))["impulse_B"][0]
     x = initial_state(F5)
-    x[STATE.index("pulses")] = 120.0
+    x[STATE.index("engine_load")] = 120.0
     out = _run(F5, x)
     assert out["health"][0] == pytest.approx(float(g(120.0)), rel=1e-14)
     assert out["impulse_B"][0] == pytest.approx(first * float(g(120.0)), rel=1e-12)
@@ -256,7 +256,7 @@ def test_delrin_ablates_mu_ecap_until_the_liner_is_empty() -> None:
     p = parameter_values(F16)
     mu = F16.craft.engine.ablation
     x = initial_state(F16)
-    x[STATE.index("pulses")] = 300.0
+    x[STATE.index("engine_load")] = 300.0
     full = _run(F16, x)
     assert full["liner_loss"][0] == pytest.approx(mu * full["energy_captured"][0], rel=1e-14)
     assert full["health"][0] == 1.0
@@ -308,7 +308,7 @@ def test_kernel_peaks_at_kernel_offset() -> None:
 # (a craft on the beam axis, the first pulse) would drown their derivatives in rounding.
 X_SCALE = np.full(STATE.size, 1e-4)
 X_SCALE[STATE.index("r_L")] = 1e-2
-X_SCALE[STATE.slot("pulses").start] = 100.0
+X_SCALE[STATE.slot("engine_load").start] = 100.0
 SCALE: list[float | np.ndarray] = [X_SCALE, 1e-2, 1e-4]
 
 
@@ -321,7 +321,7 @@ def _general_state(model: Model) -> np.ndarray:
         tilt_azimuth=1.1,
         w_B=(0.3, -1.0, 2.0),
     )
-    x[STATE.index("pulses")] = 90.0
+    x[STATE.index("engine_load")] = 90.0
     return x
 
 

@@ -117,10 +117,10 @@ def test_cli_simulate_writes_trajectory_pulses_summary_and_plot(tmp_path):
         "qx",
         "qy",
         "qz",
-        "w1_radps",
-        "w2_radps",
-        "w3_radps",
-        "spin_radps",
+        "w1_rad_per_s",
+        "w2_rad_per_s",
+        "w3_rad_per_s",
+        "spin_rad_per_s",
         "liner_mass_kg",
     ]
     rows = np.loadtxt(out / "trajectory.csv", delimiter=",", skiprows=1)

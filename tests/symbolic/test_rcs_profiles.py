@@ -162,8 +162,8 @@ def test_layouts_per_profile_and_the_map_exposes_its_own(rcs_model):
     assert hold == map_input_layout(N_THR, False, RcsProfile.HOLD, 1)
     sub = map_input_layout(N_THR, False, RcsProfile.SUBINTERVALS, 3)
     assert sub.slot("rcs_thrust").size == 12
-    # sub-interval-major: thruster i on sub-interval j at j n + i
-    assert sub.labels()[4 + 2 * N_THR + 1] == "rcs_thrust[sub2.thr1] [N]"
+    # sub-interval-major: thruster i on sub-interval j at (j - 1) n + i - 1, both from 1
+    assert sub.labels()[4 + 2 * N_THR + 1] == "rcs_thrust[sub3.thr2] [N]"
     assert rcs_levels(sub, N_THR, 2) == slice(4 + 8, 4 + 12)
     locked = map_input_layout(N_THR, True, RcsProfile.PHASE_LOCKED)
     assert locked.names[3:] == ("rcs_thrust", "rcs_cos", "rcs_sin", "motor_torque")
@@ -455,10 +455,10 @@ def test_bad_rcs_options_name_the_field(rcs_model):
     with pytest.raises(ParameterError, match=r"^constraints\[0\]: RcsEnvelope needs a craft"):
         OcpProblem(no_rcs, 2, (ControlEffort("energy"),), (RcsEnvelope(),))
     with pytest.raises(
-        ParameterError, match=r"^controls\[0\].upper: 0.3 N is beyond thruster 0's force"
+        ParameterError, match=r"^controls\[0\].upper: 0.3 N is beyond thruster 1's force"
     ):  # beyond the thrusters: refused whether or not the envelope is asked for
         problem(constraints=(RcsEnvelope(),), controls=(ControlBound("rcs_thrust", 0, 0.3),))
-    with pytest.raises(ParameterError, match=r"^constraints\[0\]: thruster 1's held inputs"):
+    with pytest.raises(ParameterError, match=r"^constraints\[0\]: thruster 2's held inputs"):
         problem(
             constraints=(RcsEnvelope(),),
             rcs_profile=RcsProfile.PHASE_LOCKED,

@@ -34,7 +34,7 @@ from lightcraft_opt.symbolic.terms.rotation import conjugate, quat_multiply
 
 __all__ = ["ERROR_STATE", "build_error_state"]  # ERROR_STATE re-exported from layout
 
-_ADDITIVE = ("r_L", "v_L", "w_B", "spin", "liner_mass", "rcs_mass", "pulses")
+_ADDITIVE = ("r_L", "v_L", "w_B", "spin", "liner_mass", "rcs_mass", "engine_load")
 
 
 def _small_rotation(theta_B: ca.SX) -> ca.SX:

@@ -59,7 +59,8 @@ def pulse_jump(x: ca.SX, pulse: ca.SX, p: ca.SX, model: Model) -> tuple[ca.SX, d
         mp.I,
         massless_carrier=not model.craft.has_carrier,
     )
-    count = PULSE_INPUT.get("energy", pulse) / PARAMETERS.get("reference_pulse_energy", p)
+    # the engine load counts energy in reference pulses (a dropped pulse adds 0)
+    load = PULSE_INPUT.get("energy", pulse) / PARAMETERS.get("reference_pulse_energy", p)
     jump = assemble(
         STATE,
         {
@@ -67,7 +68,7 @@ def pulse_jump(x: ca.SX, pulse: ca.SX, p: ca.SX, model: Model) -> tuple[ca.SX, d
             "w_B": dw,
             "spin": dspin,
             "liner_mass": -eng["liner_loss"],
-            "pulses": count,
+            "engine_load": load,
         },
     )
     return x + jump, eng

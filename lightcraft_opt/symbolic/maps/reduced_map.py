@@ -151,7 +151,7 @@ def _lift(z: ca.SX, p: ca.SX) -> ca.SX:
             "q_LB": q,
             "liner_mass": REDUCED_STATE.get("liner_mass", z),
             "rcs_mass": REDUCED_STATE.get("rcs_mass", z),
-            "pulses": REDUCED_STATE.get("pulses", z),
+            "engine_load": REDUCED_STATE.get("engine_load", z),
         },
     )
     mp = mass_properties(base, p)  # depends on the consumables only
@@ -183,7 +183,7 @@ def _project(x: ca.SX, p: ca.SX) -> ca.SX:
             "coning": c,
             "liner_mass": STATE.get("liner_mass", x),
             "rcs_mass": STATE.get("rcs_mass", x),
-            "pulses": STATE.get("pulses", x),
+            "engine_load": STATE.get("engine_load", x),
         },
     )
 

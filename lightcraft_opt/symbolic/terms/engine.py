@@ -39,8 +39,9 @@ Axial coupling per captured joule kappa:
 - air: ``kappa = C g(n)``, with the engine health (overheating near pulse n_f,
   docs/physics.md#health)
   ``g(n) = 1 - (1 - g_inf) [s((n - n_f)/w_n) - s(-n_f/w_n)] / (1 - s(-n_f/w_n))``,
-  n the ``pulses`` state, s the logistic: the step of docs/physics.md#health, shifted and scaled
-  so that g(0) = 1 exactly (the first pulse gives I0) and g(inf) = g_inf (``health_floor``).
+  n the ``engine_load`` state (energy delivered over E_ref), s the logistic: the step of
+  docs/physics.md#health, shifted and scaled so that g(0) = 1 exactly (the first pulse
+  gives I0) and g(inf) = g_inf (``health_floor``).
 - Delrin: ``kappa = C`` (health 1) while ``liner_mass > 0``, else ``spent_coupling`` g(n)
   (air mode on the bare shroud); the switch is the only if_else. Each pulse ablates
   ``liner_loss = min(ablation E_cap, liner_mass)``: never more than is left.
@@ -222,7 +223,7 @@ def engine_impulse(x: Expr, pulse: Expr, p: Expr, model: Model) -> dict[str, Exp
     E_cap = ca.sum2(E_k)
     coupling = PARAMETERS.get("impulse_per_pulse", p) / _reference_energy(pulse, p, model)
 
-    g_air = health(STATE.get("pulses", x), p)
+    g_air = health(STATE.get("engine_load", x), p)
     if model.craft.propellant is Propellant.AIR:
         kappa, g, liner_loss = coupling * g_air, g_air, 0 * E_cap
     else:
