@@ -15,15 +15,16 @@ restoration phase or a line search neither trigger nor hide a stall, and a viola
 first rises (the solver leaves the rollout, whose dynamics gaps are closed) and then falls
 is not stopped while it falls. The start, v_0, is not the solver's iterate and is left out
 of the comparison: a flown start is near-feasible by design, and IPOPT's first step from it
-may multiply its violation (problems/beam_tracking_apogee.toml from the director's calm
-flight: 2.0, then 4.8, falling to 2.6 by iteration 59), which compared with v_0 would look
-like no progress at all. A solve whose violation ever reached the tolerance never
-stalls, nor one whose window minimum is under :data:`FLOOR` (1 in scaled units: a metre of
-altitude, a metre or a metre per second of dynamics gap): from a start that flies (the
-director's flight, ocp/start.py) IPOPT walks through iterates violated by 0.01-0.3 for
-dozens of iterations while its objective falls (problems/beam_tracking_focus.toml: 1.08 ->
-0.61 over iterations 30-68), which is progress, not infeasibility; a problem that cannot
-be met at all misses by far more (24.8 and 17.7 below).
+may multiply its violation (beam_tracking_focus.toml over 260 pulses from the director's
+calm flight: 2.0, then 4.8, falling to 2.6 by iteration 59; bench/README.md), which compared
+with v_0 would look like no progress at all. A solve whose violation ever reached the
+tolerance never stalls, nor one whose window minimum is under :data:`FLOOR` (1 in scaled
+units: a metre of altitude, a metre or a metre per second of dynamics gap): from a start
+that flies (the director's flight, ocp/start.py) IPOPT walks through iterates violated by
+0.01-0.3 for dozens of iterations while its objective falls
+(problems/beam_tracking_focus.toml: 1.08 -> 0.61 over iterations 30-68), which is progress,
+not infeasibility; a problem that cannot be met at all misses by far more (24.8 and 17.7
+below).
 
 Why W = 30 and 10 % (measured 2026-12-03): problem (b) (problems/least_energy_flight16.toml)
 with the pulse energy capped at 20 J, which cannot leave the pad, let alone reach 30 m:

@@ -10,9 +10,9 @@ gaps, so the solver begins on the dynamics' manifold and only has to improve it:
   holds at its value, every free one clipped to its bounds and slew limits; the RCS off
   (held at the problem's values). Under the linear beam model the director loses Flight 5
   above 30 m (docs/director.md), so it does not apply there. Where the director loses
-  the craft in the problem's wind (problems/beam_tracking_apogee.toml: the 3 m/s crosswind
-  over 10 s), its flight in calm air, whose gaps in the wind are again what the wind does
-  over one pulse.
+  the craft in the problem's wind (beam_tracking_focus.toml over 260 pulses, 10 s: in its
+  3 m/s crosswind the director loses the craft at 6.3 s, 66 m), its flight in calm air,
+  whose gaps in the wind are again what the wind does over one pulse.
 - **the nominal rollout** otherwise (:func:`rollout`): the beam under the craft, the
   flight's pulse energy, rolled forward through Φ in the problem's wind.
 - **the nominal rollout in calm air**, where the problem's wind blows the nominal rollout
