@@ -26,7 +26,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Sequence
-from typing import cast
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -220,11 +220,10 @@ class CompiledOcp:
             "ocp_solve", [*syms.values(), w0], [U, X, sol["f"]], [*names, "w0"], ["U", "X", "cost"]
         )
         self._bounds = (lbx, ubx)
-        self._warm_solver: ca.Function | None = None
+        self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
-        self._resolve_solver: ca.Function | None = None
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
 
@@ -462,31 +461,27 @@ class CompiledOcp:
     def _resolver(self) -> ca.Function:
         """The solver for re-solves from a previous result (primal and dual): IPOPT started
         at the result with a barrier parameter of 1e-9 and the bounds and multipliers
-        pushed by 1e-9 (:data:`RESOLVE_IPOPT`; built once, on first use); the others as
-        they are."""
-        if self.options.solver is not OcpSolver.IPOPT:
-            return self.solver
-        if self._resolve_solver is None:
-            setup = self._setup
-            ipopt = {**setup.options["ipopt"], **RESOLVE_IPOPT}
-            self._resolve_solver = ca.nlpsol(
-                "ocp_nlp_resolve", setup.plugin, setup.nlp, {**setup.options, "ipopt": ipopt}
-            )
-        return self._resolve_solver
+        pushed by 1e-9 (:data:`RESOLVE_IPOPT`)."""
+        return self._ipopt_with("ocp_nlp_resolve", RESOLVE_IPOPT)
 
     def _warm_started(self) -> ca.Function:
-        """The solver for warm starts: IPOPT told to start from the given primal and dual
-        point with a small barrier parameter (built once, on first use; it shares the
-        derivatives of the cold solver, so the build is quick); the others as they are."""
+        """The solver for starts that flew: IPOPT told to start from the given point with a
+        small barrier parameter (:data:`WARM_IPOPT`)."""
+        return self._ipopt_with("ocp_nlp_warm", WARM_IPOPT)
+
+    def _ipopt_with(self, name: str, settings: dict[str, Any]) -> ca.Function:
+        """IPOPT on this NLP with ``settings`` over the cold solver's IPOPT options, built
+        once per name on first use (it shares the cold solver's derivatives, so the build
+        is quick); the other solvers as they are."""
         if self.options.solver is not OcpSolver.IPOPT:
             return self.solver
-        if self._warm_solver is None:
+        if name not in self._variants:
             setup = self._setup
-            ipopt = {**setup.options["ipopt"], **WARM_IPOPT}
-            self._warm_solver = ca.nlpsol(
-                "ocp_nlp_warm", setup.plugin, setup.nlp, {**setup.options, "ipopt": ipopt}
+            ipopt = {**setup.options["ipopt"], **settings}
+            self._variants[name] = ca.nlpsol(
+                name, setup.plugin, setup.nlp, {**setup.options, "ipopt": ipopt}
             )
-        return self._warm_solver
+        return self._variants[name]
 
     def _start(
         self,
