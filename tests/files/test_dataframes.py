@@ -14,9 +14,7 @@ import sys
 import numpy as np
 import pytest
 from files.test_results import _ocp
-from support.paths import REPO_ROOT
 
-import lightcraft_opt as lc
 from lightcraft_opt.campaign.run_table import RunTable, read_table
 from lightcraft_opt.campaign.runner import CampaignResult
 from lightcraft_opt.control.result import (
@@ -28,20 +26,6 @@ from lightcraft_opt.control.result import (
 from lightcraft_opt.errors import LightcraftError
 
 pd = pytest.importorskip("pandas")
-
-MODEL = REPO_ROOT / "models" / "flight5.toml"
-
-
-@pytest.fixture(scope="module")
-def model() -> lc.Model:
-    return lc.load_model(MODEL)
-
-
-@pytest.fixture(scope="module")
-def flight(model: lc.Model) -> lc.SimulationResult:
-    """0.3 s of Flight 5, a pulse in five dropped (a NaN beam gap in pulses.csv)."""
-    return lc.simulate(model, 0.3, compiled=False, dropout_rate=0.2, seed=1)
-
 
 def _same_table(frame, path, rtol: float = 1e-11) -> None:
     """``frame`` is ``pd.read_csv(path)`` column for column: names and order, numbers to

@@ -45,19 +45,6 @@ from lightcraft_opt.simulation.coast_reference import simulate_coast
 from lightcraft_opt.simulation.flight_log import beam_gap
 from lightcraft_opt.symbolic.terms.beam import beam_side
 
-MODEL = REPO_ROOT / "models" / "flight5.toml"
-
-
-@pytest.fixture(scope="module")
-def model() -> lc.Model:
-    return lc.load_model(MODEL)
-
-
-@pytest.fixture(scope="module")
-def flight(model: lc.Model) -> lc.SimulationResult:
-    """0.3 s of Flight 5, a pulse in five dropped (seed 1 drops pulse 1)."""
-    return lc.simulate(model, 0.3, compiled=False, dropout_rate=0.2, seed=1)
-
 
 @pytest.fixture(scope="module")
 def saved(flight: lc.SimulationResult, model: lc.Model, tmp_path_factory) -> Path:
