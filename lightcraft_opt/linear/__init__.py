@@ -14,7 +14,9 @@ exact casadi AD). The modules, in the order they build on each other:
   RCS (:func:`coning_linear_model`), the nutation controllers' design model;
 - :mod:`.riccati`: the discrete LQR gain on matrices (:func:`dlqr_gain`, scipy);
 - :mod:`.focus`: the focus of a :class:`~lightcraft_opt.model.FocusSchedule` at a
-  height (:func:`scheduled_focus`) and the beam's side it makes there.
+  height (:func:`scheduled_focus`) and the beam's side it makes there;
+- :mod:`.observability`: the N-pulse observability Gramian of Φ along a flight from
+  named sensors (:func:`~lightcraft_opt.linear.observability.observability`).
 
 numpy, scipy and casadi only: the nutation MPC, the LQR controller and the director
 (:mod:`lightcraft_opt.control`) build on these, and python-control, which takes seconds to
