@@ -337,10 +337,9 @@ class CompiledOcp:
         first = None
         if convex is not None:  # the convexified Hessian first, then the exact one, warm
             first = call_solver(convex, args, self._deadline, until)
-            done = int(first.stats.get("iter_count", 0)) if first.stats else 0
-            if first.solution is not None and np.all(np.isfinite(first.solution[0])):
-                w1, l1, m1 = first.solution
-                args = {**args, "x0": w1, "lam_x0": l1, "lam_g0": m1}
+            done = _iterations(first)
+            if _finite(first):
+                args = _continued(args, first)
                 solver = self._warm_started()
             phase = f" (after {done} iterations with the convexified Hessian)"
         if first is not None and (first.stall is not None or first.deadline_reached):
@@ -351,14 +350,12 @@ class CompiledOcp:
             call = call_solver(solver, args, self._deadline, until, first_iteration=done)
             if kept and not _succeeded(call) and call.stall is None and not call.deadline_reached:
                 # the kept Hessian did not get there: on from where it stopped, exact
-                done = int(call.stats.get("iter_count", 0)) if call.stats else 0
+                done = _iterations(call)
                 self._keep_blocks(False)
-                if call.solution is not None and np.all(np.isfinite(call.solution[0])):
-                    w1, l1, m1 = call.solution
-                    args = {**args, "x0": w1, "lam_x0": l1, "lam_g0": m1}
+                if _finite(call):
+                    args = _continued(args, call)
                 call = call_solver(solver, args, self._deadline, until, first_iteration=done)
                 phase = f" (after {done} iterations with the kept Hessian)"
-                convex = None
         self.last_solver = solver
         solve_time = time.perf_counter() - start
         w, lam_x, lam_g = call.solution or (w0, lam_x0, lam_g0)
@@ -367,7 +364,7 @@ class CompiledOcp:
         status, message, iterations = solver_status(call, self.options, violation)
         if not finite:
             status, message, w = OcpStatus.FAILED, message + " (non-finite iterate)", w0
-        if convex is not None or phase:
+        if phase:  # a first phase ran: its iterations count too
             iterations += done
             message += phase
         if cold is not None and cold.flown:
@@ -623,3 +620,20 @@ def solve(
 def _succeeded(call: SolverCall) -> bool:
     """Whether the solver reported success for ``call``."""
     return bool(call.stats and call.stats.get("success"))
+
+
+def _iterations(call: SolverCall) -> int:
+    """The iterations ``call`` reported (0 when it left no statistics)."""
+    return int(call.stats.get("iter_count", 0)) if call.stats else 0
+
+
+def _finite(call: SolverCall) -> bool:
+    """Whether ``call`` returned a finite primal point to go on from."""
+    return call.solution is not None and bool(np.all(np.isfinite(call.solution[0])))
+
+
+def _continued(args: dict[str, Any], call: SolverCall) -> dict[str, Any]:
+    """The solver arguments ``args`` started at ``call``'s primal and dual point."""
+    assert call.solution is not None
+    w, lam_x, lam_g = call.solution
+    return {**args, "x0": w, "lam_x0": lam_x, "lam_g0": lam_g}
