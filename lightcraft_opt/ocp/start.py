@@ -138,8 +138,8 @@ def director_start(
     """
     start = time.perf_counter()
     X, U, caught = _directed(problem, phi, x0, p, t0)
-    calm = wind_scaled(p, 0.0)
-    if np.array_equal(calm, p) or float(np.min(caught, initial=1.0)) >= LEFT_BEAM_CAUGHT:
+    calm = _calm_instead(p, caught)
+    if calm is None:
         return Start(StartKind.DIRECTOR, X, U, time.perf_counter() - start)
     X, U, _ = _directed(problem, phi, x0, calm, t0)
     return Start(StartKind.DIRECTOR_CALM, X, U, time.perf_counter() - start)
@@ -170,14 +170,10 @@ def _directed(
         if u_last is not None:
             u = np.clip(u, u_last - problem.slew, u_last + problem.slew)
         u = np.clip(u, problem.lower, problem.upper)
-        x_next, engine = (np.asarray(v, dtype=float).ravel() for v in phi.step(x, u, p, t))
-        finite = bool(np.all(np.isfinite(x_next)))
-        x = x_next if finite else x
-        fired = float(u[e][0])
-        share = float(ENGINE.get("energy_captured", engine)) / fired if fired > 0 else 1.0
+        x, share = _stepped(phi, x, u, p, t, float(u[e][0]))
         X.append(x)
         U.append(u)
-        caught.append(share if finite else 0.0)
+        caught.append(share)
         u_last = u
     return np.array(X), np.array(U).reshape(N, lay.size), np.array(caught)
 
@@ -197,8 +193,8 @@ def nominal_start(
     """
     began = time.perf_counter()
     X, U, caught = _rolled(problem, phi, None, x0, p, t0)
-    calm = wind_scaled(p, 0.0)
-    if np.array_equal(calm, p) or float(np.min(caught, initial=1.0)) >= LEFT_BEAM_CAUGHT:
+    calm = _calm_instead(p, caught)
+    if calm is None:
         return Start(StartKind.ROLLOUT, X, U, time.perf_counter() - began)
     X, U, _ = _rolled(problem, phi, None, x0, calm, t0)
     return Start(StartKind.CALM, X, U, time.perf_counter() - began)
@@ -273,16 +269,33 @@ def _rolled(
             u_last = uk
         else:
             uk = u[k]
-        x_next, engine = (
-            np.asarray(v, dtype=float).ravel() for v in phi.step(X[-1], uk, p, t0 + k * phi.period)
-        )
-        finite = bool(np.all(np.isfinite(x_next)))
-        X.append(x_next if finite else X[-1])
+        x, share = _stepped(phi, X[-1], uk, p, t0 + k * phi.period, float(uk[energy][0]))
+        X.append(x)
         U.append(uk)
-        fired = float(uk[energy][0])
-        share = float(ENGINE.get("energy_captured", engine)) / fired if fired > 0 else 1.0
-        caught.append(share if finite else 0.0)
+        caught.append(share)
     return np.array(X), np.array(U).reshape(N, lay.size), np.array(caught)
+
+
+def _stepped(
+    phi: PulseMap, x: np.ndarray, u: np.ndarray, p: np.ndarray, t: float, fired: float
+) -> tuple[np.ndarray, float]:
+    """One pulse of a flown start: Φ's next state (x itself where Φ returned a non-finite
+    state) and the fraction of the ``fired`` energy [J] the optic caught (1 for a pulse
+    fired with no energy; 0 where Φ's state was not finite)."""
+    x_next, engine = (np.asarray(v, dtype=float).ravel() for v in phi.step(x, u, p, t))
+    if not np.all(np.isfinite(x_next)):
+        return x, 0.0
+    return x_next, float(ENGINE.get("energy_captured", engine)) / fired if fired > 0 else 1.0
+
+
+def _calm_instead(p: np.ndarray, caught: np.ndarray) -> np.ndarray | None:
+    """(PARAMETERS.size,) ``p`` in calm air when a flight in ``p``'s wind left the beam (a
+    pulse caught under :data:`LEFT_BEAM_CAUGHT` of its energy) and that wind blows at
+    all; None when the flight keeps its wind."""
+    calm = wind_scaled(p, 0.0)
+    if np.array_equal(calm, p) or float(np.min(caught, initial=1.0)) >= LEFT_BEAM_CAUGHT:
+        return None
+    return calm
 
 
 #: A rollout has left the beam when a pulse's optic catches less than this fraction of the
