@@ -89,6 +89,11 @@ def _points(x: np.ndarray, y: np.ndarray) -> dict[str, Any]:
     return out
 
 
+def _points_by_status(status: np.ndarray, x: np.ndarray, y: np.ndarray) -> dict[str, Any]:
+    """:func:`_points` of the runs of each status apart (``status``, x, y: one per run)."""
+    return {str(name): _points(x[status == name], y[status == name]) for name in np.unique(status)}
+
+
 def campaign_summary(
     table: Mapping[str, np.ndarray], timings: Mapping[str, np.ndarray] | None = None
 ) -> dict[str, Any]:
@@ -117,12 +122,9 @@ def campaign_summary(
         "final_position": _points(col("final_x_m"), col("final_y_m")),
         # each outcome apart: those that stay in the beam and those that leave it are two
         # clouds, not one Gaussian (end_points.png draws these ellipses)
-        "final_position_by_status": {
-            str(name): _points(
-                col("final_x_m")[status[flown] == name], col("final_y_m")[status[flown] == name]
-            )
-            for name in np.unique(status[flown])
-        },
+        "final_position_by_status": _points_by_status(
+            status[flown], col("final_x_m"), col("final_y_m")
+        ),
         "left_beam": {
             "count": left,
             "probability": left / n if n else math.nan,

@@ -35,7 +35,7 @@ from lightcraft_opt.layout import STATE
 from lightcraft_opt.linear.operating_points import (
     OperatingPoint,
     PulseMapJacobian,
-    error_state_chart,
+    error_state_step,
     jacobian_for,
 )
 from lightcraft_opt.linear.signal_names import entry_names, select_entries
@@ -120,16 +120,13 @@ def linear_model(
         )
     if ulay.size != point.u.size:
         raise ParameterError("point.u", f"needs {ulay.size} map inputs, got {point.u.size}")
-    x_next, A, B = jac(point.x, point.u, point.p, point.t)
     wanted: Sequence[str] | None
     if coordinates is Coordinates.ERROR_STATE:
-        _, retract_jac, local_jac = error_state_chart()
-        E = np.asarray(retract_jac(point.x, np.zeros(ERROR_STATE.size)))
-        L = np.asarray(local_jac(x_next, x_next))
-        A, B = L @ A @ E, L @ B
+        _, A, B = error_state_step(jac, point.x, point.u, point.p, point.t)
         layout = ERROR_STATE
         wanted = REDUCED_STATES if states is None else states
     elif coordinates is Coordinates.FULL:
+        _, A, B = jac(point.x, point.u, point.p, point.t)
         layout, wanted = STATE, states
     else:
         allowed = [c.value for c in Coordinates]

@@ -25,10 +25,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import STATE
-from lightcraft_opt.linear.operating_points import (
-    PulseMapJacobian,
-    error_state_chart,
-)
+from lightcraft_opt.linear.operating_points import PulseMapJacobian, error_state_step
 from lightcraft_opt.linear.signal_names import entry_names, select_entries
 from lightcraft_opt.symbolic.maps.error_state import ERROR_STATE
 
@@ -71,7 +68,8 @@ def observability_gramian(
 def flight_models(
     jacobian: PulseMapJacobian, X: np.ndarray, U: np.ndarray, p: np.ndarray, t: np.ndarray
 ) -> np.ndarray:
-    """(N - 1, n, n) error-state A_k of Φ along a flight (module docstring), n =
+    """(N - 1, n, n) error-state A_k of Φ along a flight of it (module docstring:
+    :func:`~lightcraft_opt.linear.operating_points.error_state_step` at each pulse), n =
     ERROR_STATE.size.
 
     Parameters
@@ -88,15 +86,8 @@ def flight_models(
             f"need (N, {STATE.size}), (N - 1, inputs) and (N - 1,), got {X.shape}, "
             f"{U.shape}, {np.shape(t)}",
         )
-    _, retract_jac, local_jac = error_state_chart()
-    zero = np.zeros(ERROR_STATE.size)
-    out = []
-    for k in range(U.shape[0]):
-        _, A, _ = jacobian(X[k], U[k], p, float(t[k]))
-        E = np.asarray(retract_jac(X[k], zero))
-        L = np.asarray(local_jac(X[k + 1], X[k + 1]))
-        out.append(L @ A @ E)
-    return np.array(out).reshape(-1, ERROR_STATE.size, ERROR_STATE.size)
+    models = [error_state_step(jacobian, X[k], U[k], p, float(t[k]))[1] for k in range(len(U))]
+    return np.array(models).reshape(-1, ERROR_STATE.size, ERROR_STATE.size)
 
 
 @dataclass(frozen=True)

@@ -120,6 +120,20 @@ def error_state_chart() -> tuple[ca.Function, ca.Function, ca.Function]:
     )
 
 
+def error_state_step(
+    jacobian: PulseMapJacobian, x: np.ndarray, u: np.ndarray, p: np.ndarray, t: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One pulse of Φ from ``x`` (STATE.size,) under ``u`` and its Jacobians in the
+    error-state chart: (x_next, A, B) with A = L(x_next) ∂Φ/∂x E(x) (ERROR_STATE.size
+    square) and B = L(x_next) ∂Φ/∂u, E the chart's retraction Jacobian at x and L its
+    inverse's at x_next (:mod:`lightcraft_opt.symbolic.maps.error_state`)."""
+    x_next, A, B = jacobian(x, u, p, t)
+    _, retract_jac, local_jac = error_state_chart()
+    E = np.asarray(retract_jac(x, np.zeros(ERROR_STATE.size)))
+    L = np.asarray(local_jac(x_next, x_next))
+    return x_next, L @ A @ E, L @ B
+
+
 def error_state(
     point: OperatingPoint | np.ndarray, x: np.ndarray, states: Sequence[str] | None = None
 ) -> np.ndarray:
