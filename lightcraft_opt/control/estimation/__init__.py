@@ -1,0 +1,18 @@
+"""State estimation at pulse rate: what a tracker sees, turned into the state a controller needs.
+
+- :mod:`.reading`: :class:`Reading`, one sensor's sample (a camera frame, a gyro sample, a
+  spin count) with the time it was taken and the pulse at which it reaches the estimator;
+- :mod:`.estimate`: :class:`Estimate` (the reduced state ẑ of Ψ, its slow states and their
+  covariance) and the :class:`Estimator` protocol, ``step(readings, u_fired) -> Estimate``,
+  which every estimator meets.
+
+The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
+is a plain vector (no quaternion), and the director already predicts with it.
+"""
+
+from __future__ import annotations
+
+from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.reading import Reading
+
+__all__ = ["Estimate", "Estimator", "Reading"]
