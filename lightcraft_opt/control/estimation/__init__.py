@@ -4,7 +4,9 @@
   spin count) with the time it was taken and the pulse at which it reaches the estimator;
 - :mod:`.estimate`: :class:`Estimate` (the reduced state ẑ of Ψ, its slow states and their
   covariance) and the :class:`Estimator` protocol, ``step(readings, u_fired) -> Estimate``,
-  which every estimator meets.
+  which every estimator meets;
+- :mod:`.model`: :class:`EstimationModel`, the discrete model (prediction, process noise,
+  each sensor's measurement, with Jacobians) both estimators run on.
 
 The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
 is a plain vector (no quaternion), and the director already predicts with it.
@@ -13,6 +15,7 @@ is a plain vector (no quaternion), and the director already predicts with it.
 from __future__ import annotations
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 
-__all__ = ["Estimate", "Estimator", "Reading"]
+__all__ = ["Estimate", "EstimationModel", "Estimator", "Reading"]

@@ -1,0 +1,46 @@
+"""The discrete model an estimator runs on, as a protocol both estimators share.
+
+The estimated vector s stacks Ψ's state z (REDUCED_STATE) and the slow states (wind,
+the engine's coupling: random walks). Between pulses::
+
+    s[k+1] = f(s[k], u[k], t_k) + w[k],      w[k] ~ N(0, Q(s[k], u[k], t_k))
+
+and a reading of sensor ``name`` taken ``dt`` seconds before pulse k's node (``dt`` =
+t_k - t, 0 <= dt < one pulse period; the reading lies in the coast that ends at node k)::
+
+    y = h_name(s[k], dt) + v,                 v ~ N(0, R_name)
+
+A model that is linear in s (a test's double integrator) meets the same protocol, which
+is how the moving-horizon estimator is checked against the Kalman filter.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = ["EstimationModel"]
+
+
+@runtime_checkable
+class EstimationModel(Protocol):
+    """What an estimator needs of its model (module docstring).
+
+    - ``names``: the entries of s, in order (``"r_L[east]"``, ..., ``"wind_L[east]"``);
+    - ``predict(s, u, t) -> (s_next, F)``: f and its Jacobian ∂f/∂s (n, n); ``u`` the map
+      input fired at t [s] (pointing in L, energy [J], ...: the controller's input layout);
+    - ``process_noise(s, u, t) -> Q`` (n, n), symmetric positive semidefinite;
+    - ``measure(sensor, s, dt) -> (y, H)``: h_sensor and its Jacobian ∂h/∂s (m, n);
+    - ``measurement_noise(sensor) -> R`` (m, m), symmetric positive definite.
+    """
+
+    names: tuple[str, ...]
+
+    def predict(self, s: np.ndarray, u: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def process_noise(self, s: np.ndarray, u: np.ndarray, t: float) -> np.ndarray: ...
+
+    def measure(self, sensor: str, s: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def measurement_noise(self, sensor: str) -> np.ndarray: ...
