@@ -1,0 +1,425 @@
+"""The estimation model on Ψ: the reduced pulse map with the wind and the coupling as slow states.
+
+The estimated vector is s = (z, σ): Ψ's state z (REDUCED_STATE, docs/frames.md) and the slow
+states σ, each a random walk:
+
+- ``"wind"``: the mean wind at the profile's reference height, east and north in L [m/s]
+  (``wind_L[east]``, ``wind_L[north]``). Ψ reads the wind from p as a speed and the
+  direction it blows from (``wind_speed_ref``, ``wind_direction_from``); the shape of the
+  profile (shear, roughness, veer) stays the model's. The east/north pair is the better
+  chart: the speed/direction chart is singular in calm air (the direction is then
+  undefined, and a speed of zero is on its boundary), where the flights start; east/north
+  is linear in the wind vector everywhere;
+- ``"coupling"``: the engine's coupling coefficient C [N s/J], the impulse a pulse of the
+  reference energy gives over that energy (``Flight.coupling_coefficient``); it enters p as
+  ``impulse_per_pulse`` = C x ``reference_pulse_energy``.
+
+Between pulses s[k+1] = (Ψ(z, u, p(σ), t), σ) + w, w ~ N(0, Q) (:class:`ProcessNoise`), and
+its Jacobian is
+
+    F = [[∂Ψ/∂z, ∂Ψ/∂p · ∂p/∂σ], [0, I]]
+
+from Ψ's explicit chain over compiled pieces (symbolic/maps/reduced_map_derivatives.py), the
+same map the director plans with (:func:`estimation_model` builds its model the director's
+way, with the optic quadrature of ``DirectorOptions``). The wind columns chain a substep
+piece that also differentiates in the two wind entries of p; the coupling column is exact
+from the energy column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
+through their product only, and the energy also counts the engine's load (pulse_jump.py),
+so ∂Ψ/∂C = (E / C) (∂Ψ/∂E − e_load / E_ref). This holds where nothing ablates (the air mode,
+or a liner with ``ablation`` 0); elsewhere the coupling is refused.
+
+A sensor is a casadi Function ``h(x, p, dt) -> y`` on the FULL state x (STATE) and its noise
+covariance R; the model composes it with Ψ's ``lift`` and differentiates the composition
+(``measure``).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields, replace
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT, reduced_derivatives_for
+from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
+from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, REDUCED_STATE, parameter_values
+from lightcraft_opt.linear.signal_names import entry_names
+from lightcraft_opt.model import Model, Propellant
+from lightcraft_opt.model.checks import checked_number
+from lightcraft_opt.symbolic.maps.reduced_map import ReducedMap, build_reduced_map
+
+__all__ = ["SLOW_STATES", "ProcessNoise", "PsiEstimationModel", "estimation_model"]
+
+#: The slow states a model can carry, with the entries each adds to s.
+SLOW_STATES: dict[str, tuple[str, ...]] = {
+    "wind": ("wind_L[east]", "wind_L[north]"),
+    "coupling": ("coupling",),
+}
+_WIND_P = ("wind_speed_ref", "wind_direction_from")
+_SPEED, _DIRECTION = (PARAMETERS.slot(n).start for n in _WIND_P)
+_IMPULSE = PARAMETERS.slot("impulse_per_pulse").start
+_REFERENCE_ENERGY = PARAMETERS.slot("reference_pulse_energy").start
+_ENERGY = PULSE_INPUT.slot("energy").start
+_LOAD = REDUCED_STATE.slot("engine_load").start
+_NZ = REDUCED_STATE.size
+_CALM = 1e-9  # m/s: below this the wind's direction is undefined (module docstring)
+
+
+@dataclass(frozen=True)
+class ProcessNoise:
+    """Standard deviations of the process noise w a pulse, one per block of s (SI).
+
+    Ψ's own error against Φ (docs/beam_riding.md#reduced-map: one pulse's velocity 0.27 cm/s
+    median, 0.87 max, along coning flights) and what it cannot know (gusts, the plant's
+    dispersion) set them:
+
+    - ``velocity`` [m/s], each L axis: 3e-3, Ψ's median one-pulse velocity error;
+    - ``position`` [m], each L axis: 6e-5, that velocity error over half a pulse (26 Hz);
+    - ``angular_momentum`` [kg m²/s], each L axis: 1e-5, 1.6e-4 of Flight 5's |H| (0.063):
+      a tilt of 0.01° a pulse, a tenth of what an off-centre pulse tips H by;
+    - ``coning`` [-]: 1e-3, the coning angle's change by aerodynamic torques within a
+      pulse interval, which Ψ leaves out (about 0.06°);
+    - ``mass`` [kg] (liner, RCS propellant) 1e-9 and ``load`` [reference pulses] 1e-6: Ψ
+      counts them exactly; a floor keeps the covariance positive definite;
+    - ``wind`` [m/s] each of east/north: 0.05 a pulse, a random walk of 0.25 m/s over a
+      second (26 pulses): a slow mean wind with the gusts in it;
+    - ``coupling``, relative: 1e-3 of C a pulse, a drift of 1 % over 100 pulses (the air
+      engine's health step near pulse 100 is in Ψ already).
+    """
+
+    position: float = 6e-5
+    velocity: float = 3e-3
+    angular_momentum: float = 1e-5
+    coning: float = 1e-3
+    mass: float = 1e-9
+    load: float = 1e-6
+    wind: float = 0.05
+    coupling: float = 1e-3
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            checked_number("ProcessNoise", f.name, getattr(self, f.name), 0.0)
+            if getattr(self, f.name) <= 0:
+                raise OptionError(f"ProcessNoise.{f.name} must be > 0, got {getattr(self, f.name)}")
+
+    def scaled(self, factor: float) -> ProcessNoise:
+        """Every standard deviation times ``factor`` (> 0)."""
+        return ProcessNoise(**{f.name: getattr(self, f.name) * factor for f in fields(self)})
+
+
+@functools.lru_cache(maxsize=4)
+def _wind_substep(psi_model: Model, substeps: int, dense: int, compiled: bool) -> ca.Function:
+    """Ψ's coast substep with its Jacobians in z, the held RCS levels w and the two wind
+    entries of p (``reduced_substep_wind_jacobian(z, w, p, t) -> (z_next, S_z, S_w,
+    S_wind)``), compiled unless ``compiled`` is False (once per structure: disk cache)."""
+    from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions
+
+    psi = build_reduced_map(psi_model, ReducedMapOptions(substeps, dense))
+    nw = psi.inputs.size - PULSE_INPUT.size
+    z = ca.SX.sym("z", _NZ)
+    w = ca.SX.sym("w", nw)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    t = ca.SX.sym("t")
+    z_next = psi.substep(z, w, p, t)
+    wind = ca.vertcat(p[_SPEED], p[_DIRECTION])
+    f = ca.Function(
+        "reduced_substep_wind_jacobian",
+        [z, w, p, t],
+        [z_next, ca.jacobian(z_next, z), ca.jacobian(z_next, w), ca.jacobian(z_next, wind)],
+        ["z", "w", "p", "t"],
+        ["z_next", "S_z", "S_w", "S_wind"],
+        {"cse": True},
+    )
+    if not compiled:
+        return f
+    done, _ = compile_all(
+        [(f, DERIVATIVE_FLAGS)],
+        max_instructions=DERIVATIVE_INSTRUCTION_LIMIT,
+        what="Ψ's wind substep",
+    )
+    return done[0]
+
+
+def _stage_with_wind(psi: ReducedMap, jump: ca.Function, substep: ca.Function) -> ca.Function:
+    """``psi_wind_stage(z, u, p, t) -> (z_next, A, B, S_wind)``: Ψ's value and Jacobians in
+    z, u and the wind entries of p, chained over the pieces (as reduced_map_derivatives.py:
+    the jump does not see the wind)."""
+    n_pulse = PULSE_INPUT.size
+    nw = psi.inputs.size - n_pulse
+    h = psi.period / psi.options.substeps
+    zm, um = ca.MX.sym("z", _NZ), ca.MX.sym("u", n_pulse + nw)
+    pm, tm = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
+    z_i, _, A, B_pulse = jump(zm, um[:n_pulse], pm)
+    B_w, S_wind = ca.MX.zeros(_NZ, nw), ca.MX.zeros(_NZ, 2)
+    for i in range(psi.options.substeps):
+        z_i, S_z, S_w, S_p = substep(z_i, um[n_pulse:], pm, tm + float(h * i))
+        A, B_pulse = ca.mtimes(S_z, A), ca.mtimes(S_z, B_pulse)
+        B_w = ca.mtimes(S_z, B_w) + S_w if nw else B_w
+        S_wind = ca.mtimes(S_z, S_wind) + S_p
+    return ca.Function(
+        "psi_wind_stage",
+        [zm, um, pm, tm],
+        [z_i, A, ca.horzcat(B_pulse, B_w), S_wind],
+        ["z", "u", "p", "t"],
+        ["z_next", "A", "B", "S_wind"],
+    )
+
+
+def estimation_model(model: Model, quadrature: tuple[int, int] = (4, 16)) -> Model:
+    """The estimator's model of ``model``: the same craft with an optic quadrature of
+    ``quadrature`` (radial, azimuthal), as ``control.director.director_model`` builds the
+    director's (default ``DirectorOptions().quadrature``), so both share one compiled Ψ."""
+    engine = model.craft.engine
+    coarse = replace(engine, quadrature_radial=quadrature[0], quadrature_azimuthal=quadrature[1])
+    return replace(model, craft=replace(model.craft, engine=coarse))
+
+
+class PsiEstimationModel:
+    """The :class:`~lightcraft_opt.control.estimation.model.EstimationModel` on Ψ with slow
+    states (module docstring).
+
+    Parameters
+    ----------
+    model : the estimator's model (its numbers are what it believes; see
+        :func:`estimation_model`).
+    sensors : {name: (h, R)}: ``h(x, p, dt) -> y`` a casadi Function on the full state x
+        (STATE), p (PARAMETERS) and dt [s], the time from the reading to the node it ends
+        at; R (m, m) the noise covariance of y [y's units²].
+    slow : the slow states, a sub-tuple of ("wind", "coupling") in that order of s.
+    noise : the process noise (:class:`ProcessNoise`, default its defaults).
+    p : the model's parameter vector (default its model's); the slow states overwrite
+        their entries.
+    compiled : compile the pieces (None: ``compiled.compile_by_default``).
+
+    Attributes
+    ----------
+    names : the entries of s: Ψ's (``"r_L[east]"``, ...) then the slow ones.
+    state_size : how many of them are Ψ's (REDUCED_STATE.size).
+    psi : the reduced map; period : pulse period [s]; p : the base parameters.
+    slow : the slow states kept.
+    """
+
+    def __init__(
+        self,
+        model: Model,
+        sensors: Mapping[str, tuple[ca.Function, np.ndarray]],
+        *,
+        slow: Sequence[str] = ("wind", "coupling"),
+        noise: ProcessNoise | None = None,
+        p: np.ndarray | None = None,
+        compiled: bool | None = None,
+    ) -> None:
+        slow = tuple(slow)
+        if any(s not in SLOW_STATES for s in slow) or len(set(slow)) != len(slow):
+            raise OptionError(f"slow must be a sub-tuple of {tuple(SLOW_STATES)}, got {slow!r}")
+        self.slow = tuple(s for s in SLOW_STATES if s in slow)
+        self.noise = noise or ProcessNoise()
+        if not isinstance(self.noise, ProcessNoise):
+            raise OptionError(f"noise must be ProcessNoise, got {self.noise!r}")
+        self.model = model
+        self.p = parameter_values(model) if p is None else np.array(p, dtype=float)
+        if "wind" in self.slow and model.environment.wind.table_height:
+            raise ParameterError(
+                "environment.wind", "a wind table does not read p: the wind cannot be estimated"
+            )
+        if "coupling" in self.slow and (
+            model.craft.propellant is not Propellant.AIR
+            and self.p[PARAMETERS.slot("ablation").start] != 0
+        ):
+            raise ParameterError(
+                "craft.engine.ablation", "the coupling is estimated only where nothing ablates"
+            )
+        self.psi = psi = build_reduced_map(model)
+        self.period = psi.period
+        d = reduced_derivatives_for(model, psi.options, compiled=compiled)
+        self._stage = d.stage
+        if "wind" in self.slow:
+            from lightcraft_opt.compiled import compile_by_default
+
+            want = compile_by_default() if compiled is None else bool(compiled)
+            sub = _wind_substep(model, psi.options.substeps, psi.options.dense, want)
+            self._wind_stage: ca.Function | None = _stage_with_wind(psi, d.jump, sub)
+        else:
+            self._wind_stage = None
+        self._lift = psi.lift
+        self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
+            n for s in self.slow for n in SLOW_STATES[s]
+        )
+        self.n = len(self.names)
+        self.state_size = _NZ
+        self._wind = _NZ if "wind" in self.slow else None
+        self._coupling = self.n - 1 if "coupling" in self.slow else None
+        self._Q = np.diag(np.square(self._sigmas()))
+        self._sensors: dict[str, tuple[ca.Function, np.ndarray]] = {}
+        for name, (h, R) in sensors.items():
+            R = np.atleast_2d(np.asarray(R, dtype=float))
+            m = h.size1_out(0)
+            if R.shape != (m, m) or np.any(np.linalg.eigvalsh(0.5 * (R + R.T)) <= 0):
+                raise ParameterError(
+                    f"sensors[{name!r}]", f"R must be ({m}, {m}) and positive definite"
+                )
+            self._sensors[name] = (self._measurement(name, h), R)
+
+    # -- the slow states in p ---------------------------------------------------------------
+
+    def slow_values(self, p: np.ndarray | None = None) -> np.ndarray:
+        """The slow states σ that ``p`` (default the model's) holds: the wind at the reference
+        height (east, north) [m/s] and C [N s/J]."""
+        p = self.p if p is None else p
+        out: list[float] = []
+        if "wind" in self.slow:
+            speed, frm = p[_SPEED], p[_DIRECTION]
+            out += [-speed * math.sin(frm), -speed * math.cos(frm)]
+        if "coupling" in self.slow:
+            out.append(p[_IMPULSE] / p[_REFERENCE_ENERGY])
+        return np.array(out)
+
+    def parameters(self, s: np.ndarray) -> np.ndarray:
+        """p with the slow states of s in it (module docstring)."""
+        p = self.p.copy()
+        if self._wind is not None:
+            east, north = s[self._wind], s[self._wind + 1]
+            speed = math.hypot(east, north)
+            p[_SPEED] = speed
+            if speed > _CALM:
+                p[_DIRECTION] = math.atan2(-east, -north)
+        if self._coupling is not None:
+            p[_IMPULSE] = s[self._coupling] * p[_REFERENCE_ENERGY]
+        return p
+
+    def start(self, x0: np.ndarray) -> np.ndarray:
+        """s of the full state x0 (STATE): Ψ's ``project`` of it and the model's slow states."""
+        z = np.asarray(self.psi.project(np.asarray(x0, dtype=float), self.p)).ravel()
+        return np.concatenate([z, self.slow_values()])
+
+    def lift(self, s: np.ndarray) -> np.ndarray:
+        """The full state (STATE) Ψ's ``lift`` builds from s's z."""
+        return np.asarray(self._lift(s[:_NZ], self.parameters(s))).ravel()
+
+    def _sigmas(self) -> np.ndarray:
+        q = self.noise
+        per_slot = {
+            "r_L": q.position,
+            "v_L": q.velocity,
+            "H_L": q.angular_momentum,
+            "coning": q.coning,
+            "liner_mass": q.mass,
+            "rcs_mass": q.mass,
+            "engine_load": q.load,
+        }
+        sig = [per_slot[s.name] for s in REDUCED_STATE.slots for _ in range(s.size)]
+        if "wind" in self.slow:
+            sig += [q.wind, q.wind]
+        if "coupling" in self.slow:
+            sig.append(q.coupling * float(self.slow_values()[-1]))
+        return np.array(sig)
+
+    # -- the protocol ------------------------------------------------------------------------
+
+    def _input(self, u: np.ndarray) -> np.ndarray:
+        u = np.asarray(u, dtype=float).ravel()
+        size = self.psi.inputs.size
+        if u.size == size:
+            return u
+        if u.size >= PULSE_INPUT.size and size == PULSE_INPUT.size:
+            return u[:size]
+        if u.size == PULSE_INPUT.size:  # the pulse alone: the thrusters at rest
+            return np.concatenate([u, np.zeros(size - u.size)])
+        raise ParameterError("u", f"needs {size} entries (Ψ's inputs) or the pulse's, got {u.size}")
+
+    def predict(self, s: np.ndarray, u: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """(s_next (n,), F (n, n)): Ψ from s with ``u`` fired at ``t`` [s] (Ψ's inputs: the
+        pulse's pointing [m, L east/north], focus [m], energy [J], then held RCS levels) and
+        the slow states held; F its Jacobian (module docstring)."""
+        s = np.asarray(s, dtype=float).ravel()
+        u = self._input(u)
+        p = self.parameters(s)
+        z = s[:_NZ]
+        F = np.eye(self.n)
+        if self._wind_stage is not None and self._wind is not None:
+            z_next, A, B, S = (np.asarray(v) for v in self._wind_stage(z, u, p, t))
+            speed = float(p[_SPEED])
+            if speed > _CALM:
+                frm = float(p[_DIRECTION])
+                along = np.array([-math.sin(frm), -math.cos(frm)])
+                across = np.array([-math.cos(frm), math.sin(frm)])
+                F[:_NZ, self._wind : self._wind + 2] = np.outer(S[:, 0], along) + np.outer(
+                    S[:, 1] / speed, across
+                )
+            else:  # calm: each column is ∂/∂speed with the wind blowing along its axis
+                for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
+                    q = p.copy()
+                    q[_DIRECTION] = frm
+                    F[:_NZ, self._wind + j] = np.asarray(self._wind_stage(z, u, q, t)[3])[:, 0]
+        else:
+            z_next, _, A, B = (np.asarray(v) for v in self._stage(z, u, p, t))
+        F[:_NZ, :_NZ] = A
+        if self._coupling is not None:
+            C, energy = float(s[self._coupling]), float(u[_ENERGY])
+            column = B[:, _ENERGY].copy()
+            column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
+            F[:_NZ, self._coupling] = column * energy / C
+        s_next = s.copy()
+        s_next[:_NZ] = z_next.ravel()
+        return s_next, F
+
+    def process_noise(self, s: np.ndarray, u: np.ndarray, t: float) -> np.ndarray:
+        """Q (n, n): diagonal, :class:`ProcessNoise` squared (constant)."""
+        return self._Q.copy()
+
+    def _measurement(self, name: str, h: ca.Function) -> ca.Function:
+        """``measure_<name>(z, p, dt) -> (y, H_z, H_p)``: h at Ψ's lift of z, its Jacobians in
+        z and in the slow states' entries of p (wind speed, direction, impulse_per_pulse)."""
+        z, p, dt = ca.SX.sym("z", _NZ), ca.SX.sym("p", PARAMETERS.size), ca.SX.sym("dt")
+        y = h(self.psi.lift(z, p), p, dt)
+        slots = ca.vertcat(p[_SPEED], p[_DIRECTION], p[_IMPULSE])
+        return ca.Function(
+            f"measure_{name}",
+            [z, p, dt],
+            [y, ca.jacobian(y, z), ca.jacobian(y, slots)],
+            ["z", "p", "dt"],
+            ["y", "H_z", "H_p"],
+            {"cse": True},
+        )
+
+    def measure(self, sensor: str, s: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(y (m,), H (m, n)): sensor ``sensor``'s reading ``dt`` [s] before the node of s
+        (its units and frame) and its Jacobian in s."""
+        if sensor not in self._sensors:
+            raise ParameterError(
+                "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
+            )
+        f = self._sensors[sensor][0]
+        s = np.asarray(s, dtype=float).ravel()
+        p = self.parameters(s)
+        y, H_z, H_p = (np.asarray(v) for v in f(s[:_NZ], p, dt))
+        H = np.zeros((H_z.shape[0], self.n))
+        H[:, :_NZ] = H_z
+        if self._wind is not None and np.any(H_p[:, :2]):
+            speed, frm = float(p[_SPEED]), float(p[_DIRECTION])
+            if speed > _CALM:
+                along = np.array([-math.sin(frm), -math.cos(frm)])
+                across = np.array([-math.cos(frm), math.sin(frm)])
+                H[:, self._wind : self._wind + 2] = np.outer(H_p[:, 0], along) + np.outer(
+                    H_p[:, 1] / speed, across
+                )
+            else:
+                for j, d in enumerate((-0.5 * math.pi, math.pi)):
+                    q = p.copy()
+                    q[_DIRECTION] = d
+                    H[:, self._wind + j] = np.asarray(f(s[:_NZ], q, dt)[2])[:, 0]
+        if self._coupling is not None:
+            H[:, self._coupling] = H_p[:, 2] * p[_REFERENCE_ENERGY]
+        return y.ravel(), H
+
+    def measurement_noise(self, sensor: str) -> np.ndarray:
+        """R (m, m) of ``sensor``."""
+        if sensor not in self._sensors:
+            raise ParameterError(
+                "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
+            )
+        return self._sensors[sensor][1].copy()

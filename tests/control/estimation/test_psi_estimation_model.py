@@ -1,0 +1,113 @@
+"""Ψ's estimation model: F and H against central finite differences (tests/support style)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+from support.models import table1_flight5
+
+from lightcraft_opt.control.estimation import EstimationModel
+from lightcraft_opt.control.estimation.psi_model import PsiEstimationModel, estimation_model
+from lightcraft_opt.errors import OptionError
+from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, nominal_inputs
+
+G = 9.80665  # m/s², the camera's fall over dt (a test's own model of the sensor)
+
+
+def camera() -> ca.Function:
+    """A position camera: r_L at the reading's time, dt before the node (ballistic back)."""
+    x, p, dt = ca.SX.sym("x", STATE.size), ca.SX.sym("p", PARAMETERS.size), ca.SX.sym("dt")
+    r, v = STATE.get("r_L", x), STATE.get("v_L", x)
+    y = r - v * dt - 0.5 * G * dt**2 * ca.DM([0, 0, 1])
+    return ca.Function("camera", [x, p, dt], [y], ["x", "p", "dt"], ["y"])
+
+
+def gyro() -> ca.Function:
+    """A gyro: the transverse body rates w_B[b2, b3] [rad/s]."""
+    x, p, dt = ca.SX.sym("x", STATE.size), ca.SX.sym("p", PARAMETERS.size), ca.SX.sym("dt")
+    return ca.Function("gyro", [x, p, dt], [STATE.get("w_B", x)[1:]], ["x", "p", "dt"], ["y"])
+
+
+@pytest.fixture(scope="module")
+def model() -> PsiEstimationModel:
+    sensors = {"camera": (camera(), 0.005**2 * np.eye(3)), "gyro": (gyro(), 0.01**2 * np.eye(2))}
+    return PsiEstimationModel(estimation_model(table1_flight5()), sensors, compiled=False)
+
+
+def _state(model: PsiEstimationModel, wind: tuple[float, float]) -> np.ndarray:
+    x0 = initial_state(model.model, r_L=(0.01, 0.0, 2.0), v_L=(0.0, 0.0, 4.0), w_B=(0, 0.3, -0.2))
+    s = model.start(x0)
+    s[model.names.index("wind_L[east]") :][:2] = wind
+    return s
+
+
+def _fd(f, s: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """Central differences of f at s, steps 1e-5 of each entry's scale."""
+    cols = []
+    for j in range(s.size):
+        e = np.zeros(s.size)
+        e[j] = 1e-5 * scale[j]
+        cols.append((f(s + e) - f(s - e)) / (2 * e[j]))
+    return np.array(cols).T
+
+
+def _scale(model: PsiEstimationModel, s: np.ndarray) -> np.ndarray:
+    """A step scale per entry: its size, at least a typical error (1e-3 of SI, 1 m/s wind)."""
+    scale = np.maximum(np.abs(s), 1e-3)
+    scale[model.names.index("wind_L[east]") :][:2] = 1.0
+    return scale
+
+
+def test_meets_the_protocol(model: PsiEstimationModel) -> None:
+    assert isinstance(model, EstimationModel)
+    assert model.names[-3:] == ("wind_L[east]", "wind_L[north]", "coupling")
+
+
+@pytest.mark.parametrize("wind", [(3.0, 0.5), (0.0, 0.0)], ids=["crosswind", "calm"])
+def test_F_is_psi_jacobian(model: PsiEstimationModel, wind: tuple[float, float]) -> None:
+    """F (the compiled chain, the wind columns through p's speed and direction, the
+    coupling's through the energy column) against central differences of f, each row
+    relative to its largest entry: 1e-6 (the differences' truncation error is ~1e-10)."""
+    s = _state(model, wind)
+    u = nominal_inputs(model.model, model.psi.inputs)
+    _, F = model.predict(s, u, 0.0)
+    F_fd = _fd(lambda v: model.predict(v, u, 0.0)[0], s, _scale(model, s))
+    row = np.abs(F_fd).max(axis=1, keepdims=True)
+    assert np.all(np.abs(F - F_fd) <= 1e-6 * row + 1e-12)
+    # the slow states are held (random walks)
+    assert np.array_equal(F[14:], np.eye(model.n)[14:])
+    assert np.abs(F[3:6, 14:16]).max() > 1e-4  # the wind does push the craft
+
+
+@pytest.mark.parametrize("sensor", ["camera", "gyro"])
+def test_H_is_the_lifted_sensor_jacobian(model: PsiEstimationModel, sensor: str) -> None:
+    s = _state(model, (3.0, 0.5))
+    dt = 0.4 * model.period
+    y, H = model.measure(sensor, s, dt)
+    H_fd = _fd(lambda v: model.measure(sensor, v, dt)[0], s, _scale(model, s))
+    row = np.abs(H_fd).max(axis=1, keepdims=True)
+    assert np.all(np.abs(H - H_fd) <= 1e-6 * row + 1e-12)
+    if sensor == "camera":  # the position dt before the node, falling ballistically
+        r, v = s[0:3], s[3:6]
+        np.testing.assert_allclose(y, r - v * dt - 0.5 * G * dt**2 * np.array([0, 0, 1]))
+
+
+def test_slow_states_round_trip(model: PsiEstimationModel) -> None:
+    """p built from the slow states holds them: the wind from the west at 3 m/s blows east;
+    the coupling is Flight 5's C = 0.0637 / 420 N s/J."""
+    s = _state(model, (3.0, 0.0))
+    p = model.parameters(s)
+    assert p[PARAMETERS.slot("wind_speed_ref").start] == pytest.approx(3.0)
+    assert p[PARAMETERS.slot("wind_direction_from").start] == pytest.approx(-np.pi / 2)
+    assert model.slow_values()[-1] == pytest.approx(0.0637 / 420.0)
+    np.testing.assert_allclose(
+        PsiEstimationModel(model.model, {}, slow=("wind",), compiled=False).slow_values(p),
+        s[14:16],
+        atol=1e-12,
+    )
+
+
+def test_bad_slow_states_are_named(model: PsiEstimationModel) -> None:
+    with pytest.raises(OptionError, match="slow"):
+        PsiEstimationModel(model.model, {}, slow=("gusts",), compiled=False)
