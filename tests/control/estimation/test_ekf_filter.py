@@ -59,6 +59,7 @@ def test_equals_a_textbook_kalman_filter() -> None:
     ekf.reset(np.array([0.2, -0.1]))
     m, P = np.array([0.2, -0.1]), np.diag(sigma0**2)
     truth = m + sigma0 * rng.normal(size=2)
+    u_last = np.zeros(1)
     for k in range(30):
         t, u = k * T, np.array([np.sin(k / 5.0)])
         if k:

@@ -1,0 +1,107 @@
+"""Benchmark: the estimators' step time and accuracy on flights of Ψ itself (on demand, not in CI).
+
+Flight 5 (models/flight5.toml) under the nominal inputs, the director's model of it (Ψ, 4 x 16
+optic, compiled), from 2 m at 4 m/s: ``--flights`` seeded flights of ``--pulses`` pulses of Ψ
+with process noise drawn from the model's Q (every noise at ``--scale`` of the defaults) and a
+position camera (5 mm x scale) at each pulse. Each estimator chosen (``--estimators ekf``)
+filters every flight. Printed: the step time (median, 99th percentile) over all steps; the NEES
+(n = 17) and the camera's NIS (m = 3) averaged over flights and pulses, with their two-sided
+95 % bands χ²(N n) / N (tests/control/estimation/test_ekf_filter.py); the RMSE per entry of s
+over the second half of the flights against the truth. Target (issue 30): EKF step median
+<= 0.3 ms.
+
+Timing on a loaded machine is not a measurement of the code: run it alone.
+
+Run: ``python bench/estimation.py --estimators ekf`` (``--help`` for options).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+from scipy.stats import chi2
+
+import lightcraft_opt as lc
+from lightcraft_opt.control.estimation import Reading
+from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter
+from lightcraft_opt.control.estimation.psi_model import (
+    ProcessNoise,
+    PsiEstimationModel,
+    estimation_model,
+)
+from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, nominal_inputs
+
+ROOT = Path(__file__).resolve().parents[1]
+G = 9.80665  # m/s²
+
+
+def camera() -> ca.Function:
+    """Positions in L at the reading's time, dt [s] before the node."""
+    x, p, dt = ca.SX.sym("x", STATE.size), ca.SX.sym("p", PARAMETERS.size), ca.SX.sym("dt")
+    r, v = STATE.get("r_L", x), STATE.get("v_L", x)
+    y = r - v * dt - 0.5 * G * dt**2 * ca.DM([0, 0, 1])
+    return ca.Function("camera", [x, p, dt], [y], ["x", "p", "dt"], ["y"])
+
+
+def estimators(model: PsiEstimationModel, scale: float, names: list[str]) -> dict:
+    prior = tuple((n, scale * s) for n, s in EkfOptions().prior)
+    made = {}
+    for name in names:
+        if name == "ekf":
+            made[name] = ExtendedKalmanFilter(model, EkfOptions(prior=prior))
+        else:
+            raise SystemExit(f"unknown estimator {name!r}; known: ekf")
+    return made
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--estimators", default="ekf", help="comma-separated: ekf")
+    parser.add_argument("--flights", type=int, default=50)
+    parser.add_argument("--pulses", type=int, default=40)
+    parser.add_argument("--scale", type=float, default=1.0, help="every noise times this")
+    args = parser.parse_args()
+    model = estimation_model(lc.load_model(ROOT / "models" / "flight5.toml"))
+    camera_R = (args.scale * 0.005) ** 2 * np.eye(3)
+    psi = PsiEstimationModel(
+        model, {"camera": (camera(), camera_R)}, noise=ProcessNoise().scaled(args.scale)
+    )
+    x0 = initial_state(model, r_L=(0.0, 0.0, 2.0), v_L=(0.0, 0.0, 4.0))
+    u = nominal_inputs(model, psi.psi.inputs)
+    L_q = np.linalg.cholesky(psi.process_noise(psi.start(x0), u, 0.0))
+    for name, est in estimators(psi, args.scale, args.estimators.split(",")).items():
+        times, nees, nis, errors = [], [], [], []
+        for run in range(args.flights):
+            rng = np.random.default_rng(1000 + run)
+            est.reset(x0, 0.0)
+            s = est.s + rng.normal(size=psi.n) * np.sqrt(np.diag(est.P))
+            for k in range(args.pulses):
+                t = k * psi.period
+                y = psi.measure("camera", s, 0.0)[0] + np.sqrt(camera_R[0, 0]) * rng.normal(size=3)
+                e = est.step([Reading("camera", t, k, y)], u if k else None, t)
+                times.append(e.seconds)
+                err = s - est.s
+                d = np.sqrt(np.diag(est.P))
+                nees.append(err / d @ np.linalg.solve(est.P / np.outer(d, d), err / d))
+                nis += [i.nis for i in getattr(est, "innovations", [])]
+                if k >= args.pulses // 2:
+                    errors.append(err)
+                s = psi.predict(s, u, t)[0] + L_q @ rng.normal(size=psi.n)
+        N = args.flights
+        ms = 1e3 * np.array(times)
+        print(f"{name}: step median {np.median(ms):.3f} ms, p99 {np.percentile(ms, 99):.3f} ms")
+        band = chi2.ppf([0.025, 0.975], N * psi.n) / N
+        print(f"  NEES {np.mean(nees):.2f} (n {psi.n}, band {band[0]:.2f}-{band[1]:.2f})")
+        if nis:
+            band = chi2.ppf([0.025, 0.975], N * 3) / N
+            print(f"  NIS {np.mean(nis):.2f} (m 3, band {band[0]:.2f}-{band[1]:.2f})")
+        rmse = np.sqrt(np.mean(np.square(errors), axis=0))
+        for entry, value in zip(psi.names, rmse, strict=True):
+            print(f"  RMSE {entry:14s} {value:.3g}")
+
+
+if __name__ == "__main__":
+    main()
