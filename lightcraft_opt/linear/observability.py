@@ -35,32 +35,41 @@ __all__ = ["Observability", "flight_models", "observability", "observability_gra
 def observability_gramian(
     A: Sequence[np.ndarray] | np.ndarray, C: np.ndarray, R: np.ndarray
 ) -> np.ndarray:
-    """W_N (n, n) of the time-varying model δ[k+1] = A[k] δ[k] measured by y_k = C δ[k]
+    """W_N (n, n) of the time-varying model δ[k+1] = A[k] δ[k] measured by y_k = C_k δ[k]
     + v_k (cov R) at k = 0 .. N-1, N = len(A) + 1 (module docstring).
 
     Parameters
     ----------
     A : (N - 1, n, n) state matrices, one a pulse (the last step's is not needed).
-    C : (m, n) measurement matrix [measurement units per state unit].
+    C : (m, n) measurement matrix [measurement units per state unit], the same at every
+        pulse, or (N, m, n) one a pulse (a sensor whose reading depends on the state
+        nonlinearly, linearised along the flight).
     R : (m, m) measurement noise covariance, symmetric positive definite [units²].
     """
-    C = np.atleast_2d(np.asarray(C, dtype=float))
+    A = [np.asarray(a, dtype=float) for a in A]
+    C = np.asarray(C, dtype=float)
+    per_pulse = C.ndim == 3
+    Cs = (
+        C if per_pulse else np.broadcast_to(np.atleast_2d(C), (len(A) + 1, *np.atleast_2d(C).shape))
+    )
+    if Cs.shape[0] != len(A) + 1:
+        raise ParameterError("C", f"needs one matrix a pulse ({len(A) + 1}), got {Cs.shape[0]}")
     R = np.atleast_2d(np.asarray(R, dtype=float))
-    m, n = C.shape
+    m, n = Cs.shape[1:]
     if R.shape != (m, m) or not np.all(np.isfinite(R)):
         raise ParameterError("R", f"needs a finite ({m}, {m}) covariance, got {R.shape}")
     try:
         chol = np.linalg.cholesky(0.5 * (R + R.T))
     except np.linalg.LinAlgError:
         raise ParameterError("R", "must be symmetric positive definite") from None
-    weighted = np.linalg.solve(chol, C)  # R^-1/2 C
     M = np.eye(n)
-    W = weighted.T @ weighted
-    for k, Ak in enumerate(np.asarray(A, dtype=float)):
+    block = np.linalg.solve(chol, Cs[0])  # R^-1/2 C_0
+    W = block.T @ block
+    for k, Ak in enumerate(A):
         if Ak.shape != (n, n):
             raise ParameterError(f"A[{k}]", f"needs shape ({n}, {n}), got {Ak.shape}")
         M = Ak @ M
-        block = weighted @ M
+        block = np.linalg.solve(chol, Cs[k + 1]) @ M
         W = W + block.T @ block
     return 0.5 * (W + W.T)
 
@@ -106,6 +115,15 @@ class Observability:
     gramian: np.ndarray
     eigenvalues: np.ndarray
     directions: np.ndarray
+
+    @classmethod
+    def of(cls, gramian: np.ndarray, states: Sequence[str]) -> Observability:
+        """What a Gramian (n, n) on the named states says (its eigen-decomposition)."""
+        W = 0.5 * (np.asarray(gramian, dtype=float) + np.asarray(gramian, dtype=float).T)
+        if W.shape != (len(states), len(states)):
+            raise ParameterError("gramian", f"needs shape ({len(states)},) * 2, got {W.shape}")
+        values, vectors = np.linalg.eigh(W)
+        return cls(tuple(states), W, values, vectors)
 
     @property
     def condition(self) -> float:
@@ -172,7 +190,5 @@ def observability(
     C = np.eye(n)[measured]
     W = observability_gramian(flight_models(jacobian, X, U, p, t), C, np.diag(np.square(sigma)))
     keep = select_entries(ERROR_STATE, states, "states")
-    W = W[np.ix_(keep, keep)]
-    values, vectors = np.linalg.eigh(W)
     names = entry_names(ERROR_STATE)
-    return Observability(tuple(names[i] for i in keep), W, values, vectors)
+    return Observability.of(W[np.ix_(keep, keep)], [names[i] for i in keep])

@@ -40,6 +40,25 @@ def test_the_double_integrator_has_the_closed_form_gramian():
     np.testing.assert_allclose(W, expected, rtol=1e-12)
 
 
+def test_a_sensor_that_changes_along_the_flight():
+    """C_k one a pulse: a double integrator seen by position at even pulses and velocity at
+    odd ones; W = Σ (C_k M_k)ᵀ R⁻¹ C_k M_k written out, M_k = A^k."""
+    T, N, sigma = 0.04, 7, 0.01
+    A = np.array([[1.0, T], [0.0, 1.0]])
+    C = np.array([[[1.0, 0.0]] if k % 2 == 0 else [[0.0, 1.0]] for k in range(N)])
+    W = observability_gramian([A] * (N - 1), C, np.array([[sigma**2]]))
+    expected = (
+        sum(
+            (C[k] @ np.linalg.matrix_power(A, k)).T @ (C[k] @ np.linalg.matrix_power(A, k))
+            for k in range(N)
+        )
+        / sigma**2
+    )
+    np.testing.assert_allclose(W, expected, rtol=1e-12)
+    with pytest.raises(ParameterError, match="C"):
+        observability_gramian([A] * (N - 1), C[:-1], np.array([[sigma**2]]))
+
+
 def test_bad_noise_names_its_argument():
     with pytest.raises(ParameterError, match="R"):
         observability_gramian([np.eye(2)], np.eye(2), -np.eye(2))

@@ -193,9 +193,9 @@ class _Evaluator:
         self._buffer, self._trigger = self.function.buffer()
         self._args = [np.zeros(f.numel_in(i)) for i in range(f.n_in())]
         for i, a in enumerate(self._args):
-            self._buffer.set_arg(i, memoryview(a))
+            self._buffer.set_arg(i, a.data)
         self._out = np.zeros(rows * cols)
-        self._buffer.set_res(0, memoryview(self._out))
+        self._buffer.set_res(0, self._out.data)
         self._shape = (cols, rows)
 
     def __call__(self, *args: np.ndarray | float) -> np.ndarray:

@@ -181,3 +181,21 @@ def test_options_name_the_field() -> None:
         EkfOptions(noise_scale=0.0)
     with pytest.raises(OptionError, match="prior"):
         EkfOptions(prior=(("r_L", -1.0),))
+
+
+def test_model_gramian_is_the_double_integrators_closed_form() -> None:
+    """The Gramian of an EstimationModel's flight (its own F_k and H_k) read by position:
+    [[N, T S1], [T S1, T² S2]] / σ², S1 = Σk, S2 = Σk² (tests/linear/test_observability.py)."""
+    from lightcraft_opt.control.estimation.psi_observability import (
+        model_flight,
+        model_observability,
+    )
+
+    model, N = DoubleIntegrator(), 12
+    S, F, _ = model_flight(model, np.array([0.0, 1.0]), np.zeros(1), N)
+    seen = model_observability(model, S, F, ["position"])
+    k = np.arange(N)
+    expected = np.array([[N, T * k.sum()], [T * k.sum(), T**2 * (k**2).sum()]]) / 0.01**2
+    np.testing.assert_allclose(seen.gramian, expected, rtol=1e-12)
+    scaled = model_observability(model, S, F, ["position"], scale=np.array([0.01, 0.1]))
+    assert scaled.bound("v") * 0.1 == pytest.approx(seen.bound("v"), rel=1e-9)
