@@ -7,8 +7,9 @@ position camera (5 mm x scale) at each pulse. Each estimator chosen (``--estimat
 filters every flight. Printed: the step time (median, 99th percentile) over all steps; the NEES
 (n = 17) and the camera's NIS (m = 3) averaged over flights and pulses, with their two-sided
 95 % bands χ²(N n) / N (tests/control/estimation/test_ekf_filter.py); the RMSE per entry of s
-over the second half of the flights against the truth. Target (issue 30): EKF step median
-<= 0.3 ms.
+over the second half of the flights against the truth; the NEES of blocks of s (their
+marginal covariance) per entry, which says where a filter is overconfident. Target (issue
+30): EKF step median <= 0.3 ms.
 
 Timing on a loaded machine is not a measurement of the code: run it alone.
 
@@ -74,6 +75,13 @@ def main() -> None:
     L_q = np.linalg.cholesky(psi.process_noise(psi.start(x0), u, 0.0))
     for name, est in estimators(psi, args.scale, args.estimators.split(",")).items():
         times, nees, nis, errors = [], [], [], []
+        blocks = {
+            "r_L, v_L": [i for i, n in enumerate(psi.names) if n[:3] in ("r_L", "v_L")],
+            "H_L": [i for i, n in enumerate(psi.names) if n.startswith("H_L")],
+            "coning": [i for i, n in enumerate(psi.names) if n.startswith("coning")],
+            "wind, coupling": list(range(psi.state_size, psi.n)),
+        }
+        per_block: dict[str, list[float]] = {b: [] for b in blocks}
         for run in range(args.flights):
             rng = np.random.default_rng(1000 + run)
             est.reset(x0, 0.0)
@@ -86,6 +94,9 @@ def main() -> None:
                 err = s - est.s
                 d = np.sqrt(np.diag(est.P))
                 nees.append(err / d @ np.linalg.solve(est.P / np.outer(d, d), err / d))
+                for b, idx in blocks.items():
+                    Pb, eb = est.P[np.ix_(idx, idx)], err[idx]
+                    per_block[b].append(eb @ np.linalg.solve(Pb, eb) / len(idx))
                 nis += [i.nis for i in getattr(est, "innovations", [])]
                 if k >= args.pulses // 2:
                     errors.append(err)
@@ -95,6 +106,10 @@ def main() -> None:
         print(f"{name}: step median {np.median(ms):.3f} ms, p99 {np.percentile(ms, 99):.3f} ms")
         band = chi2.ppf([0.025, 0.975], N * psi.n) / N
         print(f"  NEES {np.mean(nees):.2f} (n {psi.n}, band {band[0]:.2f}-{band[1]:.2f})")
+        print(
+            "  NEES per entry of a block: "
+            + ", ".join(f"{b} {np.mean(v):.2f}" for b, v in per_block.items())
+        )
         if nis:
             band = chi2.ppf([0.025, 0.975], N * 3) / N
             print(f"  NIS {np.mean(nis):.2f} (m 3, band {band[0]:.2f}-{band[1]:.2f})")
