@@ -87,6 +87,21 @@ def test_equals_a_textbook_kalman_filter() -> None:
         u_last = u
 
 
+def test_a_reading_older_than_the_history_is_dropped() -> None:
+    """With 2 pulses of history, a reading 3 pulses late changes nothing and is counted."""
+    model = DoubleIntegrator()
+    ekf, twin = (ExtendedKalmanFilter(model, EkfOptions(history=2)) for _ in range(2))
+    for f in (ekf, twin):
+        f.reset(np.array([0.0, 1.0]))
+    u = np.zeros(1)
+    for k in range(5):
+        late = [Reading("position", 0.5 * T, k, np.array([0.3]))] if k == 4 else []
+        got = ekf.step(late, u if k else None, k * T)
+        want = twin.step([], u if k else None, k * T)
+        np.testing.assert_array_equal(got.z, want.z)
+    assert ekf.dropped == 1 and twin.dropped == 0
+
+
 @pytest.fixture(scope="module")
 def psi_model() -> PsiEstimationModel:
     model = estimation_model(table1_flight5())
