@@ -55,9 +55,6 @@ __all__ = [
     "position_before",
 ]
 
-#: Below this horizontal distance [m] from the pad's vertical a mount has no azimuth reference.
-MIN_SITE_DISTANCE = 1.0
-
 
 def _symbols() -> tuple[ca.SX, ca.SX, ca.SX]:
     return ca.SX.sym("x", STATE.size), ca.SX.sym("p", PARAMETERS.size), ca.SX.sym("dt")
@@ -128,13 +125,12 @@ def _checked_sites(sites_L: Sequence[Sequence[float]]) -> np.ndarray:
         raise ParameterError("sites_L", f"needs rows of 3 coordinates in L [m], got {sites_L!r}")
     if not np.all(np.isfinite(sites)):
         raise ParameterError("sites_L", f"must be finite, got {sites_L!r}")
-    near = np.hypot(sites[:, 0], sites[:, 1]) < MIN_SITE_DISTANCE
-    if near.any():
+    on = np.hypot(sites[:, 0], sites[:, 1]) == 0.0
+    if on.any():
         raise ParameterError(
-            f"sites_L[{int(np.argmax(near))}]",
-            f"a mount must stand at least {MIN_SITE_DISTANCE:g} m off the pad's vertical (its "
-            "azimuth is measured from the line to it), got "
-            f"{sites[int(np.argmax(near))].tolist()}",
+            f"sites_L[{int(np.argmax(on))}]",
+            "a mount must stand off the pad's vertical (its azimuth is measured from the "
+            f"line to it), got {sites[int(np.argmax(on))].tolist()}",
         )
     return sites
 
@@ -145,8 +141,7 @@ def bearings_from(r_L: ca.SX, sites_L: Sequence[Sequence[float]]) -> ca.SX:
     Parameters
     ----------
     r_L : (3,) the point, L frame [m].
-    sites_L : (n, 3) the mounts, L frame [m], each at least :data:`MIN_SITE_DISTANCE` off
-        the pad's vertical.
+    sites_L : (n, 3) the mounts, L frame [m], each off the pad's vertical.
 
     Returns
     -------
