@@ -6,7 +6,11 @@
   covariance) and the :class:`Estimator` protocol, ``step(readings, u_fired) -> Estimate``,
   which every estimator meets;
 - :mod:`.model`: :class:`EstimationModel`, the discrete model (prediction, process noise,
-  each sensor's measurement, with Jacobians) both estimators run on.
+  each sensor's measurement, with Jacobians) both estimators run on;
+- :mod:`.sensor_options`: the sensors' options (:class:`SensorOptions`: a camera, gyros,
+  a spin counter; their noise, frame rate, latency, lost frames);
+- :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
+  one owner of each sensor's measurement Function and noise.
 
 The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
 is a plain vector (no quaternion), and the director already predicts with it.
@@ -17,5 +21,24 @@ from __future__ import annotations
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
+from lightcraft_opt.control.estimation.sensor_options import (
+    CameraKind,
+    CameraOptions,
+    GyroOptions,
+    SensorOptions,
+    SpinSensorOptions,
+)
+from lightcraft_opt.control.estimation.sensors import SensorSuite
 
-__all__ = ["Estimate", "EstimationModel", "Estimator", "Reading"]
+__all__ = [
+    "CameraKind",
+    "CameraOptions",
+    "Estimate",
+    "EstimationModel",
+    "Estimator",
+    "GyroOptions",
+    "Reading",
+    "SensorOptions",
+    "SensorSuite",
+    "SpinSensorOptions",
+]
