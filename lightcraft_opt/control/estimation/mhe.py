@@ -1,0 +1,408 @@
+"""The moving-horizon estimator: the last N pulses fitted at once, one QP a pulse.
+
+The window holds N + 1 nodes, the states s_0 .. s_N at the last N + 1 pulses (fewer at the
+start of a flight), and the process noises w_j between them (multiple shooting). Its cost
+(docs/estimation.md#moving-horizon-estimation)::
+
+    ‖s_0 - s̄_0‖²_{P̄_0⁻¹}  +  Σ_{j<N} ‖w_j‖²_{Q_j⁻¹}  +  Σ_j Σ_readings ‖y - h(s_j, dt)‖²_{R⁻¹}
+
+subject to s_{j+1} = f(s_j, u_j, t_j) + w_j. Each pulse is one real-time iteration:
+
+1. shift: a node is added at the pulse (its guess the prediction of the last solution);
+   the oldest leaves when there are more than N + 1, and the arrival cost (s̄_0, P̄_0)
+   moves to the new first node by one extended Kalman filter step, its readings' update
+   and the prediction, linearised at the estimator's own solution of the node that left;
+2. the readings that arrived are placed at the nodes their times belong to (latency);
+3. one Gauss-Newton QP about the guess (control/estimation/mhe_qp.py, HPIPM), whose
+   solution is the new guess; its last node is the estimate.
+
+On a linear model with Gaussian noise the last node equals the Kalman filter's estimate at
+every pulse, the first N included: the arrival cost is then the filter's prediction at
+the first node, and the window's least squares the rest of the filter's (the check in
+tests/control/estimation/test_mhe_kalman.py).
+
+The covariance returned is the last node's block of the inverse of the QP's Hessian
+(reduced by its dynamics), computed by the Kalman covariance recursion along the window
+from P̄_0 with the QP's own Jacobians.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from lightcraft_opt.control.estimation.estimate import Estimate
+from lightcraft_opt.control.estimation.mhe_qp import mhe_qp_function, mhe_qp_sizes
+from lightcraft_opt.control.estimation.model import EstimationModel
+from lightcraft_opt.control.estimation.reading import Reading
+from lightcraft_opt.control.mpc_qp import QpStatus
+from lightcraft_opt.control.options import ControllerFault
+from lightcraft_opt.errors import OptionError, ParameterError
+from lightcraft_opt.model.checks import checked_int, checked_number, checked_vector
+
+__all__ = ["MheOptions", "MheStats", "MovingHorizonEstimator"]
+
+#: Longest window: 10 s of pulses; the QP grows with it and a pulse leaves 38 ms.
+MAX_WINDOW = 260
+#: Two times closer than this [s] are the same time (a reading taken at a pulse).
+_SAME_TIME = 1e-9
+
+
+@dataclass(frozen=True)
+class MheOptions:
+    """How the moving-horizon estimator fits its window.
+
+    Attributes
+    ----------
+    horizon : N, pulses in the window (N + 1 nodes), in [1, 260].
+    prior_sigma : the prior standard deviation of every entry of s, in its SI unit, > 0.
+    prior_sigmas : ((name, sigma), ...) overrides of ``prior_sigma``; a name is an entry
+        of the model's ``names`` (``"r_L[east]"``) or the part before its bracket
+        (``"r_L"``: all three).
+    max_iter : HPIPM's iteration cap, >= 1 (the QP has no bounds: it takes one or two).
+    tol : HPIPM's tolerance on the absolute residuals, in (0, 1).
+    """
+
+    horizon: int = 15
+    prior_sigma: float = 1.0
+    prior_sigmas: tuple[tuple[str, float], ...] = ()
+    max_iter: int = 20
+    tol: float = 1e-8
+
+    def __post_init__(self) -> None:
+        checked_int("MheOptions", "horizon", self.horizon, 1, MAX_WINDOW, "10 s of pulses")
+        checked_number("MheOptions", "prior_sigma", self.prior_sigma, 0.0)
+        if not isinstance(self.prior_sigmas, tuple):
+            raise OptionError(
+                f"MheOptions.prior_sigmas must be a tuple of (name, sigma), got "
+                f"{self.prior_sigmas!r}"
+            )
+        for pair in self.prior_sigmas:
+            if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], str)):
+                raise OptionError(
+                    f"MheOptions.prior_sigmas must hold (name, sigma) pairs, got {pair!r}"
+                )
+            checked_number("MheOptions", f"prior_sigmas[{pair[0]!r}]", pair[1], 0.0)
+        checked_int("MheOptions", "max_iter", self.max_iter, 1)
+        checked_number("MheOptions", "tol", self.tol, 0.0, 1.0)
+
+    def prior_covariance(self, names: Sequence[str]) -> np.ndarray:
+        """(n, n) diagonal prior covariance of s whose entries are ``names``; an override
+        that names no entry is an OptionError listing them."""
+        sigma = np.full(len(names), float(self.prior_sigma))
+        for name, value in self.prior_sigmas:
+            hit = [i for i, e in enumerate(names) if e == name or e.split("[")[0] == name]
+            if not hit:
+                raise OptionError(
+                    f"MheOptions.prior_sigmas: {name!r} names no entry of the model, "
+                    f"whose entries are {list(names)}"
+                )
+            sigma[hit] = value
+        return np.diag(sigma**2)
+
+
+@dataclass(frozen=True)
+class MheStats:
+    """One step of the estimator.
+
+    Attributes
+    ----------
+    status : how the QP ended (SOLVED; MAX_ITER, FAILED, NON_FINITE: the step fell back).
+    message : HPIPM's word, or why the step fell back.
+    fallback : the estimate is the prediction (the QP failed), not the window's fit.
+    iterations : HPIPM's (0 when it was not called); solve_time : of the QP [s].
+    step_time : of the whole step [s].
+    nodes : in the window, <= N + 1.
+    readings : in the window; dropped : readings this step could not use (taken before
+        the window's first node, or not finite).
+    """
+
+    status: QpStatus
+    message: str = ""
+    fallback: bool = False
+    iterations: int = 0
+    solve_time: float = 0.0
+    step_time: float = 0.0
+    nodes: int = 0
+    readings: int = 0
+    dropped: int = 0
+
+
+@dataclass
+class _Node:
+    """One pulse of the window: its time [s], the guess of s, the input fired there and
+    the root L (L Lᵀ = Q) of the noise of the stage it starts (None at the last node),
+    its readings (sensor, y, dt) and its f, F at the guess (None when stale)."""
+
+    t: float
+    s: np.ndarray
+    u: np.ndarray | None = None
+    noise_root: np.ndarray | None = None
+    readings: list[tuple[str, np.ndarray, float]] = field(default_factory=list)
+    linear: tuple[np.ndarray, np.ndarray] | None = None
+
+
+class MovingHorizonEstimator:
+    """A moving-horizon estimator (module docstring) on any :class:`EstimationModel`.
+
+    It meets the :class:`~lightcraft_opt.control.estimation.Estimator` protocol. Two
+    optional methods of the model map its vector s to what an :class:`Estimate` holds:
+
+    - ``start(x0) -> s0``: the estimated vector of a full state x0 (the prior mean of
+      ``reset``); without it s0 = x0;
+    - ``parts(s) -> (z, x, slow)``: Ψ's state, the full state (``lift``) and the slow
+      states by name; without it z = x = s and no slow states.
+
+    Parameters
+    ----------
+    model : the discrete model (predictions, noises, measurements, with Jacobians).
+    options : :class:`MheOptions`.
+
+    Attributes
+    ----------
+    name : "mhe".
+    last : :class:`MheStats` of the last step.
+    qp : the compiled QP Function (``mhe_qp``), built once.
+    """
+
+    name = "mhe"
+
+    def __init__(self, model: EstimationModel, options: MheOptions | None = None) -> None:
+        self.model = model
+        self.options = options if options is not None else MheOptions()
+        self.n = n = len(model.names)
+        self.prior = self.options.prior_covariance(model.names)
+        N = self.options.horizon
+        self.qp = mhe_qp_function(n, N, self.options.max_iter, self.options.tol)
+        n_w, n_a = mhe_qp_sizes(n, N)
+        # the QP's inputs and outputs, filled in place and handed over without copies:
+        # each (n, n) block is stored transposed, which is casadi's column-major order
+        self._A, self._B = np.zeros((N, n, n)), np.zeros((N, n, n))
+        self._d, self._H, self._g = np.zeros(N * n), np.zeros((N + 1, n, n)), np.zeros(n_w)
+        self._w, self._cost = np.zeros(n_w), np.zeros(1)
+        self._lam_x, self._lam_a = np.zeros(n_w), np.zeros(n_a)
+        self._buffer, self._eval = self.qp.buffer()
+        for i, a in enumerate((self._A, self._B, self._d, self._H, self._g)):
+            self._buffer.set_arg(i, a.data.cast("B"))
+        for i, a in enumerate((self._w, self._cost, self._lam_x, self._lam_a)):
+            self._buffer.set_res(i, a.data.cast("B"))
+        self._noise: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._nodes: list[_Node] = []
+        self._pending: list[Reading] = []
+        self._t_left = -math.inf
+        self._mean = np.zeros(n)
+        self._cov = self.prior.copy()
+        self.last = MheStats(QpStatus.SOLVED)
+
+    # ----------------------------------------------------------------- the protocol
+    def reset(self, x0: np.ndarray, t0: float = 0.0) -> None:
+        """Start a flight at time ``t0`` [s] from the full state ``x0`` (the model's
+        ``start`` maps it to s) as the prior mean, with the options' prior covariance."""
+        start = getattr(self.model, "start", None)
+        s0 = np.asarray(start(x0) if start is not None else x0, dtype=float).ravel()
+        self._mean = checked_vector("x0", s0, self.n)
+        self._cov = self.prior.copy()
+        self._nodes = [_Node(float(t0), self._mean.copy())]
+        self._pending, self._t_left = [], -math.inf
+        self.last = MheStats(QpStatus.SOLVED, nodes=1)
+
+    def step(
+        self,
+        readings: Sequence[Reading],
+        u_fired: np.ndarray | None,
+        t: float,
+        *,
+        fault: ControllerFault | None = None,
+    ) -> Estimate:
+        """The estimate at pulse time ``t`` [s].
+
+        ``readings``: those that arrived since the last step (any latency); ``u_fired``:
+        the input fired at the last pulse, which adds a node at ``t``; None (the first
+        step of a flight) adds none, ``t`` must then be the last node's time. ``fault``
+        injects a QP failure (RAISE, NON_FINITE; closed_loop.py). Never raises for a
+        failed QP: the step falls back to the prediction and says so in :attr:`last`.
+        """
+        clock = time.perf_counter()
+        if not self._nodes:
+            raise ParameterError("x0", "reset(x0, t0) the estimator before its first step")
+        if u_fired is None:
+            if abs(t - self._nodes[-1].t) > _SAME_TIME:
+                raise ParameterError(
+                    "u_fired", f"None adds no node: t = {t} must be the last node's time"
+                )
+        else:
+            self._add_node(np.asarray(u_fired, dtype=float), float(t))
+        queue, self._pending = [*self._pending, *readings], []
+        dropped = sum(not self._place(r) for r in queue)
+        if len(self._nodes) > self.options.horizon + 1:
+            self._move_arrival_cost()
+        status, message, iterations, solve_time, cov = self._iterate(fault)
+        s = self._nodes[-1].s
+        fallback = status is not QpStatus.SOLVED
+        parts = getattr(self.model, "parts", None)
+        z, x, slow = parts(s) if parts is not None else (s.copy(), s.copy(), {})
+        seconds = time.perf_counter() - clock
+        self.last = MheStats(
+            status,
+            message,
+            fallback,
+            iterations,
+            solve_time,
+            seconds,
+            len(self._nodes),
+            sum(len(node.readings) for node in self._nodes),
+            dropped,
+        )
+        return Estimate(float(t), np.asarray(z), np.asarray(x), cov, dict(slow), seconds)
+
+    # ----------------------------------------------------------------- the window
+    def _add_node(self, u: np.ndarray, t: float) -> None:
+        """Shift: a node at ``t``, its guess predicted from the last."""
+        last = self._nodes[-1]
+        last.u = u
+        last.linear = self._predict(last.s, u, last.t)
+        Q = np.asarray(self.model.process_noise(last.s, u, last.t), dtype=float)
+        last.noise_root = _root(Q)
+        self._nodes.append(_Node(t, last.linear[0].copy()))
+
+    def _move_arrival_cost(self) -> None:
+        """Drop the first node; the arrival cost moves to the next one by one EKF step
+        linearised at the node's solution ŝ: the update with its readings, then the
+        prediction (s̄ ← f(ŝ) + F (s̄⁺ - ŝ), P̄ ← F P̄⁺ Fᵀ + Q)."""
+        node = self._nodes.pop(0)
+        s_hat, mean, P = node.s, self._mean, self._cov
+        for sensor, y, dt in node.readings:
+            h, Hm = self._measure(sensor, s_hat, dt)
+            R = self._noise_of(sensor)[0]
+            mean, P = _kalman_update(mean, P, y - h - Hm @ (mean - s_hat), Hm, R)
+        assert node.u is not None and node.noise_root is not None
+        f, F = node.linear if node.linear is not None else self._predict(s_hat, node.u, node.t)
+        L = node.noise_root
+        self._mean = f + F @ (mean - s_hat)
+        self._cov = _symmetric(F @ P @ F.T + L @ L.T)
+        self._t_left = node.t
+
+    def _place(self, reading: Reading) -> bool:
+        """Put a reading at the node its time belongs to (the first node at or after
+        it); one taken after the last node waits. False: not usable (dropped)."""
+        y = np.asarray(reading.y, dtype=float).ravel()
+        if reading.t <= self._t_left + _SAME_TIME or not np.all(np.isfinite(y)):
+            return False
+        for node in self._nodes:
+            if reading.t <= node.t + _SAME_TIME:
+                node.readings.append((reading.sensor, y, max(0.0, node.t - reading.t)))
+                return True
+        self._pending.append(reading)
+        return True
+
+    # ----------------------------------------------------------------- one iteration
+    def _iterate(
+        self, fault: ControllerFault | None
+    ) -> tuple[QpStatus, str, int, float, np.ndarray]:
+        """Linearise at the guess, solve the QP, move the guess; (status, message,
+        iterations, solve time, covariance of the last node)."""
+        nodes, N, n = self._nodes, self.options.horizon, self.n
+        m = len(nodes) - 1
+        pad = N - m  # stages before the first node: s held still (F = I, no noise)
+        A, B, d, H, g = self._A, self._B, self._d, self._H, self._g
+        A[:pad], B[:pad], d[: pad * n], g[:] = np.eye(n), 0.0, 0.0, 0.0
+        H[:] = 0.0
+        info = _symmetric(np.linalg.inv(self._cov))
+        H[0] = info
+        g[:n] = info @ (nodes[0].s - self._mean)
+        cov_pred, cov = self._cov, self._cov
+        for i, node in enumerate(nodes):
+            j = pad + i
+            Hi, gi = H[j], g[2 * n * j : 2 * n * j + n]
+            for sensor, y, dt in node.readings:
+                h, Hm = self._measure(sensor, node.s, dt)
+                R, R_inv = self._noise_of(sensor)
+                Hi += Hm.T @ R_inv @ Hm
+                gi -= Hm.T @ (R_inv @ (y - h))
+                cov = _kalman_update(np.zeros(n), cov, np.zeros(y.size), Hm, R)[1]
+            if i == m:
+                break
+            if node.linear is None:
+                assert node.u is not None
+                node.linear = self._predict(node.s, node.u, node.t)
+            f, F = node.linear
+            assert node.noise_root is not None
+            A[j], B[j] = F.T, node.noise_root.T
+            d[j * n : (j + 1) * n] = f - nodes[i + 1].s
+            cov_pred = _symmetric(F @ cov @ F.T + node.noise_root @ node.noise_root.T)
+            cov = cov_pred
+        if not all(np.all(np.isfinite(v)) for v in (A, B, d, H, g)):
+            return QpStatus.NON_FINITE, "non-finite linearisation", 0, 0.0, cov_pred
+        clock = time.perf_counter()
+        if fault is ControllerFault.RAISE:
+            status, message, iterations = QpStatus.FAILED, "injected solver failure", 0
+        else:
+            status, message, iterations = self._solve()
+        solve_time = time.perf_counter() - clock
+        if fault is ControllerFault.NON_FINITE or not np.all(np.isfinite(self._w)):
+            status, message = QpStatus.NON_FINITE, f"{message}; the answer is not finite"
+        if status is not QpStatus.SOLVED:
+            return status, message, iterations, solve_time, cov_pred
+        for i, node in enumerate(nodes):
+            k = 2 * n * (pad + i)
+            node.s = node.s + self._w[k : k + n]
+            node.linear = None
+        return status, message, iterations, solve_time, cov
+
+    def _solve(self) -> tuple[QpStatus, str, int]:
+        """One call of the compiled QP on the filled inputs: (status, message, iterations)."""
+        try:
+            self._eval()
+        except RuntimeError as err:
+            return QpStatus.FAILED, str(err), 0
+        stats = self._buffer.stats()
+        raw = str(stats.get("return_status", "unknown"))
+        iterations = int(stats.get("iter_count", -1))
+        if self._buffer.ret() == 0 and stats.get("success", False):
+            return QpStatus.SOLVED, f"hpipm: {raw}", iterations
+        if iterations >= self.options.max_iter:
+            return QpStatus.MAX_ITER, f"hpipm: {raw} (iteration cap)", iterations
+        return QpStatus.FAILED, f"hpipm: {raw}", iterations
+
+    # ----------------------------------------------------------------- the model
+    def _predict(self, s: np.ndarray, u: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        f, F = self.model.predict(s, u, t)
+        return np.asarray(f, dtype=float).ravel(), np.asarray(F, dtype=float)
+
+    def _measure(self, sensor: str, s: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        h, Hm = self.model.measure(sensor, s, dt)
+        return np.asarray(h, dtype=float).ravel(), np.atleast_2d(np.asarray(Hm, dtype=float))
+
+    def _noise_of(self, sensor: str) -> tuple[np.ndarray, np.ndarray]:
+        """(R, R⁻¹) of a sensor, asked of the model once."""
+        if sensor not in self._noise:
+            R = np.atleast_2d(np.asarray(self.model.measurement_noise(sensor), dtype=float))
+            self._noise[sensor] = (R, np.linalg.inv(R))
+        return self._noise[sensor]
+
+
+# --------------------------------------------------------------------------- linear algebra
+def _kalman_update(
+    mean: np.ndarray, P: np.ndarray, innovation: np.ndarray, Hm: np.ndarray, R: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The Kalman filter's measurement update (Joseph form): (mean + K ν, (I - K H) P
+    (I - K H)ᵀ + K R Kᵀ) with K = P Hᵀ (H P Hᵀ + R)⁻¹."""
+    PH = P @ Hm.T
+    K = np.linalg.solve(Hm @ PH + R, PH.T).T
+    IKH = np.eye(P.shape[0]) - K @ Hm
+    return mean + K @ innovation, _symmetric(IKH @ P @ IKH.T + K @ R @ K.T)
+
+
+def _root(Q: np.ndarray) -> np.ndarray:
+    """L with L Lᵀ = Q for a symmetric positive semidefinite Q (its eigen-decomposition;
+    the columns of zero eigenvalues are zero)."""
+    lam, V = np.linalg.eigh(_symmetric(Q))
+    return V * np.sqrt(np.clip(lam, 0.0, None))
+
+
+def _symmetric(P: np.ndarray) -> np.ndarray:
+    return 0.5 * (P + P.T)
