@@ -196,6 +196,7 @@ class MovingHorizonEstimator:
         self._t_left = -math.inf
         self._mean = np.zeros(n)
         self._cov = self.prior.copy()
+        self._last_cov = self.prior.copy()  # the covariance last returned
         self.last = MheStats(QpStatus.SOLVED)
 
     # ----------------------------------------------------------------- the protocol
@@ -206,6 +207,7 @@ class MovingHorizonEstimator:
         s0 = np.asarray(start(x0) if start is not None else x0, dtype=float).ravel()
         self._mean = checked_vector("x0", s0, self.n)
         self._cov = self.prior.copy()
+        self._last_cov = self.prior.copy()
         self._nodes = [_Node(float(t0), self._mean.copy())]
         self._pending, self._t_left = [], -math.inf
         self.last = MheStats(QpStatus.SOLVED, nodes=1)
@@ -241,6 +243,7 @@ class MovingHorizonEstimator:
         if len(self._nodes) > self.options.horizon + 1:
             self._move_arrival_cost()
         status, message, iterations, solve_time, cov = self._iterate(fault)
+        self._last_cov = cov
         s = self._nodes[-1].s
         fallback = status is not QpStatus.SOLVED
         parts = getattr(self.model, "parts", None)
@@ -261,18 +264,23 @@ class MovingHorizonEstimator:
 
     # ----------------------------------------------------------------- the window
     def _add_node(self, u: np.ndarray, t: float) -> None:
-        """Shift: a node at ``t``, its guess predicted from the last."""
+        """Shift: a node at ``t``, its guess predicted from the last (held at the last
+        when the prediction is not finite: the step then falls back)."""
         last = self._nodes[-1]
         last.u = u
-        last.linear = self._predict(last.s, u, last.t)
+        f, F = self._predict(last.s, u, last.t)
+        finite = bool(np.all(np.isfinite(f)) and np.all(np.isfinite(F)))
+        last.linear = (f, F) if finite else None
         Q = np.asarray(self.model.process_noise(last.s, u, last.t), dtype=float)
         last.noise_root = _root(Q)
-        self._nodes.append(_Node(t, last.linear[0].copy()))
+        self._nodes.append(_Node(t, f.copy() if finite else last.s.copy()))
 
     def _move_arrival_cost(self) -> None:
         """Drop the first node; the arrival cost moves to the next one by one EKF step
         linearised at the node's solution ŝ: the update with its readings, then the
-        prediction (s̄ ← f(ŝ) + F (s̄⁺ - ŝ), P̄ ← F P̄⁺ Fᵀ + Q)."""
+        prediction (s̄ ← f(ŝ) + F (s̄⁺ - ŝ), P̄ ← F P̄⁺ Fᵀ + Q). Should the model give
+        no finite answer there, the new first node's guess becomes s̄ and P̄ grows by Q:
+        a bad pulse never poisons the arrival cost."""
         node = self._nodes.pop(0)
         s_hat, mean, P = node.s, self._mean, self._cov
         for sensor, y, dt in node.readings:
@@ -282,8 +290,13 @@ class MovingHorizonEstimator:
         assert node.u is not None and node.noise_root is not None
         f, F = node.linear if node.linear is not None else self._predict(s_hat, node.u, node.t)
         L = node.noise_root
-        self._mean = f + F @ (mean - s_hat)
-        self._cov = _symmetric(F @ P @ F.T + L @ L.T)
+        mean, P = f + F @ (mean - s_hat), _symmetric(F @ P @ F.T + L @ L.T)
+        if np.all(np.isfinite(mean)) and np.all(np.isfinite(P)):
+            self._mean, self._cov = mean, P
+        else:
+            grown = self._cov + L @ L.T
+            self._mean = self._nodes[0].s.copy()
+            self._cov = grown if np.all(np.isfinite(grown)) else self._cov
         self._t_left = node.t
 
     def _place(self, reading: Reading) -> bool:
@@ -335,8 +348,10 @@ class MovingHorizonEstimator:
             d[j * n : (j + 1) * n] = f - nodes[i + 1].s
             cov_pred = _symmetric(F @ cov @ F.T + node.noise_root @ node.noise_root.T)
             cov = cov_pred
-        if not all(np.all(np.isfinite(v)) for v in (A, B, d, H, g)):
-            return QpStatus.NON_FINITE, "non-finite linearisation", 0, 0.0, cov_pred
+        if not all(np.all(np.isfinite(v)) for v in (A, B, d, H, g, cov_pred)):
+            for node in nodes:
+                node.linear = None
+            return QpStatus.NON_FINITE, "non-finite linearisation", 0, 0.0, self._last_cov
         clock = time.perf_counter()
         if fault is ControllerFault.RAISE:
             status, message, iterations = QpStatus.FAILED, "injected solver failure", 0
@@ -399,7 +414,9 @@ def _kalman_update(
 
 def _root(Q: np.ndarray) -> np.ndarray:
     """L with L Lᵀ = Q for a symmetric positive semidefinite Q (its eigen-decomposition;
-    the columns of zero eigenvalues are zero)."""
+    the columns of zero eigenvalues are zero); NaN for a Q that is not finite."""
+    if not np.all(np.isfinite(Q)):
+        return np.full(Q.shape, np.nan)
     lam, V = np.linalg.eigh(_symmetric(Q))
     return V * np.sqrt(np.clip(lam, 0.0, None))
 

@@ -20,6 +20,8 @@ import pytest
 from lightcraft_opt.control.estimation import Estimator, Reading
 from lightcraft_opt.control.estimation.mhe import MheOptions, MovingHorizonEstimator
 from lightcraft_opt.control.estimation.mhe_qp import mhe_qp_function, mhe_qp_sizes
+from lightcraft_opt.control.mpc_qp import QpStatus
+from lightcraft_opt.control.options import ControllerFault
 
 PERIOD = 1 / 26  # s, a pulse
 SIGMA_CAMERA = 0.005  # m
@@ -31,7 +33,7 @@ G = np.vstack([0.5 * PERIOD**2 * I3, PERIOD * I3])  # an acceleration held over 
 Q = SIGMA_ACCEL**2 * G @ G.T  # rank 3: the MHE must cope with a singular Q
 R = SIGMA_CAMERA**2 * I3
 PRIOR = np.diag([0.02] * 3 + [0.2] * 3) ** 2
-HORIZON = 8
+HORIZON = 10
 
 
 class ConstantVelocity:
@@ -128,6 +130,31 @@ def test_mhe_equals_the_kalman_filter_with_lost_readings():
 def test_mhe_with_latency_equals_the_filter_that_saw_the_same_readings(latency):
     d_mean, d_cov = run_both(4 * HORIZON, seed=3, latency=latency, lost=0.2)
     assert d_mean.max() < 1e-8 and d_cov.max() < 1e-8
+
+
+@pytest.mark.parametrize("fault", [ControllerFault.RAISE, ControllerFault.NON_FINITE])
+def test_a_failed_qp_falls_back_to_the_prediction_and_the_next_recovers(fault):
+    """The failed pulse's estimate is the last estimate predicted (F x + G u); the next
+    pulse's QP, on a linear model, is the full-information fit again: the filter's."""
+    _, U, readings = flight(3 * HORIZON, seed=4)
+    mhe = MovingHorizonEstimator(
+        ConstantVelocity(),
+        MheOptions(horizon=HORIZON, prior_sigmas=(("r_L", 0.02), ("v_L", 0.2))),
+    )
+    mhe.reset(np.r_[0.0, 0.0, 2.0, 0.0, 0.0, 4.0])
+    failing, previous = {HORIZON + 2, HORIZON + 3}, np.zeros(6)
+    for k in range(3 * HORIZON):
+        arrived = [r for r in readings if r.arrives == k]
+        u = None if k == 0 else U[k - 1]
+        est = mhe.step(arrived, u, k * PERIOD, fault=fault if k in failing else None)
+        if k in failing:
+            assert mhe.last.fallback and mhe.last.status in (QpStatus.FAILED, QpStatus.NON_FINITE)
+            assert np.max(np.abs(est.z - (F @ previous + G @ U[k - 1]))) < 1e-12
+        else:
+            assert not mhe.last.fallback
+            x_kf = kalman([r for r in readings if r.arrives <= k], U, k)[0]
+            assert np.max(np.abs(est.z - x_kf)) < 1e-8
+        previous = est.z
 
 
 def test_a_reading_older_than_the_window_is_dropped_and_said():
