@@ -134,13 +134,14 @@ class MheStats:
 
 @dataclass
 class _Node:
-    """One pulse of the window: its time [s], the guess of s, the input fired there and
-    the root L (L Lᵀ = Q) of the noise of the stage it starts (None at the last node),
-    its readings (sensor, y, dt) and its f, F at the guess (None when stale)."""
+    """One pulse of the window: its time [s], the guess of s, the input fired there, the
+    noise Q of the stage it starts and its root L (L Lᵀ = Q; None at the last node), its
+    readings (sensor, y, dt) and its f, F at the guess (None when stale)."""
 
     t: float
     s: np.ndarray
     u: np.ndarray | None = None
+    noise: np.ndarray | None = None
     noise_root: np.ndarray | None = None
     readings: list[tuple[str, np.ndarray, float]] = field(default_factory=list)
     linear: tuple[np.ndarray, np.ndarray] | None = None
@@ -191,6 +192,7 @@ class MovingHorizonEstimator:
         for i, a in enumerate((self._w, self._cost, self._lam_x, self._lam_a)):
             self._buffer.set_res(i, a.data.cast("B"))
         self._noise: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self._eye = np.eye(n)
         self._nodes: list[_Node] = []
         self._pending: list[Reading] = []
         self._t_left = -math.inf
@@ -273,6 +275,7 @@ class MovingHorizonEstimator:
         last.linear = (f, F) if finite else None
         Q = np.asarray(self.model.process_noise(last.s, u, last.t), dtype=float)
         last.noise_root = _root(Q)
+        last.noise = last.noise_root @ last.noise_root.T
         self._nodes.append(_Node(t, f.copy() if finite else last.s.copy()))
 
     def _move_arrival_cost(self) -> None:
@@ -287,14 +290,14 @@ class MovingHorizonEstimator:
             h, Hm = self._measure(sensor, s_hat, dt)
             R = self._noise_of(sensor)[0]
             mean, P = _kalman_update(mean, P, y - h - Hm @ (mean - s_hat), Hm, R)
-        assert node.u is not None and node.noise_root is not None
+        assert node.u is not None
         f, F = node.linear if node.linear is not None else self._predict(s_hat, node.u, node.t)
-        L = node.noise_root
-        mean, P = f + F @ (mean - s_hat), _symmetric(F @ P @ F.T + L @ L.T)
+        assert node.noise is not None
+        mean, P = f + F @ (mean - s_hat), _symmetric(F @ P @ F.T + node.noise)
         if np.all(np.isfinite(mean)) and np.all(np.isfinite(P)):
             self._mean, self._cov = mean, P
         else:
-            grown = self._cov + L @ L.T
+            grown = self._cov + node.noise
             self._mean = self._nodes[0].s.copy()
             self._cov = grown if np.all(np.isfinite(grown)) else self._cov
         self._t_left = node.t
@@ -322,7 +325,7 @@ class MovingHorizonEstimator:
         m = len(nodes) - 1
         pad = N - m  # stages before the first node: s held still (F = I, no noise)
         A, B, d, H, g = self._A, self._B, self._d, self._H, self._g
-        A[:pad], B[:pad], d[: pad * n], g[:] = np.eye(n), 0.0, 0.0, 0.0
+        A[:pad], B[:pad], d[: pad * n], g[:] = self._eye, 0.0, 0.0, 0.0
         H[:] = 0.0
         info = _symmetric(np.linalg.inv(self._cov))
         H[0] = info
@@ -331,22 +334,26 @@ class MovingHorizonEstimator:
         for i, node in enumerate(nodes):
             j = pad + i
             Hi, gi = H[j], g[2 * n * j : 2 * n * j + n]
+            rows, noises = [], []
             for sensor, y, dt in node.readings:
                 h, Hm = self._measure(sensor, node.s, dt)
                 R, R_inv = self._noise_of(sensor)
                 Hi += Hm.T @ R_inv @ Hm
                 gi -= Hm.T @ (R_inv @ (y - h))
-                cov = _kalman_update(np.zeros(n), cov, np.zeros(y.size), Hm, R)[1]
+                rows.append(Hm)
+                noises.append(R)
+            if rows:
+                cov = _covariance_update(cov, np.vstack(rows), _block_diagonal(noises))
             if i == m:
                 break
             if node.linear is None:
                 assert node.u is not None
                 node.linear = self._predict(node.s, node.u, node.t)
             f, F = node.linear
-            assert node.noise_root is not None
+            assert node.noise_root is not None and node.noise is not None
             A[j], B[j] = F.T, node.noise_root.T
             d[j * n : (j + 1) * n] = f - nodes[i + 1].s
-            cov_pred = _symmetric(F @ cov @ F.T + node.noise_root @ node.noise_root.T)
+            cov_pred = _symmetric(F @ cov @ F.T + node.noise)
             cov = cov_pred
         if not all(np.all(np.isfinite(v)) for v in (A, B, d, H, g, cov_pred)):
             for node in nodes:
@@ -410,6 +417,24 @@ def _kalman_update(
     K = np.linalg.solve(Hm @ PH + R, PH.T).T
     IKH = np.eye(P.shape[0]) - K @ Hm
     return mean + K @ innovation, _symmetric(IKH @ P @ IKH.T + K @ R @ K.T)
+
+
+def _covariance_update(P: np.ndarray, Hm: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """The Kalman filter's covariance update P - K H P, K = P Hᵀ (H P Hᵀ + R)⁻¹."""
+    PH = P @ Hm.T
+    K = np.linalg.solve(Hm @ PH + R, PH.T).T
+    return _symmetric(P - K @ PH.T)
+
+
+def _block_diagonal(blocks: list[np.ndarray]) -> np.ndarray:
+    if len(blocks) == 1:
+        return blocks[0]
+    size = sum(b.shape[0] for b in blocks)
+    out, i = np.zeros((size, size)), 0
+    for b in blocks:
+        out[i : i + b.shape[0], i : i + b.shape[0]] = b
+        i += b.shape[0]
+    return out
 
 
 def _root(Q: np.ndarray) -> np.ndarray:
