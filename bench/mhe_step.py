@@ -9,7 +9,9 @@ covariance recursion and the HPIPM QP. Ψ's values and Jacobians (the EKF's mode
 top: N + 1 predictions a pulse (bench/director.py measures Ψ's).
 
 Printed: the median, 99th percentile and max of the whole step and of the QP alone over
-``--steps`` pulses after the window has filled, and the model's share. Target (issue 30):
+``--steps`` pulses after the window has filled, the model's share and its predictions a
+step (each a value and a Jacobian: multiply by Ψ's cost of a stage for Ψ's share), with
+every stage evaluated afresh and with three (``MheOptions.relinearize``). Target (issue 30):
 median <= 3 ms. Timing on a loaded machine is not a measurement of the code: run it alone.
 
 Run: ``python bench/mhe_step.py`` (``--help`` for options). :func:`mhe_step_times` is the
@@ -38,7 +40,7 @@ ENTRIES = (
 
 class PsiSized:
     """A 17-entry stand-in of Ψ's estimation model (module docstring); ``seconds``
-    accumulates the wall time spent in it."""
+    accumulates the wall time spent in it, ``predictions`` its calls of ``predict``."""
 
     names = ENTRIES
 
@@ -49,10 +51,11 @@ class PsiSized:
         self.A[:3, 3:6] += PERIOD * np.eye(3)
         self.Q = np.diag(rng.uniform(1e-6, 1e-4, n))
         self.R = (0.005**2) * np.eye(3)
-        self.seconds = 0.0
+        self.seconds, self.predictions = 0.0, 0
 
     def predict(self, s: np.ndarray, u: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
         clock = time.perf_counter()
+        self.predictions += 1
         out = self.A @ s + 0.01 * np.sin(s), self.A + 0.01 * np.diag(np.cos(s))
         self.seconds += time.perf_counter() - clock
         return out
@@ -73,17 +76,24 @@ class PsiSized:
 
 
 def mhe_step_times(
-    steps: int = 300, horizon: int = 15, cameras: int = 1, seed: int = 0
+    steps: int = 300,
+    horizon: int = 15,
+    cameras: int = 1,
+    relinearize: int | None = None,
+    seed: int = 0,
 ) -> dict[str, np.ndarray | float]:
     """Step and QP times [s] of the MHE on :class:`PsiSized` over ``steps`` pulses after
-    the window has filled; ``cameras`` readings of r_L a node. Returns {"step": (steps,),
-    "qp": (steps,), "model_share": fraction of the step time spent in the model}."""
+    the window has filled; ``cameras`` readings of r_L a node; ``relinearize`` as
+    :class:`MheOptions`. Returns {"step": (steps,), "qp": (steps,), "model_share":
+    fraction of the step time spent in the model, "predictions": model predictions (values
+    and Jacobians) a step}."""
     rng = np.random.default_rng(seed)
     model = PsiSized(seed)
-    mhe = MovingHorizonEstimator(model, MheOptions(horizon=horizon, prior_sigma=0.1))
+    options = MheOptions(horizon=horizon, prior_sigma=0.1, relinearize=relinearize)
+    mhe = MovingHorizonEstimator(model, options)
     mhe.reset(np.zeros(len(ENTRIES)))
     s = np.zeros(len(ENTRIES))
-    step, qp, spent, model_time = [], [], 0.0, 0.0
+    step, qp, spent, model_time, predictions = [], [], 0.0, 0.0, 0
     u = np.zeros(0)
     for k in range(horizon + steps):
         if k:
@@ -92,14 +102,20 @@ def mhe_step_times(
             Reading(f"camera{c}", k * PERIOD, k, s[:3] + rng.normal(0.0, 0.005, 3))
             for c in range(cameras)
         ]
-        model.seconds = 0.0
+        model.seconds, model.predictions = 0.0, 0
         mhe.step(readings, None if k == 0 else u, k * PERIOD)
         if k >= horizon:
             step.append(mhe.last.step_time)
             qp.append(mhe.last.solve_time)
             spent += mhe.last.step_time
             model_time += model.seconds
-    return {"step": np.array(step), "qp": np.array(qp), "model_share": model_time / spent}
+            predictions += model.predictions
+    return {
+        "step": np.array(step),
+        "qp": np.array(qp),
+        "model_share": model_time / spent,
+        "predictions": predictions / steps,
+    }
 
 
 def main() -> None:
@@ -107,15 +123,17 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=400)
     parser.add_argument("--horizon", type=int, default=15)
     args = parser.parse_args()
-    for cameras in (1, 3):
-        times = mhe_step_times(args.steps, args.horizon, cameras)
+    for cameras, relinearize in ((1, None), (3, None), (1, 3)):
+        times = mhe_step_times(args.steps, args.horizon, cameras, relinearize)
+        print(f"N {args.horizon}, {cameras} camera(s) a node, relinearize {relinearize}:")
         for what in ("step", "qp"):
             t = np.asarray(times[what]) * 1e3
             print(
-                f"N {args.horizon}, {cameras} camera(s) a node, {what:4s}: median "
-                f"{np.median(t):.2f} ms, p99 {np.percentile(t, 99):.2f} ms, max {t.max():.2f} ms"
+                f"  {what:4s}: median {np.median(t):.2f} ms, p99 {np.percentile(t, 99):.2f} ms, "
+                f"max {t.max():.2f} ms"
             )
-        print(f"  the model's share of the step: {100 * float(times['model_share']):.0f} %")
+        share, calls = float(times["model_share"]), float(times["predictions"])
+        print(f"  the model: {100 * share:.0f} % of the step, {calls:.1f} predictions a step")
 
 
 if __name__ == "__main__":

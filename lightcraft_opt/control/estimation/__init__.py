@@ -10,7 +10,9 @@
 - :mod:`.sensor_options`: the sensors' options (:class:`SensorOptions`: a camera, gyros,
   a spin counter; their noise, frame rate, latency, lost frames);
 - :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
-  one owner of each sensor's measurement Function and noise.
+  one owner of each sensor's measurement Function and noise;
+- :mod:`.mhe`: :class:`MovingHorizonEstimator` (:class:`MheOptions`, :class:`MheStats`),
+  the last N pulses fitted by one HPIPM QP a pulse (its QP: :mod:`.mhe_qp`).
 
 The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
 is a plain vector (no quaternion), and the director already predicts with it.
@@ -19,6 +21,7 @@ is a plain vector (no quaternion), and the director already predicts with it.
 from __future__ import annotations
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.mhe import MheOptions, MheStats, MovingHorizonEstimator
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.control.estimation.sensor_options import (
@@ -37,6 +40,9 @@ __all__ = [
     "EstimationModel",
     "Estimator",
     "GyroOptions",
+    "MheOptions",
+    "MheStats",
+    "MovingHorizonEstimator",
     "Reading",
     "SensorOptions",
     "SensorSuite",

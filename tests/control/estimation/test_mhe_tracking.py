@@ -94,11 +94,12 @@ def flight(seed: int, pulses: int) -> tuple[np.ndarray, list[Reading]]:
     return np.array(X), readings
 
 
-def nees_of_flight(seed: int, pulses: int) -> np.ndarray:
+def nees_of_flight(seed: int, pulses: int, relinearize: int | None) -> np.ndarray:
     X, readings = flight(seed, pulses)
+    sigmas = (("r_L", 0.3), ("v_L", 0.5))
     mhe = MovingHorizonEstimator(
         DragRangeElevation(),
-        MheOptions(horizon=10, prior_sigmas=(("r_L", 0.3), ("v_L", 0.5))),
+        MheOptions(horizon=10, prior_sigmas=sigmas, relinearize=relinearize),
     )
     mhe.reset(MEAN0)
     nees = np.empty(pulses)
@@ -111,8 +112,10 @@ def nees_of_flight(seed: int, pulses: int) -> np.ndarray:
     return nees
 
 
-def test_mhe_is_consistent_over_seeded_flights():
-    """NEES of 30 flights of 40 pulses inside the 95 % chi-square band.
+@pytest.mark.parametrize("relinearize", [None, 3], ids=["every stage", "three stages"])
+def test_mhe_is_consistent_over_seeded_flights(relinearize):
+    """NEES of 30 flights of 40 pulses inside the 95 % chi-square band, the stages
+    evaluated afresh every pulse or three a pulse.
 
     Averaged over M independent flights, a consistent estimator's NEES at a pulse is
     chi-square with M n degrees of freedom divided by M; its two-sided 95 % band is
@@ -122,7 +125,7 @@ def test_mhe_is_consistent_over_seeded_flights():
     averages lie in it; we ask 80 %: 8 of 40 outside is 4 times the 2 expected.
     """
     runs, pulses, n = 30, 40, len(NAMES)
-    nees = np.array([nees_of_flight(seed, pulses) for seed in range(runs)])
+    nees = np.array([nees_of_flight(seed, pulses, relinearize) for seed in range(runs)])
     low, high = chi2.ppf([0.025, 0.975], runs * n) / runs
     per_pulse = nees.mean(axis=0)
     assert low < nees.mean() < high
@@ -212,6 +215,7 @@ def test_a_non_finite_linearisation_falls_back_to_the_prediction():
         ({"prior_sigmas": ("r_L",)}, "MheOptions.prior_sigmas"),
         ({"max_iter": 0}, "MheOptions.max_iter"),
         ({"tol": 2.0}, "MheOptions.tol"),
+        ({"horizon": 5, "relinearize": 6}, "MheOptions.relinearize"),
     ],
 )
 def test_bad_options_name_their_field(kwargs, field):
