@@ -349,17 +349,18 @@ class MovingHorizonEstimator:
             node.linear, node.age = self._predict(node.s, node.u, node.t), 0
         for i, node in enumerate(nodes):
             j = pad + i
-            Hi, gi = H[j], g[2 * n * j : 2 * n * j + n]
-            rows, noises = [], []
-            for sensor, y, dt in node.readings:
-                h, Hm = self._measure(sensor, node.s, dt)
-                R, R_inv = self._noise_of(sensor)
-                Hi += Hm.T @ R_inv @ Hm
-                gi -= Hm.T @ (R_inv @ (y - h))
-                rows.append(Hm)
-                noises.append(R)
-            if rows:
-                cov = _covariance_update(cov, np.vstack(rows), _block_diagonal(noises))
+            if node.readings:
+                # the readings' Gauss-Newton terms: Hᵀ R⁻¹ H and -Hᵀ R⁻¹ (y - h)
+                information, gradient = np.zeros((n, n)), np.zeros(n)
+                for sensor, y, dt in node.readings:
+                    h, Hm = self._measure(sensor, node.s, dt)
+                    weighted = Hm.T @ self._noise_of(sensor)[1]
+                    information += weighted @ Hm
+                    gradient -= weighted @ (y - h)
+                H[j] += information
+                g[2 * n * j : 2 * n * j + n] += gradient
+                # the Kalman update in information form: P⁺ = (P⁻¹ + Hᵀ R⁻¹ H)⁻¹
+                cov = _symmetric(np.linalg.solve(self._eye + cov @ information, cov))
             if i == m:
                 break
             assert node.linear is not None
@@ -447,24 +448,6 @@ def _kalman_update(
     K = np.linalg.solve(Hm @ PH + R, PH.T).T
     IKH = np.eye(P.shape[0]) - K @ Hm
     return mean + K @ innovation, _symmetric(IKH @ P @ IKH.T + K @ R @ K.T)
-
-
-def _covariance_update(P: np.ndarray, Hm: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """The Kalman filter's covariance update P - K H P, K = P Hᵀ (H P Hᵀ + R)⁻¹."""
-    PH = P @ Hm.T
-    K = np.linalg.solve(Hm @ PH + R, PH.T).T
-    return _symmetric(P - K @ PH.T)
-
-
-def _block_diagonal(blocks: list[np.ndarray]) -> np.ndarray:
-    if len(blocks) == 1:
-        return blocks[0]
-    size = sum(b.shape[0] for b in blocks)
-    out, i = np.zeros((size, size)), 0
-    for b in blocks:
-        out[i : i + b.shape[0], i : i + b.shape[0]] = b
-        i += b.shape[0]
-    return out
 
 
 def _root(Q: np.ndarray) -> np.ndarray:
