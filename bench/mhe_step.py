@@ -26,8 +26,7 @@ import time
 
 import numpy as np
 
-from lightcraft_opt.control.estimation import Reading
-from lightcraft_opt.control.estimation.mhe import MheOptions, MovingHorizonEstimator
+from lightcraft_opt.control.estimation import MheOptions, MovingHorizonEstimator, Reading
 from lightcraft_opt.layout import REDUCED_STATE
 
 PERIOD = 1 / 26  # s

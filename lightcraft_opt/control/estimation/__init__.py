@@ -11,8 +11,9 @@
   a spin counter; their noise, frame rate, latency, lost frames);
 - :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
   one owner of each sensor's measurement Function and noise;
-- :mod:`.mhe`: :class:`MovingHorizonEstimator` (:class:`MheOptions`, :class:`MheStats`),
-  the last N pulses fitted by one HPIPM QP a pulse (its QP: :mod:`.mhe_qp`).
+- :mod:`.mhe`: :class:`MovingHorizonEstimator`, the last N pulses fitted by one HPIPM QP
+  a pulse (its QP: :mod:`.mhe_qp`; its options and step statistics, :class:`MheOptions`
+  and :class:`MheStats`: :mod:`.mhe_options`).
 
 The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
 is a plain vector (no quaternion), and the director already predicts with it.
@@ -21,7 +22,8 @@ is a plain vector (no quaternion), and the director already predicts with it.
 from __future__ import annotations
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
-from lightcraft_opt.control.estimation.mhe import MheOptions, MheStats, MovingHorizonEstimator
+from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
+from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.control.estimation.sensor_options import (

@@ -17,8 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lightcraft_opt.control.estimation import Estimator, Reading
-from lightcraft_opt.control.estimation.mhe import MheOptions, MovingHorizonEstimator
+from lightcraft_opt.control.estimation import Estimator, MheOptions, MovingHorizonEstimator, Reading
 from lightcraft_opt.control.estimation.mhe_qp import mhe_qp_function, mhe_qp_sizes
 from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.control.options import ControllerFault

@@ -16,8 +16,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from lightcraft_opt.control.estimation import Reading
-from lightcraft_opt.control.estimation.mhe import MheOptions, MovingHorizonEstimator
+from lightcraft_opt.control.estimation import MheOptions, MovingHorizonEstimator, Reading
 from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.errors import OptionError
 
