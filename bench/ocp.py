@@ -62,6 +62,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from sqp_chain import sqp_solve
 
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE
@@ -77,6 +78,7 @@ from lightcraft_opt.ocp.options import (
 from lightcraft_opt.ocp.problem import OcpProblem, TerminalAltitude
 from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.ocp.solve import CompiledOcp
+from lightcraft_opt.ocp.start import director_applies, director_start, nominal_start
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -112,6 +114,12 @@ def main() -> None:
         choices=("rollout", "director"),
         default="rollout",
         help="cold start: the nominal rollout (with the wind ramp) or the director's flight",
+    )
+    parser.add_argument(
+        "--sqp",
+        action="store_true",
+        help="also run the SQP on HPIPM over the chain (bench/sqp_chain.py) beside each "
+        "IPOPT row: cold from the same start, and the 2 mm re-solve",
     )
     parser.add_argument(
         "--profile",
@@ -200,6 +208,8 @@ def main() -> None:
         for label, result in (("cold", cold), ("warm", warm)):
             if not result.success:
                 print(f"    {label}: {result.message[:300]}")
+        if args.sqp and compiled.chain is not None:
+            sqp_rows(compiled, cold, warm, moved, args.max_iter)
 
     done = [(s, c, w) for s, c, w in rows if c.success and w.success]
     if done and problem.horizon == 130:
@@ -230,6 +240,38 @@ def main() -> None:
         f"from the pad {100 * np.max(np.hypot(*cold.x[:, :2].T)):.2f} cm, altitude at the end "
         f"{cold.x[-1, 2]:.1f} m (apogee {cold.x[:, 2].max():.1f} m)"
     )
+
+
+def sqp_rows(
+    compiled: CompiledOcp, cold: OcpResult, warm: OcpResult, moved: np.ndarray, max_iter: int
+) -> None:
+    """The SQP on HPIPM over the chain (bench/sqp_chain.py) on the same NLP as an IPOPT
+    row: cold from the same flown start, the 2 mm re-solve from the cold optimum; its
+    cost against IPOPT's (relative)."""
+    pr, tr = compiled.problem, compiled.transcription
+    u_fixed = np.where(pr.free, 0.0, pr.lower)
+    P = tr.parameter_vector(pr.x0, pr.p, pr.t0, pr.u_previous, u_fixed, pr.reference())
+    P_moved = tr.parameter_vector(moved, pr.p, pr.t0, pr.u_previous, u_fixed, pr.reference())
+    fly = director_start if director_applies(pr) else nominal_start
+    start = fly(pr, compiled.pulse_map, np.asarray(pr.x0), pr.p, pr.t0)
+    w_start = tr.pack(start.X, start.U, pr.u_previous)
+    runs = [
+        ("cold, convex", P, w_start, np.zeros(tr.lbg.size), "convex", cold),
+        ("warm, exact", P_moved, cold.w, cold.lam_g, "exact", warm),
+        ("warm, convex", P_moved, cold.w, cold.lam_g, "convex", warm),
+        ("warm, kept", P_moved, cold.w, cold.lam_g, "kept", warm),
+    ]
+    for label, Pv, w0, lam0, hessian, ipopt in runs:
+        iters = max_iter if label.startswith("cold") else 60
+        run = sqp_solve(compiled, Pv, w0, lam0, hessian=hessian, max_iter=iters)
+        rel = (run.cost - ipopt.cost) / abs(ipopt.cost)
+        print(
+            f"    sqp_hpipm (chain), {label:13s}: {'' if run.converged else 'not '}converged"
+            f" in {run.iterations} it, {run.seconds:.2f} s (QPs {run.qp_seconds:.2f} s, "
+            f"{run.qp_failures} failed), step {run.step:.1e}, violation {run.violation:.1e}, "
+            f"cost {run.cost:.8g} (IPOPT {ipopt.cost:.8g}, relative {rel:+.1e})",
+            flush=True,
+        )
 
 
 #: The solver's functions, in the order IPOPT calls them within an iteration.

@@ -11,12 +11,20 @@ picks the controller: docs/files/closed_loop.md.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.sensor_options import (
+    CameraKind,
+    CameraOptions,
+    GyroOptions,
+    SensorOptions,
+    SpinSensorOptions,
+)
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
@@ -47,7 +55,7 @@ from lightcraft_opt.model import FocusSchedule, Model, Wind
 
 __all__ = ["TABLES", "ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
-_TABLES = ("model_overrides", "initial", "mpc", "director", "plant")
+_TABLES = ("model_overrides", "initial", "mpc", "director", "plant", "sensors")
 _TOP: dict[str, Spec] = {
     "title": TEXT,
     "model": TEXT,
@@ -129,6 +137,19 @@ _NOISE: dict[str, Spec] = {
     "rate": quantity("angular rate"),
     "spin": quantity("angular rate"),
 }
+#: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
+#: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).
+_CAMERA: dict[str, Spec] = {
+    "kind": choice(CameraKind),
+    "noise": quantity("length"),
+    "frame_rate": quantity("frequency"),
+    "latency_pulses": INTEGER,
+    "lost_percent": NUMBER,
+    "sites": quantity("length", "rows", 3),
+}
+_STEREO_NOISE = quantity("angle")
+_RATE_SENSOR: dict[str, Spec] = {"noise": quantity("angular rate"), "latency_pulses": INTEGER}
+_SENSORS = ("camera", "gyro", "spin")
 #: Wind fields the parameter vector carries (the tables are structure: not here).
 _WIND_PARAMETERS = {
     "speed_ref": "wind_speed_ref",
@@ -156,6 +177,9 @@ TABLES: dict[str, dict[str, Spec]] = {
     "plant": _PLANT,
     "plant.noise": _NOISE,
     "plant.wind": {field: mf.SCHEMA["wind"][field] for field in _WIND_PARAMETERS},
+    "sensors.camera": _CAMERA,
+    "sensors.gyro": _RATE_SENSOR,
+    "sensors.spin": _RATE_SENSOR,
 }
 
 
@@ -176,6 +200,8 @@ class ClosedLoopProblem:
         not (its wind).
     title : the file's ``title`` (default: the file name).
     source : the file read.
+    sensors : what the tracker sees (``[sensors]``), or None: the file has no ``[sensors]``
+        and the controller is told the state with ``[plant.noise]``.
     """
 
     model: Model
@@ -188,6 +214,7 @@ class ClosedLoopProblem:
     plant_parameters: dict[str, Any]
     title: str
     source: Path
+    sensors: SensorOptions | None = None
 
 
 def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
@@ -249,6 +276,7 @@ def closed_loop_from_tables(
         plant_parameters=_plant_wind(src, plant),
         title=top.values.get("title", file.stem),
         source=file,
+        sensors=_sensor_options(src, data.get("sensors")),
     )
 
 
@@ -470,3 +498,57 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
     except ModelFileError as err:
         raise ProblemFileError(src, err.field, err.reason) from err
     return {_WIND_PARAMETERS[f]: getattr(built, f) for f in _WIND_PARAMETERS}
+
+
+def _sensor_options(src: str, raw: Any) -> SensorOptions | None:
+    """``[sensors]`` read (docs/files/closed_loop.md#keys-sensors-camera); None without it.
+    Without ``[sensors.camera]`` the camera is CameraOptions' (positions at 5 mm)."""
+    if raw is None:
+        return None
+    read_table(src, raw, "sensors", {}, tables=_SENSORS)
+    gyro = spin = None
+    if "gyro" in raw:
+        table = read_table(src, raw["gyro"], "sensors.gyro", _RATE_SENSOR)
+        gyro = _built(src, table, GyroOptions, table.values)
+    if "spin" in raw:
+        table = read_table(src, raw["spin"], "sensors.spin", _RATE_SENSOR)
+        spin = _built(src, table, SpinSensorOptions, table.values)
+    return SensorOptions(_camera_options(src, raw.get("camera", {})), gyro, spin)
+
+
+def _camera_options(src: str, raw: Any) -> CameraOptions:
+    """``[sensors.camera]``: its noise a length, or an angle for ``kind = "stereo"`` (then
+    required); ``lost_percent`` is CameraOptions.lost_rate in percent."""
+    stereo = isinstance(raw, dict) and raw.get("kind") == CameraKind.STEREO.value
+    table = read_table(
+        src, raw, "sensors.camera", {**_CAMERA, "noise": _STEREO_NOISE} if stereo else _CAMERA
+    )
+    if stereo and "noise" not in table.values:
+        raise ProblemFileError(
+            src,
+            "sensors.camera.noise",
+            "missing: a stereo camera's noise is an angle; write noise_mrad (or noise_rad, "
+            "noise_deg)",
+        )
+    values = dict(table.values)
+    if "lost_percent" in values:
+        values["lost_rate"] = values.pop("lost_percent") / 100.0
+    if "sites" in values:
+        values["sites"] = tuple(tuple(row) for row in values["sites"])
+    return _built(src, table, CameraOptions, values)
+
+
+def _built(src: str, table: Table, cls: type, values: dict[str, Any]) -> Any:
+    """``cls(**values)``; its OptionError becomes a ProblemFileError naming the key as
+    written in ``table`` (``lost_rate``: ``lost_percent``; a site: ``sites_m[i]``)."""
+    try:
+        return cls(**values)
+    except OptionError as err:
+        message = str(err)
+        found = re.search(rf"{cls.__name__}\.(\w+)(\[\d+\])?", message)
+        if not found:
+            raise ProblemFileError(src, table.where, message) from err
+        if found[1] == "lost_rate":
+            message += " (lost_percent / 100)"
+        field = "lost_percent" if found[1] == "lost_rate" else found[1]
+        raise ProblemFileError(src, table.key(field) + (found[2] or ""), message) from err

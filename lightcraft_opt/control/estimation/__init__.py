@@ -7,6 +7,13 @@
   which every estimator meets;
 - :mod:`.model`: :class:`EstimationModel`, the discrete model (prediction, process noise,
   each sensor's measurement, with Jacobians) both estimators run on;
+- :mod:`.sensor_options`: the sensors' options (:class:`SensorOptions`: a camera, gyros,
+  a spin counter; their noise, frame rate, latency, lost frames);
+- :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
+  one owner of each sensor's measurement Function and noise;
+- :mod:`.mhe`: :class:`MovingHorizonEstimator`, the last N pulses fitted by one HPIPM QP
+  a pulse (its QP: :mod:`.mhe_qp`; its options and step statistics, :class:`MheOptions`
+  and :class:`MheStats`: :mod:`.mhe_options`);
 - :mod:`.psi_model`: :class:`PsiEstimationModel`, that model on Ψ with the wind and the
   engine's coupling as slow states (:class:`ProcessNoise`; its chains in :mod:`.psi_chain`);
 - :mod:`.ekf`: :class:`ExtendedKalmanFilter` (:class:`EkfOptions`), an :class:`Estimator`;
@@ -21,6 +28,8 @@ from __future__ import annotations
 
 from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter, Innovation
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
+from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.psi_model import (
     SLOW_STATES,
@@ -30,18 +39,35 @@ from lightcraft_opt.control.estimation.psi_model import (
 )
 from lightcraft_opt.control.estimation.psi_observability import model_flight, model_observability
 from lightcraft_opt.control.estimation.reading import Reading
+from lightcraft_opt.control.estimation.sensor_options import (
+    CameraKind,
+    CameraOptions,
+    GyroOptions,
+    SensorOptions,
+    SpinSensorOptions,
+)
+from lightcraft_opt.control.estimation.sensors import SensorSuite
 
 __all__ = [
     "SLOW_STATES",
+    "CameraKind",
+    "CameraOptions",
     "EkfOptions",
     "Estimate",
     "EstimationModel",
     "Estimator",
     "ExtendedKalmanFilter",
+    "GyroOptions",
     "Innovation",
+    "MheOptions",
+    "MheStats",
+    "MovingHorizonEstimator",
     "ProcessNoise",
     "PsiEstimationModel",
     "Reading",
+    "SensorOptions",
+    "SensorSuite",
+    "SpinSensorOptions",
     "estimation_model",
     "model_flight",
     "model_observability",

@@ -116,7 +116,8 @@ class ExtendedKalmanFilter:
     Parameters
     ----------
     model : the estimation model (e.g. :class:`~.psi_model.PsiEstimationModel`); its
-        ``lift(s)`` (if it has one) gives the full state of an estimate, else x = z.
+        optional ``start(x0)`` and ``parts(s)`` (model.py) map a full state to s and s to
+        an Estimate's (z, x, slow); without them s = x0 and z = x = s.
     options : :class:`EkfOptions`.
 
     Attributes
@@ -241,9 +242,6 @@ class ExtendedKalmanFilter:
         return self._estimate(float(t), time.perf_counter() - start)
 
     def _estimate(self, t: float, seconds: float) -> Estimate:
-        names = self.model.names
-        lift = getattr(self.model, "lift", None)
-        x = np.asarray(lift(self.s), dtype=float).ravel() if lift is not None else self.s.copy()
-        nz = int(getattr(self.model, "state_size", len(names)))
-        slow = {n: float(v) for n, v in zip(names[nz:], self.s[nz:], strict=True)}
-        return Estimate(t, self.s[:nz].copy(), x, self.P.copy(), slow, seconds)
+        parts = getattr(self.model, "parts", None)
+        z, x, slow = parts(self.s) if parts is not None else (self.s.copy(), self.s.copy(), {})
+        return Estimate(t, z, x, self.P.copy(), slow, seconds)

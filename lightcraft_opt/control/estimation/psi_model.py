@@ -241,6 +241,13 @@ class PsiEstimationModel:
         z = np.asarray(self.psi.project(np.asarray(x0, dtype=float), self.p)).ravel()
         return np.concatenate([z, self.slow_values()])
 
+    def parts(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
+        """(z, x, slow): what an Estimate holds of s: Ψ's z, its lift x (STATE) and the slow
+        states by name (SI)."""
+        s = np.asarray(s, dtype=float).ravel()
+        slow = {n: float(v) for n, v in zip(self.names[_NZ:], s[_NZ:], strict=True)}
+        return s[:_NZ].copy(), self.lift(s), slow
+
     def lift(self, s: np.ndarray) -> np.ndarray:
         """The full state (STATE) Ψ's ``lift`` builds from s's z."""
         return self._lift(s[:_NZ], self.parameters(s))[:, 0]

@@ -26,7 +26,6 @@ class DoubleIntegrator:
     """r'' = u along one axis, sampled once a pulse: an EstimationModel linear in s."""
 
     names = ("r", "v")
-    state_size = 2
 
     def __init__(self, q: float = 0.3, sigma_r: float = 0.01, sigma_v: float = 0.02) -> None:
         self.A = np.array([[1.0, T], [0.0, 1.0]])
