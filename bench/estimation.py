@@ -6,7 +6,7 @@ a perfect tracker: under a beam held on the pad axis the drawn starts and winds 
 out of the 7 cm beam within a second, and no linearisation holds there; ``--beam pad``):
 ``--flights`` seeded flights of ``--pulses`` pulses of Ψ
 with process noise drawn from the model's Q (every noise at ``--scale`` of the defaults) and a
-position camera (5 mm x scale) at each pulse. Each estimator chosen (``--estimators ekf``)
+position camera (5 mm x scale) at each pulse. Each estimator chosen (``--estimators ekf,mhe``)
 filters every flight. Printed: the step time (median, 99th percentile) over all steps; the NEES
 (n = 17) and the camera's NIS (m = 3) averaged over flights and pulses, with their two-sided
 95 % bands χ²(N n) / N (tests/control/estimation/test_ekf_filter.py); the RMSE per entry of s
@@ -16,7 +16,7 @@ marginal covariance) per entry, which says where a filter is overconfident. Targ
 
 Timing on a loaded machine is not a measurement of the code: run it alone.
 
-Run: ``python bench/estimation.py --estimators ekf`` (``--help`` for options).
+Run: ``python bench/estimation.py --estimators ekf,mhe`` (``--help`` for options).
 """
 
 from __future__ import annotations
@@ -31,6 +31,8 @@ from scipy.stats import chi2
 import lightcraft_opt as lc
 from lightcraft_opt.control.estimation import Reading
 from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter
+from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
+from lightcraft_opt.control.estimation.mhe_options import MheOptions
 from lightcraft_opt.control.estimation.psi_model import (
     ProcessNoise,
     PsiEstimationModel,
@@ -51,19 +53,25 @@ def camera() -> ca.Function:
 
 
 def estimators(model: PsiEstimationModel, scale: float, names: list[str]) -> dict:
-    prior = tuple((n, scale * s) for n, s in EkfOptions().prior)
-    made = {}
+    """The estimators named, each with the same prior (the EKF's defaults times ``scale``)."""
+    ekf = EkfOptions()
+    prior = tuple((n, scale * s) for n, s in ekf.prior)
+    made: dict = {}
     for name in names:
         if name == "ekf":
-            made[name] = ExtendedKalmanFilter(model, EkfOptions(prior=prior))
+            options = EkfOptions(prior=prior, prior_default=scale * ekf.prior_default)
+            made[name] = ExtendedKalmanFilter(model, options)
+        elif name == "mhe":
+            options = MheOptions(prior_sigma=scale * ekf.prior_default, prior_sigmas=prior)
+            made[name] = MovingHorizonEstimator(model, options)
         else:
-            raise SystemExit(f"unknown estimator {name!r}; known: ekf")
+            raise SystemExit(f"unknown estimator {name!r}; known: ekf, mhe")
     return made
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--estimators", default="ekf", help="comma-separated: ekf")
+    parser.add_argument("--estimators", default="ekf", help="comma-separated: ekf, mhe")
     parser.add_argument("--flights", type=int, default=50)
     parser.add_argument("--pulses", type=int, default=40)
     parser.add_argument("--scale", type=float, default=1.0, help="every noise times this")
@@ -82,6 +90,7 @@ def main() -> None:
     x0 = initial_state(model, r_L=(0.0, 0.0, 2.0), v_L=(0.0, 0.0, 4.0))
     u = nominal_inputs(model, psi.psi.inputs)
     L_q = np.linalg.cholesky(psi.process_noise(psi.start(x0), u, 0.0))
+    sigma0 = args.scale * EkfOptions().prior_sigmas(psi.names)  # the prior both start from
     for name, est in estimators(psi, args.scale, args.estimators.split(",")).items():
         times, nees, nis, errors = [], [], [], []
         blocks = {
@@ -94,7 +103,7 @@ def main() -> None:
         for run in range(args.flights):
             rng = np.random.default_rng(1000 + run)
             est.reset(x0, 0.0)
-            s = est.s + rng.normal(size=psi.n) * np.sqrt(np.diag(est.P))
+            s = psi.start(x0) + rng.normal(size=psi.n) * sigma0
             u_k = u
             for k in range(args.pulses):
                 t = k * psi.period
@@ -104,11 +113,12 @@ def main() -> None:
                 if args.beam == "follow":
                     u_k[:2] = s[:2]  # the next pulse points at the craft
                 times.append(e.seconds)
-                err = s - est.s
-                d = np.sqrt(np.diag(est.P))
-                nees.append(err / d @ np.linalg.solve(est.P / np.outer(d, d), err / d))
+                err = s - np.concatenate([e.z, list(e.slow.values())])
+                P = e.covariance
+                d = np.sqrt(np.diag(P))
+                nees.append(err / d @ np.linalg.solve(P / np.outer(d, d), err / d))
                 for b, idx in blocks.items():
-                    Pb, eb = est.P[np.ix_(idx, idx)], err[idx]
+                    Pb, eb = P[np.ix_(idx, idx)], err[idx]
                     per_block[b].append(eb @ np.linalg.solve(Pb, eb) / len(idx))
                 nis += [i.nis for i in getattr(est, "innovations", [])]
                 if k >= args.pulses // 2:
