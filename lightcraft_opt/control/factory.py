@@ -14,20 +14,31 @@ budget), the factory how each kind is put together:
 - ``LQR``: :class:`~.controllers.LqrController` on the same model, with the MPC's weights;
 - ``DIRECTOR``: :class:`~.director.DirectorController`; on a craft with RCS whose
   ``DirectorOptions.rcs`` is ``NUTATION``, with the nutation MPC alongside.
+
+:func:`build_estimator` likewise builds what tells the controller the state from an
+:class:`~lightcraft_opt.control.options.EstimatorSpec` (docs/estimation.md#output-feedback).
 """
 
 from __future__ import annotations
 
 from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
 from lightcraft_opt.control.director import DirectorController
+from lightcraft_opt.control.estimation import Estimator, ReadingSource
 from lightcraft_opt.control.mpc import MpcController
-from lightcraft_opt.control.options import ControllerKind, DirectorOptions, DirectorRcs, MpcOptions
+from lightcraft_opt.control.options import (
+    ControllerKind,
+    DirectorOptions,
+    DirectorRcs,
+    EstimatorKind,
+    EstimatorSpec,
+    MpcOptions,
+)
 from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
-__all__ = ["build_controller", "controller_kind"]
+__all__ = ["build_controller", "build_estimator", "controller_kind"]
 
 
 def controller_kind(kind: ControllerKind | str, name: str = "kind") -> ControllerKind:
@@ -87,3 +98,31 @@ def build_controller(
     if kind is ControllerKind.MPC:
         return MpcController(model, mpc, prediction=prediction)
     return LqrController(model, prediction, mpc.weights)
+
+
+def build_estimator(
+    spec: EstimatorSpec, model: Model, sensors: ReadingSource | None
+) -> Estimator | None:
+    """The estimator ``spec`` names for ``model``, reading ``sensors``; None for
+    ``TRUTH`` (the controller is told the true state with the loop's noise).
+
+    Parameters
+    ----------
+    spec : which estimator and its options, SI (:class:`EstimatorSpec`).
+    model : the estimator's model (what it believes: the controller's).
+    sensors : the sensor suite the closed loop reads and the estimator models.
+
+    Raises
+    ------
+    OptionError naming ``build_estimator.spec`` when the kind is not built here.
+    """
+    if not isinstance(spec, EstimatorSpec):
+        raise OptionError(f"build_estimator.spec must be an EstimatorSpec, got {spec!r}")
+    if spec.kind is EstimatorKind.TRUTH:
+        return None
+    # the extended Kalman filter (estimation/ekf.py) and the moving-horizon estimator
+    # (estimation/mhe.py) are built here once they are part of the package
+    raise OptionError(
+        f"build_estimator.spec: the {spec.kind.value!r} estimator is not available in this "
+        f"build; use kind = {EstimatorKind.TRUTH.value!r}"
+    )

@@ -1,10 +1,11 @@
 """Options of the controllers and the closed loop: which controller, the MPC, the director,
-their weights, what goes wrong."""
+their weights, what goes wrong, and which estimator tells the controller the state."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
@@ -25,6 +26,8 @@ __all__ = [
     "DirectorOptions",
     "DirectorRcs",
     "DirectorWeights",
+    "EstimatorKind",
+    "EstimatorSpec",
     "FocusSchedule",
     "MeasurementNoise",
     "MpcOptions",
@@ -470,3 +473,77 @@ class ClosedLoopOptions:
             )
         checked_choice("ClosedLoopOptions", "fault", self.fault, ControllerFault)
         checked_int("ClosedLoopOptions", "seed", self.seed, 0)
+
+
+class EstimatorKind(Enum):
+    """What tells a closed loop's controller the state (control/factory.py builds each).
+
+    ``TRUTH``: no estimator; the controller is told the plant's true state with the
+    closed loop's :class:`MeasurementNoise` on it (the loop before issue 30). ``EKF``: the
+    extended Kalman filter on Ψ, fed the sensors' readings. ``MHE``: the moving-horizon
+    estimator, likewise.
+    """
+
+    TRUTH = "truth"
+    EKF = "ekf"
+    MHE = "mhe"
+
+
+#: The options an :class:`EstimatorSpec` may carry, with their SI unit, and the kinds
+#: that take each (docs/files/closed_loop.md#estimator).
+ESTIMATOR_OPTIONS: Mapping[str, tuple[str, tuple[EstimatorKind, ...]]] = {
+    "prior_position": ("m", (EstimatorKind.EKF, EstimatorKind.MHE)),
+    "prior_velocity": ("m/s", (EstimatorKind.EKF, EstimatorKind.MHE)),
+    "prior_attitude": ("rad", (EstimatorKind.EKF, EstimatorKind.MHE)),
+    "prior_rate": ("rad/s", (EstimatorKind.EKF, EstimatorKind.MHE)),
+    "prior_spin": ("rad/s", (EstimatorKind.EKF, EstimatorKind.MHE)),
+    "horizon": ("pulses", (EstimatorKind.MHE,)),
+    "iterations": ("-", (EstimatorKind.MHE,)),
+}
+#: The options that count (pulses, iterations): integers >= their lower bound.
+_COUNTS = {"horizon": 2, "iterations": 1}
+
+
+@dataclass(frozen=True)
+class EstimatorSpec:
+    """Which estimator a closed loop flies and the options it is built with (SI), as a
+    closed-loop file's ``[estimator]`` gives them; :func:`~.factory.build_estimator`
+    makes the estimator.
+
+    Attributes
+    ----------
+    kind : :class:`EstimatorKind` (default ``TRUTH``: no estimator).
+    options : {name: value} of :data:`ESTIMATOR_OPTIONS`, SI: the 1-sigma of the prior at
+        the start of a flight, ``prior_position`` [m] (each axis of r_L), ``prior_velocity``
+        [m/s] (v_L), ``prior_attitude`` [rad] (a small rotation of B), ``prior_rate``
+        [rad/s] (w_B), ``prior_spin`` [rad/s], each > 0; the moving-horizon estimator's
+        ``horizon`` [pulses] (an integer >= 2) and Gauss-Newton ``iterations`` (>= 1) per
+        pulse. Left out: the estimator's own default. ``TRUTH`` takes none.
+    """
+
+    kind: EstimatorKind = EstimatorKind.TRUTH
+    options: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        checked_choice("EstimatorSpec", "kind", self.kind, EstimatorKind)
+        if not isinstance(self.options, Mapping):
+            raise OptionError(
+                f"EstimatorSpec.options must be a mapping of option name to value, got "
+                f"{self.options!r}"
+            )
+        for name, value in self.options.items():
+            where = f"options[{name}]"
+            if name not in ESTIMATOR_OPTIONS:
+                raise OptionError(
+                    f"EstimatorSpec.{where}: no such option; allowed: {list(ESTIMATOR_OPTIONS)}"
+                )
+            kinds = ESTIMATOR_OPTIONS[name][1]
+            if self.kind not in kinds:
+                takers = " or ".join(repr(k.value) for k in kinds)
+                raise OptionError(
+                    f"EstimatorSpec.{where} is an option of kind {takers}, not {self.kind.value!r}"
+                )
+            if name in _COUNTS:
+                checked_int("EstimatorSpec", where, value, _COUNTS[name])
+            else:
+                checked_number("EstimatorSpec", where, value, 0.0)

@@ -6,7 +6,10 @@
   covariance) and the :class:`Estimator` protocol, ``step(readings, u_fired) -> Estimate``,
   which every estimator meets;
 - :mod:`.model`: :class:`EstimationModel`, the discrete model (prediction, process noise,
-  each sensor's measurement, with Jacobians) both estimators run on.
+  each sensor's measurement, with Jacobians) both estimators run on;
+- :mod:`.feedback`: :class:`ReadingSource` (what a closed loop asks of its sensors) and
+  :class:`OutputFeedback`, the sensors and the estimator of one closed-loop flight with
+  the log of the estimates against the truth (docs/estimation.md#output-feedback).
 
 The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
 is a plain vector (no quaternion), and the director already predicts with it.
@@ -15,7 +18,15 @@ is a plain vector (no quaternion), and the director already predicts with it.
 from __future__ import annotations
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 
-__all__ = ["Estimate", "EstimationModel", "Estimator", "Reading"]
+__all__ = [
+    "Estimate",
+    "EstimationModel",
+    "Estimator",
+    "OutputFeedback",
+    "Reading",
+    "ReadingSource",
+]
