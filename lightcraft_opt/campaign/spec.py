@@ -16,6 +16,8 @@ from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerKind,
     DirectorOptions,
+    EstimatorKind,
+    EstimatorSpec,
     MpcOptions,
 )
 from lightcraft_opt.errors import ParameterError
@@ -114,6 +116,8 @@ class Campaign:
     compiled : fly the plant Φ compiled to C (compiled/; cached on disk): True, False,
         or None (default) for compiled unless ``LIGHTCRAFT_COMPILE=0``.
     title : a name for reports.
+    estimator : what tells the controller the state in every run (the file's
+        ``[estimator]``; default the truth with the loop's noise).
     """
 
     model: Model
@@ -127,6 +131,7 @@ class Campaign:
     dispersions: Dispersions = field(default_factory=Dispersions)
     compiled: bool | None = None
     title: str = "campaign"
+    estimator: EstimatorSpec = field(default_factory=EstimatorSpec)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration", checked_duration(self.duration))
@@ -135,6 +140,8 @@ class Campaign:
             raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")
         if not isinstance(self.dispersions, Dispersions):
             raise ParameterError("dispersions", f"must be Dispersions, got {self.dispersions!r}")
+        if not isinstance(self.estimator, EstimatorSpec):
+            raise ParameterError("estimator", f"must be an EstimatorSpec, got {self.estimator!r}")
         x0 = initial_state(self.model) if self.x0 is None else self.x0
         object.__setattr__(self, "x0", checked_vector("x0", x0, STATE.size).copy())
 
@@ -143,7 +150,7 @@ class Campaign:
         """sha256 of everything a run depends on (not the title): equal fingerprints fly
         equal runs."""
         p = {k: np.ravel(v).tolist() for k, v in sorted(self.plant_parameters.items())}
-        parts = (
+        parts: tuple[str, ...] = (
             repr(self.model),
             repr(float(self.duration)),
             self.controller.value,
@@ -155,6 +162,8 @@ class Campaign:
             repr(self.dispersions),
             repr(self.compiled),
         )
+        if self.estimator.kind is not EstimatorKind.TRUTH:  # the truth's: as before it
+            parts += (repr(self.estimator),)
         return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
     @property

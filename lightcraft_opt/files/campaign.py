@@ -108,6 +108,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
             dispersions=dispersions,
             compiled=table.values.get("compiled"),
             title=problem.title,
+            estimator=problem.estimator,
         )
 
 

@@ -3,13 +3,15 @@
 The sibling of :mod:`lightcraft_opt.files.problem`: the same conventions and machinery (the
 model file with ``[model_overrides]``, ``[initial]``, model_files' units in the keys, errors
 naming the key as written) for what a closed loop needs instead of an objective: the
-controller it flies (``controller``) and its options (``[mpc]``, ``[director]``), and what
-happens to the plant (``[plant]``). Every table and key, with an example, and the rule that
+controller it flies (``controller``) and its options (``[mpc]``, ``[director]``), what
+happens to the plant (``[plant]``) and what tells the controller the state
+(``[estimator]``). Every table and key, with an example, and the rule that
 picks the controller: docs/files/closed_loop.md.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +27,8 @@ from lightcraft_opt.control.options import (
     DirectorOptions,
     DirectorRcs,
     DirectorWeights,
+    EstimatorKind,
+    EstimatorSpec,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
@@ -47,7 +51,7 @@ from lightcraft_opt.model import FocusSchedule, Model, Wind
 
 __all__ = ["TABLES", "ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
-_TABLES = ("model_overrides", "initial", "mpc", "director", "plant")
+_TABLES = ("model_overrides", "initial", "mpc", "director", "plant", "estimator")
 _TOP: dict[str, Spec] = {
     "title": TEXT,
     "model": TEXT,
@@ -129,6 +133,18 @@ _NOISE: dict[str, Spec] = {
     "rate": quantity("angular rate"),
     "spin": quantity("angular rate"),
 }
+#: ``[estimator]``: the kind, then the options its EstimatorSpec carries (SI; the field
+#: is the key without ``_pulses`` for the horizon).
+_ESTIMATOR: dict[str, Spec] = {
+    "kind": choice(EstimatorKind),
+    "horizon_pulses": INTEGER,
+    "iterations": INTEGER,
+    "prior_position": quantity("length"),
+    "prior_velocity": quantity("speed"),
+    "prior_attitude": quantity("angle"),
+    "prior_rate": quantity("angular rate"),
+    "prior_spin": quantity("angular rate"),
+}
 #: Wind fields the parameter vector carries (the tables are structure: not here).
 _WIND_PARAMETERS = {
     "speed_ref": "wind_speed_ref",
@@ -156,6 +172,7 @@ TABLES: dict[str, dict[str, Spec]] = {
     "plant": _PLANT,
     "plant.noise": _NOISE,
     "plant.wind": {field: mf.SCHEMA["wind"][field] for field in _WIND_PARAMETERS},
+    "estimator": _ESTIMATOR,
 }
 
 
@@ -176,6 +193,8 @@ class ClosedLoopProblem:
         not (its wind).
     title : the file's ``title`` (default: the file name).
     source : the file read.
+    estimator : what tells the controller the state (``[estimator]``; default the truth
+        with ``[plant.noise]``: :class:`~lightcraft_opt.control.options.EstimatorSpec`).
     """
 
     model: Model
@@ -188,6 +207,7 @@ class ClosedLoopProblem:
     plant_parameters: dict[str, Any]
     title: str
     source: Path
+    estimator: EstimatorSpec = dataclasses.field(default_factory=EstimatorSpec)
 
 
 def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
@@ -238,6 +258,7 @@ def closed_loop_from_tables(
     plant = data.get("plant", {})
     director = _director_options(src, data.get("director", {}))
     _check_energy_range(src, model, director)
+    estimator = _estimator(src, data.get("estimator", {}), plant)
     return ClosedLoopProblem(
         model=model,
         x0=x0,
@@ -249,6 +270,7 @@ def closed_loop_from_tables(
         plant_parameters=_plant_wind(src, plant),
         title=top.values.get("title", file.stem),
         source=file,
+        estimator=estimator,
     )
 
 
@@ -448,6 +470,33 @@ def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
             key = "plant.dispersion"
         if "ClosedLoopOptions.faults" in message:
             key = table.key("fault_pulses")
+        raise ProblemFileError(src, key, message) from err
+
+
+def _estimator(src: str, raw: Any, plant: Any) -> EstimatorSpec:
+    """``[estimator]`` read into an EstimatorSpec (SI); an estimator beside ``[plant.noise]``
+    (the noise on the truth a controller is told without one) is refused naming it."""
+    table = read_table(src, raw, "estimator", _ESTIMATOR)
+    options = dict(table.values)
+    kind = options.pop("kind", EstimatorKind.TRUTH)
+    if "horizon_pulses" in options:
+        options["horizon"] = options.pop("horizon_pulses")
+    if kind is not EstimatorKind.TRUTH and isinstance(plant, dict) and "noise" in plant:
+        raise ProblemFileError(
+            src,
+            "plant.noise",
+            f"is the noise on the true state the controller is told without an estimator; "
+            f'with kind = "{kind.value}" the controller is told the estimate, and the '
+            "sensors' noise applies ([sensors]): remove [plant.noise]",
+        )
+    try:
+        return EstimatorSpec(kind, options)
+    except OptionError as err:
+        message = str(err)
+        key = table.where
+        for field in options:
+            if f"options[{field}]" in message:
+                key = table.key("horizon_pulses" if field == "horizon" else field)
         raise ProblemFileError(src, key, message) from err
 
 
