@@ -200,3 +200,47 @@ def test_docs_outputs_names_every_estimate_column():
     page = (REPO_ROOT / "docs" / "outputs.md").read_text(encoding="utf-8")
     ranged = {"error_y_m", "error_vy_mps", "sigma_y_m"}  # written as x ... z
     assert [c for c in ESTIMATE_COLUMNS if f"`{c}`" not in page and c not in ranged] == []
+
+
+# --------------------------------------------------------------------------- shipped files
+#: The shipped files with a tracker, and the files they copy but for it.
+TRACKED = {
+    "director_tracked.toml": "director_crosswind.toml",
+    "montecarlo_director_tracked.toml": "montecarlo_director.toml",
+}
+
+
+def _without_sensors(text: str) -> str:
+    """The file without its [sensors.*] tables (read by the sensors' own reader)."""
+    return re.sub(r"\n\[sensors\.[^\]]+\][^\[]*", "\n", text)
+
+
+@pytest.mark.parametrize("name", TRACKED)
+def test_the_tracked_problems_fly_the_ekf_without_plant_noise(name, tmp_path):
+    """problems/director_tracked.toml and its campaign: the director told the EKF's
+    estimate, no [plant.noise]; otherwise director_crosswind's (and montecarlo_director's)
+    plant, director and wind. Read here without [sensors] (its reader is the sensors');
+    loaded whole once it is part of the build."""
+    source = REPO_ROOT / "problems" / name
+    twin = REPO_ROOT / "problems" / TRACKED[name]
+    load = load_campaign if name.startswith("montecarlo") else load_closed_loop
+    copy = tmp_path / name
+    text = source.read_text(encoding="utf-8")
+    assert "[sensors.camera]" in text
+    copy.write_text(_without_sensors(text).replace('"../models/', f'"{REPO_ROOT}/models/'))
+    tracked, reference = load(copy), load(twin)
+    assert tracked.estimator == EstimatorSpec(EstimatorKind.EKF)
+    assert tracked.loop.noise == type(tracked.loop.noise)()
+    assert reference.loop.noise != tracked.loop.noise
+    assert dataclasses.replace(tracked.loop, noise=reference.loop.noise) == reference.loop
+    assert (tracked.director, tracked.plant_parameters) == (
+        reference.director,
+        reference.plant_parameters,
+    )
+    try:
+        whole = load(source)
+    except ProblemFileError as err:
+        if not (err.field or "").startswith("sensors"):
+            raise
+        pytest.skip(f"{name}: [sensors] is read once the sensor suite is part of the build")
+    assert whole.estimator == tracked.estimator
