@@ -44,8 +44,8 @@ from lightcraft_opt.campaign.spec import (
 from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.controllers import Controller
-from lightcraft_opt.control.estimation import Estimator, ReadingSource
-from lightcraft_opt.control.factory import build_controller, build_estimator
+from lightcraft_opt.control.estimation import Estimator, SensorSuite
+from lightcraft_opt.control.factory import build_controller, build_tracker
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import (
     STATE,
@@ -204,9 +204,10 @@ class _Flyer:
             compiled=c.compiled,
         )
         self.plant: PulseMap = pulse_map_for(c.model, options, compiled=c.compiled)
-        # the sensor suite of the campaign's [sensors] (control/estimation/sensors.py)
-        self.sensors: ReadingSource | None = None
-        self.estimator: Estimator | None = build_estimator(c.estimator, c.model, self.sensors)
+        # the sensors and the estimator, reset by each flight (None, None: the truth)
+        self.sensors: SensorSuite | None
+        self.estimator: Estimator | None
+        self.sensors, self.estimator = build_tracker(c.estimator, c.model, c.sensors)
 
     def fly(self, draws: Mapping[str, float], seed: int) -> ClosedLoopResult:
         c = self.campaign

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.campaign.dispersions import Dispersions
+from lightcraft_opt.control.estimation.sensor_options import SensorOptions
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerKind,
@@ -118,6 +119,8 @@ class Campaign:
     title : a name for reports.
     estimator : what tells the controller the state in every run (the file's
         ``[estimator]``; default the truth with the loop's noise).
+    sensors : what that estimator reads (the file's ``[sensors]``; None: the default
+        camera, or nothing with the truth).
     """
 
     model: Model
@@ -132,6 +135,7 @@ class Campaign:
     compiled: bool | None = None
     title: str = "campaign"
     estimator: EstimatorSpec = field(default_factory=EstimatorSpec)
+    sensors: SensorOptions | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration", checked_duration(self.duration))
@@ -163,7 +167,7 @@ class Campaign:
             repr(self.compiled),
         )
         if self.estimator.kind is not EstimatorKind.TRUTH:  # the truth's: as before it
-            parts += (repr(self.estimator),)
+            parts += (repr(self.estimator), repr(self.sensors))
         return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
     @property

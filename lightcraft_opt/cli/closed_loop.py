@@ -14,8 +14,7 @@ from lightcraft_opt.cli.args import output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import ANIMATE_HELP, BUDGET_MS, DURATION
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
-from lightcraft_opt.control.estimation import ReadingSource
-from lightcraft_opt.control.factory import build_controller, build_estimator
+from lightcraft_opt.control.factory import build_controller, build_tracker
 from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
@@ -101,9 +100,9 @@ def _fly(
     controller = build_controller(kind, model, plant, mpc=problem.mpc, director=problem.director)
     if kind is not ControllerKind.NONE:
         print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
-    # the sensor suite of the file's [sensors] (control/estimation/sensors.py)
-    sensors: ReadingSource | None = None
-    estimator = build_estimator(problem.estimator, model, sensors)
+    sensors, estimator = build_tracker(problem.estimator, model, problem.sensors)
+    if problem.sensors is not None and estimator is None:
+        print('note: [sensors] is read by no one: [estimator] kind is "truth"', flush=True)
     told = "the true state" if estimator is None else f"the {estimator.name}'s estimate"
     print(f"flying {problem.duration:g} s, the controller told {told} ...", flush=True)
     result = closed_loop(

@@ -178,8 +178,9 @@ def closed_loop(
         per process, compiled to C where a compiler works).
     options : noise, dispersion, drop-outs, injected faults, seed.
     sensors : what the estimator reads (a
-        :class:`~lightcraft_opt.control.estimation.feedback.ReadingSource`, reset with
-        ``default_rng([seed, 1])``); only with ``estimator``.
+        :class:`~lightcraft_opt.control.estimation.SensorSuite`, or any
+        :class:`~lightcraft_opt.control.estimation.feedback.ReadingSource`), reset with
+        ``default_rng([seed, 1])`` and the plant's parameters; only with ``estimator``.
     estimator : tells the controller the state (an
         :class:`~lightcraft_opt.control.estimation.Estimator`, reset with ``x0``); None:
         the controller is told the true state with ``options.noise`` on it, which must
@@ -210,7 +211,7 @@ def closed_loop(
     faults = set(opts.faults)
     controller.reset()
     fixed = getattr(controller, "fixed_input", None)
-    feedback = _feedback(opts, sensors, estimator, x, phi, fixed)
+    feedback = _feedback(opts, sensors, estimator, x, p, phi, fixed)
     steps: list[StepStats] = []
     commanded: list[np.ndarray] = []
     nodes = [x]
@@ -242,7 +243,7 @@ def closed_loop(
                 flight.rest(t, applied, x, ENGINE.size)
                 nodes.append(x)
                 if feedback is not None:
-                    feedback.rested(applied, x, t)
+                    feedback.rested(applied)
                 continue
             X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
             if flight.ended_by(t, applied, X, eng.ravel()):
@@ -285,6 +286,7 @@ def _feedback(
     sensors: ReadingSource | None,
     estimator: Estimator | None,
     x0: np.ndarray,
+    p: np.ndarray,
     phi: PulseMap,
     fixed: object,
 ) -> OutputFeedback | None:
@@ -307,4 +309,4 @@ def _feedback(
         return None
     samples = int(phi.dense.size_out(0)[1])
     rng = np.random.default_rng([opts.seed, 1])
-    return OutputFeedback(estimator, sensors, x0, rng, period=phi.period, samples=samples)
+    return OutputFeedback(estimator, sensors, x0, rng, p, period=phi.period, samples=samples)

@@ -109,6 +109,7 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
             compiled=table.values.get("compiled"),
             title=problem.title,
             estimator=problem.estimator,
+            sensors=problem.sensors,
         )
 
 

@@ -13,12 +13,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.sensor_options import (
+    CameraKind,
+    CameraOptions,
+    GyroOptions,
+    SensorOptions,
+    SpinSensorOptions,
+)
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
@@ -51,7 +59,7 @@ from lightcraft_opt.model import FocusSchedule, Model, Wind
 
 __all__ = ["TABLES", "ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
-_TABLES = ("model_overrides", "initial", "mpc", "director", "plant", "estimator")
+_TABLES = ("model_overrides", "initial", "mpc", "director", "plant", "sensors", "estimator")
 _TOP: dict[str, Spec] = {
     "title": TEXT,
     "model": TEXT,
@@ -145,6 +153,19 @@ _ESTIMATOR: dict[str, Spec] = {
     "prior_rate": quantity("angular rate"),
     "prior_spin": quantity("angular rate"),
 }
+#: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
+#: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).
+_CAMERA: dict[str, Spec] = {
+    "kind": choice(CameraKind),
+    "noise": quantity("length"),
+    "frame_rate": quantity("frequency"),
+    "latency_pulses": INTEGER,
+    "lost_percent": NUMBER,
+    "sites": quantity("length", "rows", 3),
+}
+_STEREO_NOISE = quantity("angle")
+_RATE_SENSOR: dict[str, Spec] = {"noise": quantity("angular rate"), "latency_pulses": INTEGER}
+_SENSORS = ("camera", "gyro", "spin")
 #: Wind fields the parameter vector carries (the tables are structure: not here).
 _WIND_PARAMETERS = {
     "speed_ref": "wind_speed_ref",
@@ -173,6 +194,9 @@ TABLES: dict[str, dict[str, Spec]] = {
     "plant.noise": _NOISE,
     "plant.wind": {field: mf.SCHEMA["wind"][field] for field in _WIND_PARAMETERS},
     "estimator": _ESTIMATOR,
+    "sensors.camera": _CAMERA,
+    "sensors.gyro": _RATE_SENSOR,
+    "sensors.spin": _RATE_SENSOR,
 }
 
 
@@ -193,8 +217,11 @@ class ClosedLoopProblem:
         not (its wind).
     title : the file's ``title`` (default: the file name).
     source : the file read.
+    sensors : what the tracker sees (``[sensors]``), or None: the file has no ``[sensors]``
+        (and no estimator: the controller is told the state with ``[plant.noise]``).
     estimator : what tells the controller the state (``[estimator]``; default the truth
-        with ``[plant.noise]``: :class:`~lightcraft_opt.control.options.EstimatorSpec`).
+        with ``[plant.noise]``: :class:`~lightcraft_opt.control.options.EstimatorSpec`);
+        one other than the truth reads ``sensors``.
     """
 
     model: Model
@@ -207,6 +234,7 @@ class ClosedLoopProblem:
     plant_parameters: dict[str, Any]
     title: str
     source: Path
+    sensors: SensorOptions | None = None
     estimator: EstimatorSpec = dataclasses.field(default_factory=EstimatorSpec)
 
 
@@ -258,7 +286,7 @@ def closed_loop_from_tables(
     plant = data.get("plant", {})
     director = _director_options(src, data.get("director", {}))
     _check_energy_range(src, model, director)
-    estimator = _estimator(src, data.get("estimator", {}), plant)
+    estimator = _estimator(src, data.get("estimator", {}), plant, "sensors" in data)
     return ClosedLoopProblem(
         model=model,
         x0=x0,
@@ -270,6 +298,7 @@ def closed_loop_from_tables(
         plant_parameters=_plant_wind(src, plant),
         title=top.values.get("title", file.stem),
         source=file,
+        sensors=_sensor_options(src, data.get("sensors")),
         estimator=estimator,
     )
 
@@ -473,9 +502,10 @@ def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
         raise ProblemFileError(src, key, message) from err
 
 
-def _estimator(src: str, raw: Any, plant: Any) -> EstimatorSpec:
+def _estimator(src: str, raw: Any, plant: Any, sensed: bool) -> EstimatorSpec:
     """``[estimator]`` read into an EstimatorSpec (SI); an estimator beside ``[plant.noise]``
-    (the noise on the truth a controller is told without one) is refused naming it."""
+    (the noise on the truth a controller is told without one) is refused naming it, and
+    one without ``[sensors]`` (``sensed`` False: nothing to read) naming ``sensors``."""
     table = read_table(src, raw, "estimator", _ESTIMATOR)
     options = dict(table.values)
     kind = options.pop("kind", EstimatorKind.TRUTH)
@@ -490,7 +520,7 @@ def _estimator(src: str, raw: Any, plant: Any) -> EstimatorSpec:
             "sensors' noise applies ([sensors]): remove [plant.noise]",
         )
     try:
-        return EstimatorSpec(kind, options)
+        spec = EstimatorSpec(kind, options)
     except OptionError as err:
         message = str(err)
         key = table.where
@@ -498,6 +528,14 @@ def _estimator(src: str, raw: Any, plant: Any) -> EstimatorSpec:
             if f"options[{field}]" in message:
                 key = table.key("horizon_pulses" if field == "horizon" else field)
         raise ProblemFileError(src, key, message) from err
+    if kind is not EstimatorKind.TRUTH and not sensed:
+        raise ProblemFileError(
+            src,
+            "sensors",
+            f"missing: the {kind.value} estimator reads the sensors; write [sensors.camera] "
+            "(or an empty [sensors]: the 5 mm position camera)",
+        )
+    return spec
 
 
 def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
@@ -519,3 +557,57 @@ def _plant_wind(src: str, raw: Any) -> dict[str, Any]:
     except ModelFileError as err:
         raise ProblemFileError(src, err.field, err.reason) from err
     return {_WIND_PARAMETERS[f]: getattr(built, f) for f in _WIND_PARAMETERS}
+
+
+def _sensor_options(src: str, raw: Any) -> SensorOptions | None:
+    """``[sensors]`` read (docs/files/closed_loop.md#keys-sensors-camera); None without it.
+    Without ``[sensors.camera]`` the camera is CameraOptions' (positions at 5 mm)."""
+    if raw is None:
+        return None
+    read_table(src, raw, "sensors", {}, tables=_SENSORS)
+    gyro = spin = None
+    if "gyro" in raw:
+        table = read_table(src, raw["gyro"], "sensors.gyro", _RATE_SENSOR)
+        gyro = _built(src, table, GyroOptions, table.values)
+    if "spin" in raw:
+        table = read_table(src, raw["spin"], "sensors.spin", _RATE_SENSOR)
+        spin = _built(src, table, SpinSensorOptions, table.values)
+    return SensorOptions(_camera_options(src, raw.get("camera", {})), gyro, spin)
+
+
+def _camera_options(src: str, raw: Any) -> CameraOptions:
+    """``[sensors.camera]``: its noise a length, or an angle for ``kind = "stereo"`` (then
+    required); ``lost_percent`` is CameraOptions.lost_rate in percent."""
+    stereo = isinstance(raw, dict) and raw.get("kind") == CameraKind.STEREO.value
+    table = read_table(
+        src, raw, "sensors.camera", {**_CAMERA, "noise": _STEREO_NOISE} if stereo else _CAMERA
+    )
+    if stereo and "noise" not in table.values:
+        raise ProblemFileError(
+            src,
+            "sensors.camera.noise",
+            "missing: a stereo camera's noise is an angle; write noise_mrad (or noise_rad, "
+            "noise_deg)",
+        )
+    values = dict(table.values)
+    if "lost_percent" in values:
+        values["lost_rate"] = values.pop("lost_percent") / 100.0
+    if "sites" in values:
+        values["sites"] = tuple(tuple(row) for row in values["sites"])
+    return _built(src, table, CameraOptions, values)
+
+
+def _built(src: str, table: Table, cls: type, values: dict[str, Any]) -> Any:
+    """``cls(**values)``; its OptionError becomes a ProblemFileError naming the key as
+    written in ``table`` (``lost_rate``: ``lost_percent``; a site: ``sites_m[i]``)."""
+    try:
+        return cls(**values)
+    except OptionError as err:
+        message = str(err)
+        found = re.search(rf"{cls.__name__}\.(\w+)(\[\d+\])?", message)
+        if not found:
+            raise ProblemFileError(src, table.where, message) from err
+        if found[1] == "lost_rate":
+            message += " (lost_percent / 100)"
+        field = "lost_percent" if found[1] == "lost_rate" else found[1]
+        raise ProblemFileError(src, table.key(field) + (found[2] or ""), message) from err

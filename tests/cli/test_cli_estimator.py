@@ -16,6 +16,9 @@ model = "{REPO_ROOT / "models" / "flight5.toml"}"
 duration_s = 0.2
 controller = "none"
 
+[sensors.camera]
+noise_mm = 5.0
+
 [estimator]
 '''
 

@@ -22,7 +22,8 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.controllers import OpenLoopController
-from lightcraft_opt.control.options import EstimatorKind, EstimatorSpec
+from lightcraft_opt.control.estimation import CameraOptions, SensorOptions
+from lightcraft_opt.control.options import EstimatorKind, EstimatorSpec, MeasurementNoise
 from lightcraft_opt.control.result import ClosedLoopResult, EstimationLog
 from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.files.campaign import load_campaign
@@ -37,7 +38,7 @@ from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
-#: A closed-loop file without [plant.noise] (an estimator refuses it), and its model's path.
+#: A closed-loop file with sensors and without [plant.noise] (an estimator refuses it).
 BASE = f'''title = "estimator table"
 model = "{REPO_ROOT / "models" / "flight5.toml"}"
 duration_s = 0.5
@@ -45,6 +46,9 @@ controller = "none"
 
 [plant]
 dropout_rate = 0.1
+
+[sensors.camera]
+noise_mm = 5.0
 '''
 
 
@@ -112,6 +116,17 @@ def test_an_estimator_beside_plant_noise_is_refused_naming_it(tmp_path):
     with pytest.raises(ProblemFileError) as err:
         _load(tmp_path, '[plant.noise]\nposition_mm = 1.0\n\n[estimator]\nkind = "ekf"\n')
     assert err.value.field == "plant.noise" and "remove [plant.noise]" in err.value.reason
+
+
+def test_an_estimator_without_sensors_is_refused_naming_them(tmp_path):
+    path = tmp_path / "bare.toml"
+    path.write_text(BASE.split("[sensors.camera]")[0] + '[estimator]\nkind = "mhe"\n')
+    with pytest.raises(ProblemFileError) as err:
+        load_closed_loop(path)
+    assert err.value.field == "sensors" and "an empty [sensors]" in err.value.reason
+    path.write_text(BASE.split("[sensors.camera]")[0] + '[sensors]\n[estimator]\nkind = "mhe"\n')
+    loaded = load_closed_loop(path)
+    assert loaded.sensors == SensorOptions() and loaded.estimator.kind is EstimatorKind.MHE
 
 
 def test_a_campaign_carries_the_estimator_and_the_truth_keeps_its_fingerprint(tmp_path):
@@ -210,37 +225,22 @@ TRACKED = {
 }
 
 
-def _without_sensors(text: str) -> str:
-    """The file without its [sensors.*] tables (read by the sensors' own reader)."""
-    return re.sub(r"\n\[sensors\.[^\]]+\][^\[]*", "\n", text)
-
-
 @pytest.mark.parametrize("name", TRACKED)
-def test_the_tracked_problems_fly_the_ekf_without_plant_noise(name, tmp_path):
+def test_the_tracked_problems_fly_the_ekf_on_a_camera(name):
     """problems/director_tracked.toml and its campaign: the director told the EKF's
-    estimate, no [plant.noise]; otherwise director_crosswind's (and montecarlo_director's)
-    plant, director and wind. Read here without [sensors] (its reader is the sensors');
-    loaded whole once it is part of the build."""
-    source = REPO_ROOT / "problems" / name
-    twin = REPO_ROOT / "problems" / TRACKED[name]
+    estimate from a 5 mm position camera, one pulse late, 5 % of frames lost, and no
+    [plant.noise]; otherwise director_crosswind's (and montecarlo_director's) plant,
+    director and wind."""
     load = load_campaign if name.startswith("montecarlo") else load_closed_loop
-    copy = tmp_path / name
-    text = source.read_text(encoding="utf-8")
-    assert "[sensors.camera]" in text
-    copy.write_text(_without_sensors(text).replace('"../models/', f'"{REPO_ROOT}/models/'))
-    tracked, reference = load(copy), load(twin)
+    tracked = load(REPO_ROOT / "problems" / name)
+    reference = load(REPO_ROOT / "problems" / TRACKED[name])
     assert tracked.estimator == EstimatorSpec(EstimatorKind.EKF)
-    assert tracked.loop.noise == type(tracked.loop.noise)()
-    assert reference.loop.noise != tracked.loop.noise
+    camera = CameraOptions(noise=5e-3, latency_pulses=1, lost_rate=0.05)
+    assert tracked.sensors == SensorOptions(camera)
+    assert reference.sensors is None and reference.estimator == EstimatorSpec()
+    assert tracked.loop.noise == MeasurementNoise() != reference.loop.noise
     assert dataclasses.replace(tracked.loop, noise=reference.loop.noise) == reference.loop
     assert (tracked.director, tracked.plant_parameters) == (
         reference.director,
         reference.plant_parameters,
     )
-    try:
-        whole = load(source)
-    except ProblemFileError as err:
-        if not (err.field or "").startswith("sensors"):
-            raise
-        pytest.skip(f"{name}: [sensors] is read once the sensor suite is part of the build")
-    assert whole.estimator == tracked.estimator

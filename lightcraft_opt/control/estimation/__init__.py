@@ -7,9 +7,14 @@
   which every estimator meets;
 - :mod:`.model`: :class:`EstimationModel`, the discrete model (prediction, process noise,
   each sensor's measurement, with Jacobians) both estimators run on;
-- :mod:`.feedback`: :class:`ReadingSource` (what a closed loop asks of its sensors) and
-  :class:`OutputFeedback`, the sensors and the estimator of one closed-loop flight with
-  the log of the estimates against the truth (docs/estimation.md#output-feedback).
+- :mod:`.sensor_options`: the sensors' options (:class:`SensorOptions`: a camera, gyros,
+  a spin counter; their noise, frame rate, latency, lost frames);
+- :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
+  one owner of each sensor's measurement Function and noise;
+- :mod:`.feedback`: :class:`ReadingSource` (what a closed loop asks of its sensors: the
+  suite meets it) and :class:`OutputFeedback`, the sensors and the estimator of one
+  closed-loop flight with the log of the estimates against the truth
+  (docs/estimation.md#output-feedback).
 
 The estimators run on the reduced pulse map Ψ (symbolic/maps/reduced_map.py): its state z
 is a plain vector (no quaternion), and the director already predicts with it.
@@ -21,12 +26,26 @@ from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
+from lightcraft_opt.control.estimation.sensor_options import (
+    CameraKind,
+    CameraOptions,
+    GyroOptions,
+    SensorOptions,
+    SpinSensorOptions,
+)
+from lightcraft_opt.control.estimation.sensors import SensorSuite
 
 __all__ = [
+    "CameraKind",
+    "CameraOptions",
     "Estimate",
     "EstimationModel",
     "Estimator",
+    "GyroOptions",
     "OutputFeedback",
     "Reading",
     "ReadingSource",
+    "SensorOptions",
+    "SensorSuite",
+    "SpinSensorOptions",
 ]

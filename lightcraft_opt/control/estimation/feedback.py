@@ -38,14 +38,16 @@ class ReadingSource(Protocol):
     """What a closed loop asks of its sensors (a ``typing.Protocol``; the sensor suite of
     control/estimation/sensors.py meets it).
 
-    - ``reset(rng)``: start a flight; every random draw of the sensors comes from ``rng``.
+    - ``reset(rng, p)``: start a flight; every random draw of the sensors comes from
+      ``rng``; ``p`` (PARAMETERS.size,) the plant's parameters (the truth they measure).
     - ``readings(k, t_k, x_k, X_coast, t_coast)``: the readings arriving at pulse k, at
       t_k [s]; ``x_k`` (STATE.size,) the true state at node k, before pulse k fires;
       ``X_coast`` (STATE.size, m) and ``t_coast`` (m,) [s] the plant's dense states over
-      the coast from pulse k-1 to k (the last column is x_k at t_k), empty (m = 0) at k = 0.
+      the coast from pulse k-1 to k (the last column is x_k at t_k), empty (m = 0) at k = 0
+      and after a pulse dropped while the craft rested on the pad.
     """
 
-    def reset(self, rng: np.random.Generator) -> None: ...
+    def reset(self, rng: np.random.Generator, p: np.ndarray | None = None) -> None: ...
 
     def readings(
         self, k: int, t_k: float, x_k: np.ndarray, X_coast: np.ndarray, t_coast: np.ndarray
@@ -67,10 +69,11 @@ class OutputFeedback:
     Parameters
     ----------
     estimator : an :class:`~.estimate.Estimator`; reset here with ``x0`` at t = 0.
-    sensors : a :class:`ReadingSource`, reset here with ``rng``; None: no readings (the
-        estimator predicts alone).
+    sensors : a :class:`ReadingSource` (the :class:`~.sensors.SensorSuite`), reset here
+        with ``rng`` and ``p``; None: no readings (the estimator predicts alone).
     x0 : (STATE.size,) the flight's true state at the first pulse (the prior's mean).
     rng : the sensors' random generator.
+    p : (PARAMETERS.size,) the plant's parameters.
     period : of the pulses [s].
     samples : dense states per coast (Φ's ``dense`` output), at t_k + period i / samples,
         i = 1 .. samples.
@@ -82,6 +85,7 @@ class OutputFeedback:
         sensors: ReadingSource | None,
         x0: np.ndarray,
         rng: np.random.Generator,
+        p: np.ndarray,
         *,
         period: float,
         samples: int,
@@ -89,7 +93,7 @@ class OutputFeedback:
         _check(estimator, "estimator", ("name", "reset", "step"), "Estimator")
         if sensors is not None:
             _check(sensors, "sensors", ("reset", "readings"), "ReadingSource")
-            sensors.reset(rng)
+            sensors.reset(rng, p)
         estimator.reset(np.array(x0, dtype=float), 0.0)
         self.estimator, self.sensors = estimator, sensors
         self._after = period * np.arange(1, samples + 1) / samples  # a coast's sample times
@@ -129,10 +133,12 @@ class OutputFeedback:
         self._fired = np.array(fired, dtype=float)
         self._coast = (np.asarray(X, dtype=float), t + self._after)
 
-    def rested(self, fired: np.ndarray, x: np.ndarray, t: float) -> None:
-        """Pulse k, at ``t`` [s], was dropped (``fired``: energy 0) before any pulse fired:
-        the pad held the craft at ``x`` (STATE.size,) through the interval."""
-        self.coasted(fired, np.tile(np.asarray(x, dtype=float)[:, None], self._after.size), t)
+    def rested(self, fired: np.ndarray) -> None:
+        """Pulse k was dropped (``fired``: energy 0) before any pulse fired: the pad held
+        the craft where it was, and no coast was flown (the next readings get an empty
+        one)."""
+        self._fired = np.array(fired, dtype=float)
+        self._coast = (np.empty((STATE.size, 0)), np.empty(0))
 
     def log(self, pulses: int, p: np.ndarray) -> EstimationLog:
         """The :class:`EstimationLog` of the first ``pulses`` pulses; tilt and coning of the
