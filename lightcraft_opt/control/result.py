@@ -240,8 +240,9 @@ class ClosedLoopResult(Presentable):
         return float(np.sqrt(np.mean(v**2))) if v.size else math.nan
 
     def summary(self) -> str:
-        """The closed-loop flight on one screen: the controller's measures, then the
-        flight's figures with units."""
+        """The closed-loop flight on one screen: the controller's measures (with an
+        estimator, its RMS position error and median step time), then the flight's figures
+        with units."""
         settled = self.first_pulse_below(math.radians(0.5))
         times = self.log.solve_time_percentiles()
         solves = (
@@ -263,6 +264,13 @@ class ClosedLoopResult(Presentable):
             f"  fallbacks        {int(np.sum(self.log.fallbacks))}",
             f"  solve time       {solves}",
         ]
+        if self.estimation is not None:  # told an estimate: how good, how fast
+            est = self.estimation
+            step = 1e3 * float(np.median(est.seconds)) if est.seconds.size else math.nan
+            rows.append(
+                f"  estimator        {est.estimator}: position error RMS "
+                f"{1e3 * est.rms_position_error():.2f} mm, step median {step:.3f} ms"
+            )
         return "\n".join(
             [
                 f"ClosedLoopResult of {self.flight.model_name} under {self.controller}",

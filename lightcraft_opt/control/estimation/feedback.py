@@ -119,7 +119,7 @@ class OutputFeedback:
             raise ParameterError(
                 "estimator.step", f"must return an Estimate, got {type(estimate).__name__}"
             )
-        told = checked_vector(f"estimate {k}", estimate.x, STATE.size)
+        told = np.array(checked_vector(f"estimate {k}", estimate.x, STATE.size))
         self._truth.append(np.array(x, dtype=float))
         self._told.append(told)
         self._sigma.append(_position_sigma(estimate.covariance))

@@ -261,6 +261,10 @@ def test_a_noisy_camera_gives_its_noise_as_the_position_error(phi):
     np.testing.assert_allclose(log.sigma_r_L, sigma, rtol=1e-15)
     assert np.all(log.readings == 2)
     assert log.rms_position_error() == pytest.approx(math.sqrt(3) * sigma, rel=0.5)
+    rms = math.sqrt(np.mean(np.sum(log.error_r_L**2, axis=1)))
+    assert log.rms_position_error() == pytest.approx(rms, rel=1e-12)
+    assert f"estimator        hooked: position error RMS {1e3 * rms:.2f} mm" in fed.summary()
+    assert "estimator " not in truth.summary()
     # the beam followed the camera's noise: the flights differ
     assert not np.array_equal(fed.commanded, truth.commanded)
 
