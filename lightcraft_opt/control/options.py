@@ -18,7 +18,9 @@ from lightcraft_opt.model.checks import (
 )
 
 __all__ = [
+    "ESTIMATOR_OPTIONS",
     "MAX_CONTROL_HORIZON",
+    "PRIOR_SLOTS",
     "ClosedLoopOptions",
     "ControlWeights",
     "ControllerFault",
@@ -489,19 +491,28 @@ class EstimatorKind(Enum):
     MHE = "mhe"
 
 
-#: The options an :class:`EstimatorSpec` may carry, with their SI unit, and the kinds
-#: that take each (docs/files/closed_loop.md#estimator).
+_BOTH = (EstimatorKind.EKF, EstimatorKind.MHE)
+#: The options an :class:`EstimatorSpec` may carry: their SI unit and the kinds that take
+#: each (docs/files/closed_loop.md#keys-estimator).
 ESTIMATOR_OPTIONS: Mapping[str, tuple[str, tuple[EstimatorKind, ...]]] = {
-    "prior_position": ("m", (EstimatorKind.EKF, EstimatorKind.MHE)),
-    "prior_velocity": ("m/s", (EstimatorKind.EKF, EstimatorKind.MHE)),
-    "prior_attitude": ("rad", (EstimatorKind.EKF, EstimatorKind.MHE)),
-    "prior_rate": ("rad/s", (EstimatorKind.EKF, EstimatorKind.MHE)),
-    "prior_spin": ("rad/s", (EstimatorKind.EKF, EstimatorKind.MHE)),
+    "prior_position": ("m", _BOTH),
+    "prior_velocity": ("m/s", _BOTH),
+    "prior_coning": ("rad", _BOTH),
+    "prior_wind": ("m/s", _BOTH),
+    "noise_scale": ("-", (EstimatorKind.EKF,)),
     "horizon": ("pulses", (EstimatorKind.MHE,)),
-    "iterations": ("-", (EstimatorKind.MHE,)),
+    "max_iter": ("-", (EstimatorKind.MHE,)),
 }
-#: The options that count (pulses, iterations): integers >= their lower bound.
-_COUNTS = {"horizon": 2, "iterations": 1}
+#: The prior options and the entries of the estimated state s (Ψ's z and the slow states:
+#: docs/estimation.md) whose prior standard deviation each sets, every axis of the slot.
+PRIOR_SLOTS: Mapping[str, str] = {
+    "prior_position": "r_L",
+    "prior_velocity": "v_L",
+    "prior_coning": "coning",
+    "prior_wind": "wind_L",
+}
+#: The options that count (pulses, iterations): integers in [low, high].
+_COUNTS = {"horizon": (1, MAX_CONTROL_HORIZON), "max_iter": (1, None)}
 
 
 @dataclass(frozen=True)
@@ -513,12 +524,14 @@ class EstimatorSpec:
     Attributes
     ----------
     kind : :class:`EstimatorKind` (default ``TRUTH``: no estimator).
-    options : {name: value} of :data:`ESTIMATOR_OPTIONS`, SI: the 1-sigma of the prior at
-        the start of a flight, ``prior_position`` [m] (each axis of r_L), ``prior_velocity``
-        [m/s] (v_L), ``prior_attitude`` [rad] (a small rotation of B), ``prior_rate``
-        [rad/s] (w_B), ``prior_spin`` [rad/s], each > 0; the moving-horizon estimator's
-        ``horizon`` [pulses] (an integer >= 2) and Gauss-Newton ``iterations`` (>= 1) per
-        pulse. Left out: the estimator's own default. ``TRUTH`` takes none.
+    options : {name: value} of :data:`ESTIMATOR_OPTIONS`, SI, each left out taking the
+        estimator's own default (``TRUTH`` takes none): the prior standard deviation at the
+        start of a flight of each axis of r_L, ``prior_position`` [m], of v_L,
+        ``prior_velocity`` [m/s], of Ψ's coning offset, ``prior_coning`` [rad], and of the
+        wind, ``prior_wind`` [m/s], each > 0 (:meth:`prior_sigmas`); the EKF's
+        ``noise_scale`` (its process noise times this, > 0); the moving-horizon
+        estimator's window ``horizon`` [pulses] (an integer in [1, 260]) and its solver's
+        ``max_iter`` (>= 1).
     """
 
     kind: EstimatorKind = EstimatorKind.TRUTH
@@ -544,6 +557,18 @@ class EstimatorSpec:
                     f"EstimatorSpec.{where} is an option of kind {takers}, not {self.kind.value!r}"
                 )
             if name in _COUNTS:
-                checked_int("EstimatorSpec", where, value, _COUNTS[name])
+                low, high = _COUNTS[name]
+                why = "10 s of pulses; the QP grows with the window and a pulse leaves 38 ms"
+                checked_int("EstimatorSpec", where, value, low, high, why)
             else:
                 checked_number("EstimatorSpec", where, value, 0.0)
+
+    def prior_sigmas(self) -> tuple[tuple[str, float], ...]:
+        """((slot of s, prior standard deviation [SI]), ...) of the prior options given, in
+        :data:`PRIOR_SLOTS`' order: what the estimators' options take
+        (``EkfOptions.prior``, ``MheOptions.prior_sigmas``)."""
+        return tuple(
+            (slot, float(self.options[name]))
+            for name, slot in PRIOR_SLOTS.items()
+            if name in self.options
+        )

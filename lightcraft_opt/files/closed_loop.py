@@ -145,13 +145,13 @@ _NOISE: dict[str, Spec] = {
 #: is the key without ``_pulses`` for the horizon).
 _ESTIMATOR: dict[str, Spec] = {
     "kind": choice(EstimatorKind),
-    "horizon_pulses": INTEGER,
-    "iterations": INTEGER,
     "prior_position": quantity("length"),
     "prior_velocity": quantity("speed"),
-    "prior_attitude": quantity("angle"),
-    "prior_rate": quantity("angular rate"),
-    "prior_spin": quantity("angular rate"),
+    "prior_coning": quantity("angle"),
+    "prior_wind": quantity("speed"),
+    "noise_scale": NUMBER,
+    "horizon_pulses": INTEGER,
+    "max_iter": INTEGER,
 }
 #: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
 #: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).

@@ -69,28 +69,28 @@ def test_the_table_reads_into_si(tmp_path):
         """[estimator]
 kind = "mhe"
 horizon_pulses = 12
-iterations = 2
+max_iter = 5
 prior_position_mm = 5.0
 prior_velocity_cm_per_s = 2.0
-prior_attitude_deg = 1.0
-prior_rate_deg_per_s = 30.0
-prior_spin_rpm = 60.0
+prior_coning_deg = 1.0
+prior_wind_kmh = 3.6
 """,
     )
     assert spec.kind is EstimatorKind.MHE
     assert spec.options == pytest.approx(
         {
             "horizon": 12,
-            "iterations": 2,
+            "max_iter": 5,
             "prior_position": 5e-3,
             "prior_velocity": 2e-2,
-            "prior_attitude": math.radians(1.0),
-            "prior_rate": math.radians(30.0),
-            "prior_spin": 2 * math.pi,
+            "prior_coning": math.radians(1.0),
+            "prior_wind": 1.0,
         },
         rel=1e-15,
     )
     assert isinstance(spec.options["horizon"], int)
+    ekf = _load(tmp_path, '[estimator]\nkind = "ekf"\nnoise_scale = 2.0\n')
+    assert ekf == EstimatorSpec(EstimatorKind.EKF, {"noise_scale": 2.0})
 
 
 @pytest.mark.parametrize(
@@ -99,8 +99,10 @@ prior_spin_rpm = 60.0
         ('kind = "kalman"', "estimator.kind", r"'truth', 'ekf', 'mhe'"),
         ('kind = "ekf"\nprior_position_mm = -1.0', "estimator.prior_position_mm", r"> 0"),
         ('kind = "ekf"\nhorizon_pulses = 10', "estimator.horizon_pulses", r"kind 'mhe', not"),
-        ('kind = "mhe"\nhorizon_pulses = 1', "estimator.horizon_pulses", r">= 2"),
-        ("prior_spin_rpm = 10.0", "estimator.prior_spin_rpm", r"not 'truth'"),
+        ('kind = "mhe"\nhorizon_pulses = 0', "estimator.horizon_pulses", r">= 1"),
+        ('kind = "mhe"\nnoise_scale = 0.5', "estimator.noise_scale", r"kind 'ekf', not"),
+        ('kind = "ekf"\nnoise_scale = 0.0', "estimator.noise_scale", r"> 0"),
+        ("prior_wind_mps = 1.0", "estimator.prior_wind_mps", r"not 'truth'"),
         ('kind = "ekf"\ngain = 1.0', "estimator.gain", r"kind|unknown|not"),
         ('kind = "ekf"\nprior_position_kg = 1.0', "estimator.prior_position_kg", r"unit|mm"),
     ],

@@ -38,6 +38,7 @@ from lightcraft_opt.control.estimation import (
 )
 from lightcraft_opt.control.factory import build_estimator, build_tracker
 from lightcraft_opt.control.options import (
+    PRIOR_SLOTS,
     ClosedLoopOptions,
     EstimatorKind,
     EstimatorSpec,
@@ -411,13 +412,28 @@ def test_the_factory_builds_none_for_the_truth_and_names_what_is_missing():
         ({"kind": "ekf"}, r"EstimatorSpec.kind must be one of \['truth', 'ekf', 'mhe'\]"),
         ({"options": {"prior_position": 0.01}}, r"options\[prior_position\] is an option of"),
         ({"kind": EstimatorKind.EKF, "options": {"horizon": 10}}, r"of kind 'mhe', not 'ekf'"),
-        ({"kind": EstimatorKind.MHE, "options": {"horizon": 1}}, r"options\[horizon\] .*>= 2"),
+        ({"kind": EstimatorKind.MHE, "options": {"horizon": 0}}, r"options\[horizon\] .*>= 1"),
+        ({"kind": EstimatorKind.MHE, "options": {"horizon": 261}}, r"<= 260 \(10 s of pulses"),
         ({"kind": EstimatorKind.MHE, "options": {"horizon": 2.5}}, r"must be an integer"),
-        ({"kind": EstimatorKind.EKF, "options": {"prior_rate": -1.0}}, r"prior_rate\] .*> 0"),
-        ({"kind": EstimatorKind.EKF, "options": {"prior_spin": math.nan}}, r"prior_spin\]"),
+        ({"kind": EstimatorKind.MHE, "options": {"noise_scale": 2.0}}, r"kind 'ekf', not 'mhe'"),
+        ({"kind": EstimatorKind.EKF, "options": {"prior_wind": -1.0}}, r"prior_wind\] .*> 0"),
+        ({"kind": EstimatorKind.EKF, "options": {"prior_coning": math.nan}}, r"prior_coning\]"),
         ({"kind": EstimatorKind.EKF, "options": {"gain": 1.0}}, r"options\[gain\]: no such"),
     ],
 )
 def test_an_estimator_spec_names_its_bad_field(kwargs, message):
     with pytest.raises(OptionError, match=message):
         EstimatorSpec(**kwargs)
+
+
+def test_the_priors_are_named_by_the_slots_of_the_estimated_state():
+    """prior_* set whole slots of s (Ψ's r_L, v_L, coning and the wind), in one order
+    whatever the order given; the other options are not priors."""
+    spec = EstimatorSpec(
+        EstimatorKind.MHE,
+        {"horizon": 12, "prior_wind": 1.5, "max_iter": 5, "prior_position": 0.01},
+    )
+    assert spec.prior_sigmas() == (("r_L", 0.01), ("wind_L", 1.5))
+    psi_slots = [slot for slot in PRIOR_SLOTS.values() if slot != "wind_L"]  # wind: slow
+    assert psi_slots == ["r_L", "v_L", "coning"] and set(psi_slots) <= set(REDUCED_STATE.names)
+    assert EstimatorSpec().prior_sigmas() == ()
