@@ -11,6 +11,9 @@
   a spin counter; their noise, frame rate, latency, lost frames);
 - :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
   one owner of each sensor's measurement Function and noise;
+- :mod:`.mhe`: :class:`MovingHorizonEstimator`, the last N pulses fitted by one HPIPM QP
+  a pulse (its QP: :mod:`.mhe_qp`; its options and step statistics, :class:`MheOptions`
+  and :class:`MheStats`: :mod:`.mhe_options`);
 - :mod:`.feedback`: :class:`ReadingSource` (what a closed loop asks of its sensors: the
   suite meets it) and :class:`OutputFeedback`, the sensors and the estimator of one
   closed-loop flight with the log of the estimates against the truth
@@ -24,6 +27,8 @@ from __future__ import annotations
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
+from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
+from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.control.estimation.sensor_options import (
@@ -42,6 +47,9 @@ __all__ = [
     "EstimationModel",
     "Estimator",
     "GyroOptions",
+    "MheOptions",
+    "MheStats",
+    "MovingHorizonEstimator",
     "OutputFeedback",
     "Reading",
     "ReadingSource",

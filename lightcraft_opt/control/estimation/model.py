@@ -33,6 +33,13 @@ class EstimationModel(Protocol):
     - ``process_noise(s, u, t) -> Q`` (n, n), symmetric positive semidefinite;
     - ``measure(sensor, s, dt) -> (y, H)``: h_sensor and its Jacobian ∂h/∂s (m, n);
     - ``measurement_noise(sensor) -> R`` (m, m), symmetric positive definite.
+
+    Optional (read with ``getattr``, so a test's model may leave them out):
+
+    - ``start(x0) -> s0``: the vector s of a full state x0 (STATE), the prior mean an
+      estimator's ``reset`` starts from; without it s0 = x0;
+    - ``parts(s) -> (z, x, slow)``: what an :class:`Estimate` holds (Ψ's z, its ``lift``
+      x, the slow states by name); without it z = x = s and no slow states.
     """
 
     names: tuple[str, ...]
