@@ -6,7 +6,7 @@ in worker processes, on Dask workers). It draws the run's values
 (:func:`~lightcraft_opt.campaign.dispersions.draw`), applies them to the plant's parameters, the
 initial state and the drop-out rate, flies :func:`~lightcraft_opt.control.closed_loop.closed_loop`
 under the campaign's controller (built by control/factory.py; "none" is the open loop: the
-nominal input every pulse)
+nominal input every pulse), told the state by the campaign's estimator when it names one
 and returns the row of the run table (inputs and outputs, SI, unit in the column name) and
 a row of wall-clock timings, kept apart so that tables can be compared bit for bit.
 :func:`row_problem` checks a row read back from a resumed table against what run_one
@@ -44,7 +44,8 @@ from lightcraft_opt.campaign.spec import (
 from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.controllers import Controller
-from lightcraft_opt.control.factory import build_controller
+from lightcraft_opt.control.estimation import Estimator, SensorSuite
+from lightcraft_opt.control.factory import build_controller, build_tracker
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import (
     STATE,
@@ -203,6 +204,10 @@ class _Flyer:
             compiled=c.compiled,
         )
         self.plant: PulseMap = pulse_map_for(c.model, options, compiled=c.compiled)
+        # the sensors and the estimator, reset by each flight (None, None: the truth)
+        self.sensors: SensorSuite | None
+        self.estimator: Estimator | None
+        self.sensors, self.estimator = build_tracker(c.estimator, c.model, c.sensors)
 
     def fly(self, draws: Mapping[str, float], seed: int) -> ClosedLoopResult:
         c = self.campaign
@@ -229,6 +234,8 @@ class _Flyer:
             parameters=parameters,
             pulse_map=self.plant,
             options=loop,
+            sensors=self.sensors,
+            estimator=self.estimator,
         )
 
 

@@ -12,10 +12,13 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.campaign.dispersions import Dispersions
+from lightcraft_opt.control.estimation.sensor_options import SensorOptions
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerKind,
     DirectorOptions,
+    EstimatorKind,
+    EstimatorSpec,
     MpcOptions,
 )
 from lightcraft_opt.errors import ParameterError
@@ -114,6 +117,10 @@ class Campaign:
     compiled : fly the plant Φ compiled to C (compiled/; cached on disk): True, False,
         or None (default) for compiled unless ``LIGHTCRAFT_COMPILE=0``.
     title : a name for reports.
+    estimator : what tells the controller the state in every run (the file's
+        ``[estimator]``; default the truth with the loop's noise).
+    sensors : what that estimator reads (the file's ``[sensors]``; None: the default
+        camera, or nothing with the truth).
     """
 
     model: Model
@@ -127,6 +134,8 @@ class Campaign:
     dispersions: Dispersions = field(default_factory=Dispersions)
     compiled: bool | None = None
     title: str = "campaign"
+    estimator: EstimatorSpec = field(default_factory=EstimatorSpec)
+    sensors: SensorOptions | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration", checked_duration(self.duration))
@@ -135,6 +144,8 @@ class Campaign:
             raise ParameterError("controller", f"must be one of {allowed}, got {self.controller!r}")
         if not isinstance(self.dispersions, Dispersions):
             raise ParameterError("dispersions", f"must be Dispersions, got {self.dispersions!r}")
+        if not isinstance(self.estimator, EstimatorSpec):
+            raise ParameterError("estimator", f"must be an EstimatorSpec, got {self.estimator!r}")
         x0 = initial_state(self.model) if self.x0 is None else self.x0
         object.__setattr__(self, "x0", checked_vector("x0", x0, STATE.size).copy())
 
@@ -143,7 +154,7 @@ class Campaign:
         """sha256 of everything a run depends on (not the title): equal fingerprints fly
         equal runs."""
         p = {k: np.ravel(v).tolist() for k, v in sorted(self.plant_parameters.items())}
-        parts = (
+        parts: tuple[str, ...] = (
             repr(self.model),
             repr(float(self.duration)),
             self.controller.value,
@@ -155,6 +166,8 @@ class Campaign:
             repr(self.dispersions),
             repr(self.compiled),
         )
+        if self.estimator.kind is not EstimatorKind.TRUTH:  # the truth's: as before it
+            parts += (repr(self.estimator), repr(self.sensors))
         return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
     @property

@@ -14,7 +14,7 @@ from lightcraft_opt.cli.args import output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import ANIMATE_HELP, BUDGET_MS, DURATION
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
-from lightcraft_opt.control.factory import build_controller
+from lightcraft_opt.control.factory import build_controller, build_tracker
 from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, load_closed_loop
@@ -100,7 +100,11 @@ def _fly(
     controller = build_controller(kind, model, plant, mpc=problem.mpc, director=problem.director)
     if kind is not ControllerKind.NONE:
         print(f"built in {time.perf_counter() - start:.1f} s", flush=True)
-    print(f"flying {problem.duration:g} s ...", flush=True)
+    sensors, estimator = build_tracker(problem.estimator, model, problem.sensors)
+    if problem.sensors is not None and estimator is None:
+        print('note: [sensors] is read by no one: [estimator] kind is "truth"', flush=True)
+    told = "the true state" if estimator is None else f"the {estimator.name}'s estimate"
+    print(f"flying {problem.duration:g} s, the controller told {told} ...", flush=True)
     result = closed_loop(
         model,
         controller,
@@ -109,6 +113,8 @@ def _fly(
         parameters=problem.plant_parameters,
         pulse_map=plant,
         options=problem.loop,
+        sensors=sensors,
+        estimator=estimator,
     )
     # the files and figures below are written by the writers registered in files/outputs.py
     result.save(out, problem=problem, inputs=plant.inputs, animate=animate)
@@ -119,12 +125,19 @@ def _fly(
         "no solves" if not math.isfinite(median) else f"solve time median {median * 1e3:.2f} ms"
     )
     coning = math.degrees(result.coning[0]), math.degrees(result.coning[-1])
+    estimated = ""
+    if result.estimation is not None:
+        log = result.estimation
+        estimated = (
+            f", {log.estimator}: position error RMS {1e3 * log.rms_position_error():.2f} mm, "
+            f"step median {1e3 * float(np.median(log.seconds)) if log.seconds.size else 0:.2f} ms"
+        )
     fallbacks = int(np.sum(result.log.fallbacks))
     print(
         f"{name}: {result.flight.status.value}: coning {coning[0]:.3f} -> "
         f"{coning[1]:.3f} deg ({settled}), max tilt "
         f"{math.degrees(result.max_tilt_rad):.3f} deg, pulses {result.pulses_fired} fired, "
-        f"{result.pulses_dropped} dropped, {fallbacks} fallbacks, {solves} -> {out}/"
+        f"{result.pulses_dropped} dropped, {fallbacks} fallbacks, {solves}{estimated} -> {out}/"
     )
     return result
 
@@ -137,8 +150,9 @@ def add(sub: argparse._SubParsersAction) -> None:
         description="Fly the closed-loop file's craft under the controller it names (its "
         "controller key: mpc, lqr, director or none; --controller overrides it), u = "
         "controller.step(x); x = plant(x, u), and write trajectory.csv, "
-        "pulses.csv, steps.csv (per-pulse controller statistics), summary.json and figures "
-        "(coning, tilt, offset, RCS use; solve-time histogram). The MPC's and LQR's linear "
+        "pulses.csv, steps.csv (per-pulse controller statistics; with an [estimator], its "
+        "errors against the truth), summary.json and figures (coning, tilt, offset, RCS use; "
+        "solve-time histogram; estimate.png with an estimator). The MPC's and LQR's linear "
         "model is built once per model and kept in the cache folder (~20 s the first time; "
         "lightcraft --help: LIGHTCRAFT_CACHE). The flight depends only on its inputs: no "
         "solve has a wall-clock budget unless the file's time_budget_ms or --time-budget-ms "

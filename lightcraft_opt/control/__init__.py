@@ -4,8 +4,10 @@ and the closed loop that flies them on the full pulse map Φ.
 - :mod:`.options`: :class:`ControllerKind` (which controller), :class:`MpcOptions`,
   :class:`ControlWeights`, :class:`DirectorOptions` (with :class:`FocusSchedule`,
   :class:`DirectorRcs`), :class:`ClosedLoopOptions` (noise, plant dispersion, drop-outs,
-  injected faults);
-- :mod:`.factory`: :func:`build_controller`, every controller from a :class:`ControllerKind`;
+  injected faults), :class:`EstimatorSpec` (which :class:`EstimatorKind` tells the
+  controller the state);
+- :mod:`.factory`: :func:`build_controller`, every controller from a :class:`ControllerKind`,
+  and :func:`build_estimator`;
 - :mod:`.prediction_model`: linear models in coning coordinates scheduled on spin and
   altitude (:func:`coning_model`), the MPC's and the LQR controller's prediction;
 - :mod:`.controllers`: the ``step(x)`` interface (:class:`Controller`, a Protocol a
@@ -16,8 +18,11 @@ and the closed loop that flies them on the full pulse map Φ.
 - :mod:`.mpc_qp`: the stage-structured QP (HPIPM, ...); :mod:`.mpc`: :class:`MpcController`;
 - :mod:`.director_qp`, :mod:`.director`: :class:`DirectorController`, beam tracking by a
   real-time iteration on the reduced map Ψ (beam pointing, focus, pulse energy);
+- :mod:`.estimation`: readings, estimates, the estimators' interface, and the output
+  feedback a closed loop flies with them;
 - :mod:`.closed_loop`: :func:`closed_loop`, ``u = controller.step(x); x = Φ(x, u, p)``;
-- :mod:`.result`: :class:`ClosedLoopResult` with the controller's log and step statistics.
+- :mod:`.result`: :class:`ClosedLoopResult` with the controller's log and step statistics,
+  and an estimator's :class:`EstimationLog`.
 
 The what (options, result) never imports the how (an import-linter contract). Nothing
 here imports python-control: the linear models, the Riccati gain and the focus schedule
@@ -37,7 +42,7 @@ from lightcraft_opt.control.controllers import (
     stage_weights,
 )
 from lightcraft_opt.control.director import DirectorController
-from lightcraft_opt.control.factory import build_controller
+from lightcraft_opt.control.factory import build_controller, build_estimator
 from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.mpc_qp import NutationQp, QpStatus
 from lightcraft_opt.control.options import (
@@ -48,6 +53,8 @@ from lightcraft_opt.control.options import (
     DirectorOptions,
     DirectorRcs,
     DirectorWeights,
+    EstimatorKind,
+    EstimatorSpec,
     FocusSchedule,
     MeasurementNoise,
     MpcOptions,
@@ -59,6 +66,7 @@ from lightcraft_opt.control.result import (
     ClosedLoopResult,
     ControllerLog,
     ControllerStatus,
+    EstimationLog,
     StepStats,
 )
 
@@ -77,6 +85,9 @@ __all__ = [
     "DirectorOptions",
     "DirectorRcs",
     "DirectorWeights",
+    "EstimationLog",
+    "EstimatorKind",
+    "EstimatorSpec",
     "FocusSchedule",
     "LqrController",
     "Measurement",
@@ -91,6 +102,7 @@ __all__ = [
     "StageWeights",
     "StepStats",
     "build_controller",
+    "build_estimator",
     "closed_loop",
     "coning_model",
     "disperse",

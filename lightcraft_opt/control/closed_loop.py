@@ -8,6 +8,12 @@ The loop is written out (docs/architecture.md#rule-1)::
         u' = u, energy 0 if the laser drops the pulse
         x = Φ(x, u', p_plant, t_k)          # the plant
 
+With an estimator (output feedback, docs/estimation.md#output-feedback) the controller is
+told the estimate instead: ``y = estimator.step(sensors.readings(k, x, coast), u'_{k-1},
+t_k).x`` (control/estimation/feedback.py), the sensors drawing from their own generator,
+seeded from the loop's seed apart from the plant's draws (``default_rng([seed, 1])``), so
+that the same seed gives the same dispersion and drop-outs with or without them.
+
 The plant is the pulse map Φ (default options, PHASE_LOCKED RCS: SPLIT4 with 32
 substeps resolves the 216 Hz forcing) with its own parameters: the model's, with the
 problem's overrides (wind, gusts) and the dispersion of
@@ -34,6 +40,8 @@ import numpy as np
 
 from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.controllers import Controller
+from lightcraft_opt.control.estimation.estimate import Estimator
+from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
 from lightcraft_opt.control.options import ClosedLoopOptions, MeasurementNoise, PlantDispersion
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerLog, StepStats
 from lightcraft_opt.errors import ParameterError
@@ -149,6 +157,8 @@ def closed_loop(
     parameters: Mapping[str, float | Sequence[float]] | None = None,
     pulse_map: PulseMap | None = None,
     options: ClosedLoopOptions | None = None,
+    sensors: ReadingSource | None = None,
+    estimator: Estimator | None = None,
 ) -> ClosedLoopResult:
     """Fly ``model`` under ``controller`` for ``duration`` seconds (module docstring).
 
@@ -167,11 +177,21 @@ def closed_loop(
         :data:`PLANT_MAP` from :func:`~lightcraft_opt.compiled.pulse_map_for` (built once
         per process, compiled to C where a compiler works).
     options : noise, dispersion, drop-outs, injected faults, seed.
+    sensors : what the estimator reads (a
+        :class:`~lightcraft_opt.control.estimation.SensorSuite`, or any
+        :class:`~lightcraft_opt.control.estimation.feedback.ReadingSource`), reset with
+        ``default_rng([seed, 1])`` and the plant's parameters; only with ``estimator``.
+    estimator : tells the controller the state (an
+        :class:`~lightcraft_opt.control.estimation.Estimator`, reset with ``x0``); None:
+        the controller is told the true state with ``options.noise`` on it, which must
+        then be the only noise (an error with both). The open loop (a controller with a
+        ``fixed_input``) is told nothing: it ignores both.
 
     Returns
     -------
     ClosedLoopResult: the plant's flight, the controller's per-pulse statistics and the
-    per-pulse coning, tilt, offset and propellant used. A failed or late solve is a
+    per-pulse coning, tilt, offset and propellant used; with an estimator, its
+    :class:`~lightcraft_opt.control.result.EstimationLog`. A failed or late solve is a
     status in the log, never an exception.
     """
     opts = options or ClosedLoopOptions()
@@ -190,10 +210,11 @@ def closed_loop(
     flight = FlightLog(x, phi.period, duration, lay, p, model.laser)
     faults = set(opts.faults)
     controller.reset()
+    fixed = getattr(controller, "fixed_input", None)
+    feedback = _feedback(opts, sensors, estimator, x, p, phi, fixed)
     steps: list[StepStats] = []
     commanded: list[np.ndarray] = []
     nodes = [x]
-    fixed = getattr(controller, "fixed_input", None)
     if fixed is not None:  # open loop: no measurement, no faults to inject
         u = checked_vector("controller input", fixed, lay.size)
         commanded = [u] * n
@@ -209,7 +230,7 @@ def closed_loop(
         for k in range(n):
             t = k * phi.period
             fault = opts.fault if k in faults else None
-            y = measured(x, opts.noise, rng)
+            y = measured(x, opts.noise, rng) if feedback is None else feedback.told(k, t, x)
             u = checked_vector(
                 f"controller input {k}", controller.step(y, t, fault=fault), lay.size
             )
@@ -221,10 +242,14 @@ def closed_loop(
             if flight.rests(applied):  # on the pad, nothing fired yet
                 flight.rest(t, applied, x, ENGINE.size)
                 nodes.append(x)
+                if feedback is not None:
+                    feedback.rested(applied)
                 continue
             X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
             if flight.ended_by(t, applied, X, eng.ravel()):
                 break
+            if feedback is not None:
+                feedback.coasted(applied, X, t)
             x = X[:, -1]
             nodes.append(x)
     k_done = len(flight.pulse_t)
@@ -252,4 +277,36 @@ def closed_loop(
         commanded=np.array(commanded).reshape(-1, lay.size)[:k_done],
         dropped=dropped[:k_done],
         p_plant=p,
+        estimation=None if feedback is None else feedback.log(k_done, p),
     )
+
+
+def _feedback(
+    opts: ClosedLoopOptions,
+    sensors: ReadingSource | None,
+    estimator: Estimator | None,
+    x0: np.ndarray,
+    p: np.ndarray,
+    phi: PulseMap,
+    fixed: object,
+) -> OutputFeedback | None:
+    """The flight's output feedback: None without an estimator or for the open loop (told
+    nothing); the sensors' generator seeded apart from the plant's draws."""
+    if estimator is None:
+        if sensors is not None:
+            raise ParameterError(
+                "sensors", "need an estimator to read them (closed_loop's estimator=...)"
+            )
+        return None
+    if any(getattr(opts.noise, f) for f in ("position", "velocity", "attitude", "rate", "spin")):
+        raise ParameterError(
+            "options.noise",
+            "is the noise on the true state a controller is told without an estimator; with "
+            "one the controller is told the estimate, and the sensors' noise applies: give "
+            "MeasurementNoise() (no [plant.noise] in a file with an [estimator])",
+        )
+    if fixed is not None:
+        return None
+    samples = int(phi.dense.size_out(0)[1])
+    rng = np.random.default_rng([opts.seed, 1])
+    return OutputFeedback(estimator, sensors, x0, rng, p, period=phi.period, samples=samples)

@@ -14,20 +14,32 @@ budget), the factory how each kind is put together:
 - ``LQR``: :class:`~.controllers.LqrController` on the same model, with the MPC's weights;
 - ``DIRECTOR``: :class:`~.director.DirectorController`; on a craft with RCS whose
   ``DirectorOptions.rcs`` is ``NUTATION``, with the nutation MPC alongside.
+
+:func:`build_estimator` likewise builds what tells the controller the state from an
+:class:`~lightcraft_opt.control.options.EstimatorSpec`, and :func:`build_tracker` the sensor
+suite with it, as the CLI and the campaigns fly them (docs/estimation.md#output-feedback).
 """
 
 from __future__ import annotations
 
 from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
 from lightcraft_opt.control.director import DirectorController
+from lightcraft_opt.control.estimation import Estimator, SensorOptions, SensorSuite
 from lightcraft_opt.control.mpc import MpcController
-from lightcraft_opt.control.options import ControllerKind, DirectorOptions, DirectorRcs, MpcOptions
+from lightcraft_opt.control.options import (
+    ControllerKind,
+    DirectorOptions,
+    DirectorRcs,
+    EstimatorKind,
+    EstimatorSpec,
+    MpcOptions,
+)
 from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
-__all__ = ["build_controller", "controller_kind"]
+__all__ = ["build_controller", "build_estimator", "build_tracker", "controller_kind"]
 
 
 def controller_kind(kind: ControllerKind | str, name: str = "kind") -> ControllerKind:
@@ -87,3 +99,47 @@ def build_controller(
     if kind is ControllerKind.MPC:
         return MpcController(model, mpc, prediction=prediction)
     return LqrController(model, prediction, mpc.weights)
+
+
+def build_estimator(
+    spec: EstimatorSpec, model: Model, sensors: SensorSuite | None
+) -> Estimator | None:
+    """The estimator ``spec`` names for ``model``, reading ``sensors``; None for
+    ``TRUTH`` (the controller is told the true state with the loop's noise).
+
+    Parameters
+    ----------
+    spec : which estimator and its options, SI (:class:`EstimatorSpec`).
+    model : the estimator's model (what it believes: the controller's).
+    sensors : the sensor suite the closed loop reads and the estimator models.
+
+    Raises
+    ------
+    OptionError naming ``build_estimator.spec`` when the kind is not built here.
+    """
+    if not isinstance(spec, EstimatorSpec):
+        raise OptionError(f"build_estimator.spec must be an EstimatorSpec, got {spec!r}")
+    if spec.kind is EstimatorKind.TRUTH:
+        return None
+    # the extended Kalman filter (estimation/ekf.py) and the moving-horizon estimator
+    # (estimation/mhe.py) are built here once they are part of the package
+    raise OptionError(
+        f"build_estimator.spec: the {spec.kind.value!r} estimator is not available in this "
+        f"build; use kind = {EstimatorKind.TRUTH.value!r}"
+    )
+
+
+def build_tracker(
+    spec: EstimatorSpec, model: Model, sensors: SensorOptions | None
+) -> tuple[SensorSuite | None, Estimator | None]:
+    """The sensor suite and the estimator a closed loop flies with (its ``sensors=`` and
+    ``estimator=``): (None, None) for ``TRUTH``, whose controller is told the true state
+    (the sensors, if any, are read by no one); else the suite of ``sensors`` (None: the
+    default camera, :class:`SensorOptions`) on ``model`` and :func:`build_estimator`'s
+    estimator reading it."""
+    if not isinstance(spec, EstimatorSpec):
+        raise OptionError(f"build_tracker.spec must be an EstimatorSpec, got {spec!r}")
+    if spec.kind is EstimatorKind.TRUTH:
+        return None, None
+    suite = SensorSuite(model, sensors)
+    return suite, build_estimator(spec, model, suite)

@@ -1,10 +1,11 @@
 """Options of the controllers and the closed loop: which controller, the MPC, the director,
-their weights, what goes wrong."""
+their weights, what goes wrong, and which estimator tells the controller the state."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from enum import Enum
 
 from lightcraft_opt.errors import OptionError
@@ -17,7 +18,9 @@ from lightcraft_opt.model.checks import (
 )
 
 __all__ = [
+    "ESTIMATOR_OPTIONS",
     "MAX_CONTROL_HORIZON",
+    "PRIOR_SLOTS",
     "ClosedLoopOptions",
     "ControlWeights",
     "ControllerFault",
@@ -25,6 +28,8 @@ __all__ = [
     "DirectorOptions",
     "DirectorRcs",
     "DirectorWeights",
+    "EstimatorKind",
+    "EstimatorSpec",
     "FocusSchedule",
     "MeasurementNoise",
     "MpcOptions",
@@ -470,3 +475,100 @@ class ClosedLoopOptions:
             )
         checked_choice("ClosedLoopOptions", "fault", self.fault, ControllerFault)
         checked_int("ClosedLoopOptions", "seed", self.seed, 0)
+
+
+class EstimatorKind(Enum):
+    """What tells a closed loop's controller the state (control/factory.py builds each).
+
+    ``TRUTH``: no estimator; the controller is told the plant's true state with the
+    closed loop's :class:`MeasurementNoise` on it (the loop before issue 30). ``EKF``: the
+    extended Kalman filter on Ψ, fed the sensors' readings. ``MHE``: the moving-horizon
+    estimator, likewise.
+    """
+
+    TRUTH = "truth"
+    EKF = "ekf"
+    MHE = "mhe"
+
+
+_BOTH = (EstimatorKind.EKF, EstimatorKind.MHE)
+#: The options an :class:`EstimatorSpec` may carry: their SI unit and the kinds that take
+#: each (docs/files/closed_loop.md#keys-estimator).
+ESTIMATOR_OPTIONS: Mapping[str, tuple[str, tuple[EstimatorKind, ...]]] = {
+    "prior_position": ("m", _BOTH),
+    "prior_velocity": ("m/s", _BOTH),
+    "prior_coning": ("rad", _BOTH),
+    "prior_wind": ("m/s", _BOTH),
+    "noise_scale": ("-", (EstimatorKind.EKF,)),
+    "horizon": ("pulses", (EstimatorKind.MHE,)),
+    "max_iter": ("-", (EstimatorKind.MHE,)),
+}
+#: The prior options and the entries of the estimated state s (Ψ's z and the slow states:
+#: docs/estimation.md) whose prior standard deviation each sets, every axis of the slot.
+PRIOR_SLOTS: Mapping[str, str] = {
+    "prior_position": "r_L",
+    "prior_velocity": "v_L",
+    "prior_coning": "coning",
+    "prior_wind": "wind_L",
+}
+#: The options that count (pulses, iterations): integers in [low, high].
+_COUNTS = {"horizon": (1, MAX_CONTROL_HORIZON), "max_iter": (1, None)}
+
+
+@dataclass(frozen=True)
+class EstimatorSpec:
+    """Which estimator a closed loop flies and the options it is built with (SI), as a
+    closed-loop file's ``[estimator]`` gives them; :func:`~.factory.build_estimator`
+    makes the estimator.
+
+    Attributes
+    ----------
+    kind : :class:`EstimatorKind` (default ``TRUTH``: no estimator).
+    options : {name: value} of :data:`ESTIMATOR_OPTIONS`, SI, each left out taking the
+        estimator's own default (``TRUTH`` takes none): the prior standard deviation at the
+        start of a flight of each axis of r_L, ``prior_position`` [m], of v_L,
+        ``prior_velocity`` [m/s], of Ψ's coning offset, ``prior_coning`` [rad], and of the
+        wind, ``prior_wind`` [m/s], each > 0 (:meth:`prior_sigmas`); the EKF's
+        ``noise_scale`` (its process noise times this, > 0); the moving-horizon
+        estimator's window ``horizon`` [pulses] (an integer in [1, 260]) and its solver's
+        ``max_iter`` (>= 1).
+    """
+
+    kind: EstimatorKind = EstimatorKind.TRUTH
+    options: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        checked_choice("EstimatorSpec", "kind", self.kind, EstimatorKind)
+        if not isinstance(self.options, Mapping):
+            raise OptionError(
+                f"EstimatorSpec.options must be a mapping of option name to value, got "
+                f"{self.options!r}"
+            )
+        for name, value in self.options.items():
+            where = f"options[{name}]"
+            if name not in ESTIMATOR_OPTIONS:
+                raise OptionError(
+                    f"EstimatorSpec.{where}: no such option; allowed: {list(ESTIMATOR_OPTIONS)}"
+                )
+            kinds = ESTIMATOR_OPTIONS[name][1]
+            if self.kind not in kinds:
+                takers = " or ".join(repr(k.value) for k in kinds)
+                raise OptionError(
+                    f"EstimatorSpec.{where} is an option of kind {takers}, not {self.kind.value!r}"
+                )
+            if name in _COUNTS:
+                low, high = _COUNTS[name]
+                why = "10 s of pulses; the QP grows with the window and a pulse leaves 38 ms"
+                checked_int("EstimatorSpec", where, value, low, high, why)
+            else:
+                checked_number("EstimatorSpec", where, value, 0.0)
+
+    def prior_sigmas(self) -> tuple[tuple[str, float], ...]:
+        """((slot of s, prior standard deviation [SI]), ...) of the prior options given, in
+        :data:`PRIOR_SLOTS`' order: what the estimators' options take
+        (``EkfOptions.prior``, ``MheOptions.prior_sigmas``)."""
+        return tuple(
+            (slot, float(self.options[name]))
+            for name, slot in PRIOR_SLOTS.items()
+            if name in self.options
+        )

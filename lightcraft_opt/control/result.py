@@ -5,7 +5,8 @@ A controller reports each pulse as a :class:`StepStats` with a :class:`Controlle
 a failed or late solve is a status (the controller fell back to its shifted plan), never
 an exception. :class:`ClosedLoopResult` holds the flight (a
 :class:`~lightcraft_opt.simulation.result.SimulationResult` of the plant), the controller log and
-the per-pulse measures the acceptance criteria read.
+the per-pulse measures the acceptance criteria read, and, when an estimator told the
+controller the state, the :class:`EstimationLog` of its estimates against the truth.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ __all__ = [
     "ClosedLoopResult",
     "ControllerLog",
     "ControllerStatus",
+    "EstimationLog",
     "StepStats",
 ]
 
@@ -116,6 +118,42 @@ class ControllerLog:
 
 
 @dataclass(frozen=True)
+class EstimationLog:
+    """An estimator's estimates against the plant's true state, pulse by pulse: each row
+    is the estimate the controller was told at pulse k, before the pulse fired, minus the
+    truth at that instant (docs/estimation.md#output-feedback).
+
+    Attributes
+    ----------
+    estimator : its name ("ekf", "mhe", a user's).
+    error_r_L : (k, 3) position error r̂_L - r_L, L [m].
+    error_v_L : (k, 3) velocity error v̂_L - v_L, L [m/s].
+    error_tilt : (k,) tilt of b̂1 from L up minus the true tilt [rad].
+    error_coning : (k,) coning angle of the estimate (b1 to H) minus the true one [rad].
+    error_spin : (k,) spin error [rad/s].
+    sigma_r_L : (k, 3) the estimate's own standard deviation of r_L, the square root of
+        its covariance's diagonal, L [m].
+    seconds : (k,) wall time of each ``step`` call of the estimator [s], timed by the loop.
+    readings : (k,) how many readings reached the estimator at each pulse.
+    """
+
+    estimator: str
+    error_r_L: np.ndarray
+    error_v_L: np.ndarray
+    error_tilt: np.ndarray
+    error_coning: np.ndarray
+    error_spin: np.ndarray
+    sigma_r_L: np.ndarray
+    seconds: np.ndarray
+    readings: np.ndarray
+
+    def rms_position_error(self, start: int = 0) -> float:
+        """Root mean square of |r̂_L - r_L| from pulse ``start`` [m] (NaN without rows)."""
+        e = self.error_r_L[start:]
+        return float(np.sqrt(np.mean(np.sum(e**2, axis=1)))) if e.size else math.nan
+
+
+@dataclass(frozen=True)
 class ClosedLoopResult(Presentable):
     """A closed-loop flight: ``u = controller.step(measured x); x = Φ(x, u, p_plant)``.
 
@@ -133,6 +171,8 @@ class ClosedLoopResult(Presentable):
     commanded : (k, map-input size) the controller's inputs (before drop-outs).
     dropped : (k,) bool: the laser dropped that pulse.
     p_plant : the plant's parameter vector (dispersed).
+    estimation : the estimator's estimates against the truth (:class:`EstimationLog`);
+        None when the controller was told the true state (with the loop's noise).
     """
 
     flight: SimulationResult
@@ -145,6 +185,7 @@ class ClosedLoopResult(Presentable):
     commanded: np.ndarray
     dropped: np.ndarray
     p_plant: np.ndarray
+    estimation: EstimationLog | None = None
 
     @property
     def controller(self) -> str:
@@ -199,8 +240,9 @@ class ClosedLoopResult(Presentable):
         return float(np.sqrt(np.mean(v**2))) if v.size else math.nan
 
     def summary(self) -> str:
-        """The closed-loop flight on one screen: the controller's measures, then the
-        flight's figures with units."""
+        """The closed-loop flight on one screen: the controller's measures (with an
+        estimator, its RMS position error and median step time), then the flight's figures
+        with units."""
         settled = self.first_pulse_below(math.radians(0.5))
         times = self.log.solve_time_percentiles()
         solves = (
@@ -222,6 +264,13 @@ class ClosedLoopResult(Presentable):
             f"  fallbacks        {int(np.sum(self.log.fallbacks))}",
             f"  solve time       {solves}",
         ]
+        if self.estimation is not None:  # told an estimate: how good, how fast
+            est = self.estimation
+            step = 1e3 * float(np.median(est.seconds)) if est.seconds.size else math.nan
+            rows.append(
+                f"  estimator        {est.estimator}: position error RMS "
+                f"{1e3 * est.rms_position_error():.2f} mm, step median {step:.3f} ms"
+            )
         return "\n".join(
             [
                 f"ClosedLoopResult of {self.flight.model_name} under {self.controller}",

@@ -108,6 +108,8 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
             dispersions=dispersions,
             compiled=table.values.get("compiled"),
             title=problem.title,
+            estimator=problem.estimator,
+            sensors=problem.sensors,
         )
 
 

@@ -3,13 +3,15 @@
 The sibling of :mod:`lightcraft_opt.files.problem`: the same conventions and machinery (the
 model file with ``[model_overrides]``, ``[initial]``, model_files' units in the keys, errors
 naming the key as written) for what a closed loop needs instead of an objective: the
-controller it flies (``controller``) and its options (``[mpc]``, ``[director]``), and what
-happens to the plant (``[plant]``). Every table and key, with an example, and the rule that
+controller it flies (``controller``) and its options (``[mpc]``, ``[director]``), what
+happens to the plant (``[plant]``) and what tells the controller the state
+(``[estimator]``). Every table and key, with an example, and the rule that
 picks the controller: docs/files/closed_loop.md.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -33,6 +35,8 @@ from lightcraft_opt.control.options import (
     DirectorOptions,
     DirectorRcs,
     DirectorWeights,
+    EstimatorKind,
+    EstimatorSpec,
     MeasurementNoise,
     MpcOptions,
     MpcSolver,
@@ -55,7 +59,7 @@ from lightcraft_opt.model import FocusSchedule, Model, Wind
 
 __all__ = ["TABLES", "ClosedLoopProblem", "closed_loop_from_tables", "load_closed_loop"]
 
-_TABLES = ("model_overrides", "initial", "mpc", "director", "plant", "sensors")
+_TABLES = ("model_overrides", "initial", "mpc", "director", "plant", "sensors", "estimator")
 _TOP: dict[str, Spec] = {
     "title": TEXT,
     "model": TEXT,
@@ -137,6 +141,18 @@ _NOISE: dict[str, Spec] = {
     "rate": quantity("angular rate"),
     "spin": quantity("angular rate"),
 }
+#: ``[estimator]``: the kind, then the options its EstimatorSpec carries (SI; the field
+#: is the key without ``_pulses`` for the horizon).
+_ESTIMATOR: dict[str, Spec] = {
+    "kind": choice(EstimatorKind),
+    "prior_position": quantity("length"),
+    "prior_velocity": quantity("speed"),
+    "prior_coning": quantity("angle"),
+    "prior_wind": quantity("speed"),
+    "noise_scale": NUMBER,
+    "horizon_pulses": INTEGER,
+    "max_iter": INTEGER,
+}
 #: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
 #: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).
 _CAMERA: dict[str, Spec] = {
@@ -177,6 +193,7 @@ TABLES: dict[str, dict[str, Spec]] = {
     "plant": _PLANT,
     "plant.noise": _NOISE,
     "plant.wind": {field: mf.SCHEMA["wind"][field] for field in _WIND_PARAMETERS},
+    "estimator": _ESTIMATOR,
     "sensors.camera": _CAMERA,
     "sensors.gyro": _RATE_SENSOR,
     "sensors.spin": _RATE_SENSOR,
@@ -201,7 +218,10 @@ class ClosedLoopProblem:
     title : the file's ``title`` (default: the file name).
     source : the file read.
     sensors : what the tracker sees (``[sensors]``), or None: the file has no ``[sensors]``
-        and the controller is told the state with ``[plant.noise]``.
+        (and no estimator: the controller is told the state with ``[plant.noise]``).
+    estimator : what tells the controller the state (``[estimator]``; default the truth
+        with ``[plant.noise]``: :class:`~lightcraft_opt.control.options.EstimatorSpec`);
+        one other than the truth reads ``sensors``.
     """
 
     model: Model
@@ -215,6 +235,7 @@ class ClosedLoopProblem:
     title: str
     source: Path
     sensors: SensorOptions | None = None
+    estimator: EstimatorSpec = dataclasses.field(default_factory=EstimatorSpec)
 
 
 def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
@@ -265,6 +286,7 @@ def closed_loop_from_tables(
     plant = data.get("plant", {})
     director = _director_options(src, data.get("director", {}))
     _check_energy_range(src, model, director)
+    estimator = _estimator(src, data.get("estimator", {}), plant, "sensors" in data)
     return ClosedLoopProblem(
         model=model,
         x0=x0,
@@ -277,6 +299,7 @@ def closed_loop_from_tables(
         title=top.values.get("title", file.stem),
         source=file,
         sensors=_sensor_options(src, data.get("sensors")),
+        estimator=estimator,
     )
 
 
@@ -477,6 +500,42 @@ def _loop_options(src: str, raw: Any) -> ClosedLoopOptions:
         if "ClosedLoopOptions.faults" in message:
             key = table.key("fault_pulses")
         raise ProblemFileError(src, key, message) from err
+
+
+def _estimator(src: str, raw: Any, plant: Any, sensed: bool) -> EstimatorSpec:
+    """``[estimator]`` read into an EstimatorSpec (SI); an estimator beside ``[plant.noise]``
+    (the noise on the truth a controller is told without one) is refused naming it, and
+    one without ``[sensors]`` (``sensed`` False: nothing to read) naming ``sensors``."""
+    table = read_table(src, raw, "estimator", _ESTIMATOR)
+    options = dict(table.values)
+    kind = options.pop("kind", EstimatorKind.TRUTH)
+    if "horizon_pulses" in options:
+        options["horizon"] = options.pop("horizon_pulses")
+    if kind is not EstimatorKind.TRUTH and isinstance(plant, dict) and "noise" in plant:
+        raise ProblemFileError(
+            src,
+            "plant.noise",
+            f"is the noise on the true state the controller is told without an estimator; "
+            f'with kind = "{kind.value}" the controller is told the estimate, and the '
+            "sensors' noise applies ([sensors]): remove [plant.noise]",
+        )
+    try:
+        spec = EstimatorSpec(kind, options)
+    except OptionError as err:
+        message = str(err)
+        key = table.where
+        for field in options:
+            if f"options[{field}]" in message:
+                key = table.key("horizon_pulses" if field == "horizon" else field)
+        raise ProblemFileError(src, key, message) from err
+    if kind is not EstimatorKind.TRUTH and not sensed:
+        raise ProblemFileError(
+            src,
+            "sensors",
+            f"missing: the {kind.value} estimator reads the sensors; write [sensors.camera] "
+            "(or an empty [sensors]: the 5 mm position camera)",
+        )
+    return spec
 
 
 def _plant_wind(src: str, raw: Any) -> dict[str, Any]:

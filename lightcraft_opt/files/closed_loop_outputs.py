@@ -2,8 +2,9 @@
 
 The flight itself goes to trajectory.csv and pulses.csv by :mod:`.simulation_outputs` (the
 same columns as ``lightcraft simulate``'s); here the controller's side: one row per
-pulse with what it did and how long it took, and a summary of the acceptance measures.
-Column names carry their units.
+pulse with what it did and how long it took (with an estimator, its estimate's errors
+against the truth too), and a summary of the acceptance measures. Column names carry
+their units.
 """
 
 from __future__ import annotations
@@ -20,7 +21,13 @@ from lightcraft_opt.files.closed_loop import ClosedLoopProblem
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import finite_or_none, flight_measures, model_hash
 
-__all__ = ["STEP_COLUMNS", "steps_table", "write_closed_loop_summary", "write_steps_csv"]
+__all__ = [
+    "ESTIMATE_COLUMNS",
+    "STEP_COLUMNS",
+    "steps_table",
+    "write_closed_loop_summary",
+    "write_steps_csv",
+]
 
 STEP_COLUMNS = (
     "k",
@@ -38,11 +45,34 @@ STEP_COLUMNS = (
 )
 
 
+#: steps.csv's columns after :data:`STEP_COLUMNS` when an estimator told the controller
+#: the state (:class:`~lightcraft_opt.control.result.EstimationLog`): the estimate minus the
+#: truth before pulse k (position and velocity in L, tilt, coning, spin), the estimate's
+#: own position standard deviation, the estimator's step time and the readings it got.
+ESTIMATE_COLUMNS = (
+    "error_x_m",
+    "error_y_m",
+    "error_z_m",
+    "error_vx_mps",
+    "error_vy_mps",
+    "error_vz_mps",
+    "error_tilt_deg",
+    "error_coning_deg",
+    "error_spin_rad_per_s",
+    "sigma_x_m",
+    "sigma_y_m",
+    "sigma_z_m",
+    "estimator_time_ms",
+    "readings",
+)
+
+
 def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
     """steps.csv as {column: (n,) values}, columns :data:`STEP_COLUMNS`: one row per
     pulse k, the controller's status, solve and step time, iterations, then the coning
     and tilt before pulse k, the beam offset at it, the propellant used before it,
-    whether the laser dropped it, and the solver's message (commas replaced)."""
+    whether the laser dropped it, and the solver's message (commas replaced); then, with
+    an estimator, :data:`ESTIMATE_COLUMNS`."""
     log, pulses = result.log, range(result.pulses_commanded)
     columns = [
         np.arange(result.pulses_commanded),
@@ -58,20 +88,37 @@ def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
         np.array([int(result.dropped[k]) for k in pulses], dtype=int),
         np.array([log.messages[k].replace(",", ";") for k in pulses], dtype=object),
     ]
-    return dict(zip(STEP_COLUMNS, columns, strict=True))
+    table = dict(zip(STEP_COLUMNS, columns, strict=True))
+    est = result.estimation
+    if est is not None:
+        estimate = [
+            *est.error_r_L.T,
+            *est.error_v_L.T,
+            np.degrees(est.error_tilt),
+            np.degrees(est.error_coning),
+            est.error_spin,
+            *est.sigma_r_L.T,
+            1e3 * est.seconds,
+            est.readings.astype(int),
+        ]
+        table.update(zip(ESTIMATE_COLUMNS, estimate, strict=True))
+    return table
 
 
 #: How steps.csv writes each column of :func:`steps_table`, in its order.
 _STEP_CELLS = ("{}", "{:.9g}", "{}", "{:.6g}", "{:.6g}", "{}", *["{:.9g}"] * 4, "{}", "{}")
+_ESTIMATE_CELLS = (*["{:.9g}"] * 12, "{:.6g}", "{}")
 
 
 def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:
-    """One row per pulse k, columns :data:`STEP_COLUMNS` (:func:`steps_table`)."""
+    """One row per pulse k, columns :data:`STEP_COLUMNS`, then :data:`ESTIMATE_COLUMNS`
+    with an estimator (:func:`steps_table`)."""
     table = steps_table(result)
     columns = list(table.values())
+    formats = (*_STEP_CELLS, *_ESTIMATE_CELLS)[: len(columns)]
     lines = [",".join(table)]
     for k in range(result.pulses_commanded):
-        cells = (cell.format(c[k]) for cell, c in zip(_STEP_CELLS, columns, strict=True))
+        cells = (cell.format(c[k]) for cell, c in zip(formats, columns, strict=True))
         lines.append(",".join(cells))
     path.write_text("\n".join(lines) + "\n")
 
@@ -137,6 +184,24 @@ def write_closed_loop_summary(
         ),
         "iterations_max": int(np.max(log.iterations)) if log.iterations.size else 0,
     }
+    if result.estimation is not None:  # only with an estimator: the file is as before without
+        summary.update(_estimation_summary(result))
     path.write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     write_archive(result, path.parent)
     return summary
+
+
+def _estimation_summary(result: ClosedLoopResult) -> dict[str, Any]:
+    """summary.json's estimator entries: its name, the RMS of the position error's norm
+    and the largest, and the median and largest step time."""
+    log = result.estimation
+    assert log is not None
+    error = np.linalg.norm(log.error_r_L, axis=1)
+    seconds = log.seconds
+    return {
+        "estimator": log.estimator,
+        "position_error_rms_m": finite_or_none(log.rms_position_error()),
+        "position_error_max_m": finite_or_none(np.max(error)) if error.size else None,
+        "estimator_time_median_ms": float(np.median(seconds)) * 1e3 if seconds.size else None,
+        "estimator_time_max_ms": float(np.max(seconds)) * 1e3 if seconds.size else None,
+    }

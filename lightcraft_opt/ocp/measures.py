@@ -15,7 +15,6 @@ from lightcraft_opt.symbolic.terms.rotation import dcm
 __all__ = ["build_node_measures", "build_pulse_measures"]
 
 
-
 def build_node_measures() -> ca.Function:
     """casadi.Function ``ocp_node_measures(x, p) -> (altitude, drift_L, cos_tilt,
     energy_fired)``.

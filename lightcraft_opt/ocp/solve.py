@@ -324,7 +324,9 @@ class CompiledOcp:
         solver = (
             self._resolver()
             if warm_start is not None
-            else self._warm_started() if flown else self.solver
+            else self._warm_started()
+            if flown
+            else self.solver
         )
         kept = self._keep_blocks(warm_start is not None)
         args = dict(
@@ -448,9 +450,7 @@ class CompiledOcp:
         if chain is None:
             return False
         keep = (
-            warm
-            and self.options.warm_hessian is WarmHessian.KEPT
-            and chain.kept_blocks.has_blocks
+            warm and self.options.warm_hessian is WarmHessian.KEPT and chain.kept_blocks.has_blocks
         )
         chain.kept_blocks.frozen = keep
         return keep

@@ -23,6 +23,7 @@ from matplotlib.figure import Figure
 from lightcraft_opt.control.result import ClosedLoopResult
 from lightcraft_opt.layout import PULSE_INPUT, VectorLayout
 from lightcraft_opt.model import Laser
+from lightcraft_opt.plots.estimate import estimate_figure
 from lightcraft_opt.plots.flight3d import BeamSize, flight3d_figure
 from lightcraft_opt.plots.labels import state_label
 from lightcraft_opt.plots.titles import fit_suptitle
@@ -326,8 +327,9 @@ def closed_loop_figures(
     """Every figure of a closed-loop flight by file name: closed_loop.png (coning, tilt,
     offset, RCS use in a 2 x 2, fallback pulses ticked), closed_loop_inputs.png
     (:func:`inputs_figure`, ``inputs`` the map-input layout), solve_times.png (the
-    histogram) and flight3d.png (the path in the beam, ``laser`` and ``beam_size`` as in
-    :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`)."""
+    histogram), flight3d.png (the path in the beam, ``laser`` and ``beam_size`` as in
+    :func:`~lightcraft_opt.plots.flight3d.flight3d_figure`) and, when an estimator told
+    the controller the state, estimate.png (:func:`~.estimate.estimate_figure`)."""
     fig, axs = _panels([result], capture_radius)
     for ax in axs.ravel():
         mark_fallbacks(result, ax=ax)
@@ -341,9 +343,12 @@ def closed_loop_figures(
     hist = Figure(figsize=(6.5, 4.5), layout="constrained")
     plot_solve_times(result, ax=hist.add_subplot(), budget=budget)
     hist.suptitle(f"{result.controller}: solve time per pulse ({result.pulses_commanded} pulses)")
-    return {
+    figures = {
         "closed_loop.png": fig,
         "closed_loop_inputs.png": inputs_figure(result, inputs=inputs, title=title),
         "solve_times.png": hist,
         "flight3d.png": flight3d_figure(result.flight, laser=laser, beam_size=beam_size),
     }
+    if result.estimation is not None:
+        figures["estimate.png"] = estimate_figure(result, title=title)
+    return figures

@@ -14,6 +14,10 @@
 - :mod:`.mhe`: :class:`MovingHorizonEstimator`, the last N pulses fitted by one HPIPM QP
   a pulse (its QP: :mod:`.mhe_qp`; its options and step statistics, :class:`MheOptions`
   and :class:`MheStats`: :mod:`.mhe_options`);
+- :mod:`.feedback`: :class:`ReadingSource` (what a closed loop asks of its sensors: the
+  suite meets it) and :class:`OutputFeedback`, the sensors and the estimator of one
+  closed-loop flight with the log of the estimates against the truth
+  (docs/estimation.md#output-feedback);
 - :mod:`.psi_model`: :class:`PsiEstimationModel`, that model on Ψ with the wind and the
   engine's coupling as slow states (:class:`ProcessNoise`; its chains in :mod:`.psi_chain`);
 - :mod:`.ekf`: :class:`ExtendedKalmanFilter` (:class:`EkfOptions`), an :class:`Estimator`;
@@ -28,6 +32,7 @@ from __future__ import annotations
 
 from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter, Innovation
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
 from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
 from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
 from lightcraft_opt.control.estimation.model import EstimationModel
@@ -62,9 +67,11 @@ __all__ = [
     "MheOptions",
     "MheStats",
     "MovingHorizonEstimator",
+    "OutputFeedback",
     "ProcessNoise",
     "PsiEstimationModel",
     "Reading",
+    "ReadingSource",
     "SensorOptions",
     "SensorSuite",
     "SpinSensorOptions",
