@@ -211,7 +211,7 @@ def closed_loop(
     faults = set(opts.faults)
     controller.reset()
     fixed = getattr(controller, "fixed_input", None)
-    feedback = _feedback(opts, sensors, estimator, x, p, phi, fixed)
+    feedback = _feedback(opts, sensors, estimator, x, p, phi, fixed, model.craft.thruster_count)
     steps: list[StepStats] = []
     commanded: list[np.ndarray] = []
     nodes = [x]
@@ -289,6 +289,7 @@ def _feedback(
     p: np.ndarray,
     phi: PulseMap,
     fixed: object,
+    thrusters: int,
 ) -> OutputFeedback | None:
     """The flight's output feedback: None without an estimator or for the open loop (told
     nothing); the sensors' generator seeded apart from the plant's draws."""
@@ -309,4 +310,14 @@ def _feedback(
         return None
     samples = int(phi.dense.size_out(0)[1])
     rng = np.random.default_rng([opts.seed, 1])
-    return OutputFeedback(estimator, sensors, x0, rng, p, period=phi.period, samples=samples)
+    return OutputFeedback(
+        estimator,
+        sensors,
+        x0,
+        rng,
+        p,
+        period=phi.period,
+        samples=samples,
+        inputs=phi.inputs,
+        thrusters=thrusters,
+    )

@@ -24,7 +24,17 @@ from __future__ import annotations
 
 from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
 from lightcraft_opt.control.director import DirectorController
-from lightcraft_opt.control.estimation import Estimator, SensorOptions, SensorSuite
+from lightcraft_opt.control.estimation import (
+    EkfOptions,
+    Estimator,
+    ExtendedKalmanFilter,
+    MheOptions,
+    MovingHorizonEstimator,
+    PsiEstimationModel,
+    SensorOptions,
+    SensorSuite,
+    estimation_model,
+)
 from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.options import (
     ControllerKind,
@@ -115,17 +125,37 @@ def build_estimator(
 
     Raises
     ------
-    OptionError naming ``build_estimator.spec`` when the kind is not built here.
+    OptionError naming ``build_estimator.spec`` for a spec that is not an EstimatorSpec,
+    ``build_estimator.sensors`` when an estimator has no suite to read.
     """
     if not isinstance(spec, EstimatorSpec):
         raise OptionError(f"build_estimator.spec must be an EstimatorSpec, got {spec!r}")
     if spec.kind is EstimatorKind.TRUTH:
         return None
-    # the extended Kalman filter (estimation/ekf.py) and the moving-horizon estimator
-    # (estimation/mhe.py) are built here once they are part of the package
-    raise OptionError(
-        f"build_estimator.spec: the {spec.kind.value!r} estimator is not available in this "
-        f"build; use kind = {EstimatorKind.TRUTH.value!r}"
+    if sensors is None:
+        raise OptionError(
+            f"build_estimator.sensors: the {spec.kind.value!r} estimator needs a suite"
+        )
+    # Ψ on the director's optic (one compiled Ψ for both), each sensor's h and R from the suite
+    psi = PsiEstimationModel(
+        estimation_model(model),
+        {name: (sensors.measurement(name), sensors.covariance(name)) for name in sensors.names},
+    )
+    ekf = EkfOptions()
+    prior = ekf.prior + spec.prior_sigmas()  # later pairs override earlier ones
+    if spec.kind is EstimatorKind.EKF:
+        scale = float(spec.options.get("noise_scale", ekf.noise_scale))
+        return ExtendedKalmanFilter(psi, EkfOptions(prior=prior, noise_scale=scale))
+    # the MHE starts from the filter's priors: one belief about the launch
+    mhe = MheOptions()
+    return MovingHorizonEstimator(
+        psi,
+        MheOptions(
+            horizon=int(spec.options.get("horizon", mhe.horizon)),
+            max_iter=int(spec.options.get("max_iter", mhe.max_iter)),
+            prior_sigma=ekf.prior_default,
+            prior_sigmas=prior,
+        ),
     )
 
 

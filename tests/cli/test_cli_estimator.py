@@ -1,6 +1,7 @@
 """``lightcraft closed-loop`` with an ``[estimator]`` table: the truth flies as before (no
-estimate columns, no estimate.png); an estimator this build cannot make exits 2 with one
-line naming it, before any flight."""
+estimate columns, no estimate.png); a tracked flight (problems/director_tracked_gyro.toml,
+its first 0.4 s) writes the estimate's columns and estimate.png; a bad option exits 2 with
+one line naming its key, before any flight."""
 
 from __future__ import annotations
 
@@ -32,9 +33,19 @@ def test_the_truth_flies_as_before_and_a_missing_estimator_exits_2(tmp_path: Pat
     assert not (out / "estimate.png").exists() and (out / "closed_loop.png").is_file()
     assert "told the true state" in capsys.readouterr().out
 
-    path.write_text(FILE + 'kind = "mhe"\nhorizon_pulses = 8\n', encoding="utf-8")
+    path.write_text(FILE + 'kind = "mhe"\nhorizon_pulses = 0\n', encoding="utf-8")
     assert main(["closed-loop", str(path), "--out", str(tmp_path / "mhe")]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.splitlines()) == 1
-    assert "'mhe' estimator is not available in this build" in err
+    assert "horizon_pulses" in err
     assert not (tmp_path / "mhe" / "steps.csv").exists()
+
+
+def test_a_tracked_flight_writes_the_estimate(tmp_path: Path, capsys):
+    file = REPO_ROOT / "problems" / "director_tracked_gyro.toml"
+    out = tmp_path / "tracked"
+    assert main(["closed-loop", str(file), "--out", str(out), "--duration", "0.4"]) == 0
+    header = (out / "steps.csv").read_text().splitlines()[0].split(",")
+    assert {"error_x_m", "sigma_x_m", "estimator_time_ms", "readings"} <= set(header)
+    assert (out / "estimate.png").is_file()
+    assert "ekf: position error RMS" in capsys.readouterr().out

@@ -9,9 +9,11 @@ pulse k-1, times the step, and returns the estimate's full state: what the contr
 told. The truth never reaches the controller; it is kept only to log the estimate's error.
 
 The input the estimator is given is the one the plant fired: energy 0 when the laser
-dropped the pulse. A laser measures each pulse's energy at its output (a pick-off and an
-energy meter), so the ground station knows a drop-out when it happens; what it does not
-know (the craft's coupling, the wind) is the estimator's to estimate.
+dropped the pulse, in Ψ's layout (the pulse, each thruster's level held over the interval,
+the motor torque: :func:`held_inputs`). A laser measures each pulse's energy at its
+output (a pick-off and an energy meter), so the ground station knows a drop-out when it
+happens; what it does not know (the craft's coupling, the wind) is the estimator's to
+estimate.
 """
 
 from __future__ import annotations
@@ -26,11 +28,11 @@ from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.control.result import EstimationLog
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import REDUCED_STATE, STATE
+from lightcraft_opt.layout import PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
-__all__ = ["OutputFeedback", "ReadingSource"]
+__all__ = ["OutputFeedback", "ReadingSource", "held_inputs"]
 
 
 @runtime_checkable
@@ -52,6 +54,27 @@ class ReadingSource(Protocol):
     def readings(
         self, k: int, t_k: float, x_k: np.ndarray, X_coast: np.ndarray, t_coast: np.ndarray
     ) -> Sequence[Reading]: ...
+
+
+def held_inputs(u: np.ndarray, layout: VectorLayout, thrusters: int) -> np.ndarray:
+    """A map input ``u`` of ``layout`` (any RCS profile, layout.map_input_layout) as held
+    levels, the layout Ψ and the estimators take: the pulse (pointing in L [m], focus [m],
+    energy [J]), each of the ``thrusters`` levels' mean over the interval [N] (SUBINTERVALS:
+    the mean of its sub-intervals; PHASE_LOCKED: ``rcs_thrust``, the mean, its cosine and
+    sine parts dropped: they turn with the cone, about 8 times a pulse interval for
+    Flight 5, and average out), then the motor torque [N m] if the layout has one."""
+    u = np.asarray(u, dtype=float).ravel()
+    parts = [u[layout.slot(name).start : layout.slot(name).stop] for name in PULSE_INPUT.names]
+    if "rcs_thrust" in layout and thrusters:
+        slot = layout.slot("rcs_thrust")
+        levels = u[slot.start : slot.stop]
+        if "rcs_cos" not in layout:  # HOLD (one sub-interval) or SUBINTERVALS
+            levels = levels.reshape(-1, thrusters).mean(axis=0)
+        parts.append(levels)
+    if "motor_torque" in layout:
+        slot = layout.slot("motor_torque")
+        parts.append(u[slot.start : slot.stop])
+    return np.concatenate(parts)
 
 
 def _check(obj: object, name: str, members: tuple[str, ...], protocol: str) -> None:
@@ -77,6 +100,8 @@ class OutputFeedback:
     period : of the pulses [s].
     samples : dense states per coast (Φ's ``dense`` output), at t_k + period i / samples,
         i = 1 .. samples.
+    inputs, thrusters : the plant's map-input layout and its RCS thruster count: the fired
+        input reaches the estimator as :func:`held_inputs` (None: as fired).
     """
 
     def __init__(
@@ -89,16 +114,21 @@ class OutputFeedback:
         *,
         period: float,
         samples: int,
+        inputs: VectorLayout | None = None,
+        thrusters: int = 0,
     ) -> None:
         _check(estimator, "estimator", ("name", "reset", "step"), "Estimator")
         if sensors is not None:
             _check(sensors, "sensors", ("reset", "readings"), "ReadingSource")
             sensors.reset(rng, p)
-        estimator.reset(np.array(x0, dtype=float), 0.0)
+        self._x0 = np.array(x0, dtype=float)
+        estimator.reset(self._x0, 0.0)
+        self._resting = False  # the last pulse was dropped on the pad
         self.estimator, self.sensors = estimator, sensors
         self._after = period * np.arange(1, samples + 1) / samples  # a coast's sample times
         self._coast = (np.empty((STATE.size, 0)), np.empty(0))
         self._fired: np.ndarray | None = None
+        self._inputs, self._thrusters = inputs, thrusters
         self._truth: list[np.ndarray] = []
         self._told: list[np.ndarray] = []
         self._sigma: list[np.ndarray] = []
@@ -113,7 +143,11 @@ class OutputFeedback:
             X, tc = self._coast
             readings = list(self.sensors.readings(k, t, x, X, tc))
         start = time.perf_counter()
-        estimate = self.estimator.step(readings, self._fired, t)
+        fired = self._fired
+        if self._resting:  # the pad held the craft at x0: the ground station knows it
+            self.estimator.reset(self._x0, t)
+            fired = None
+        estimate = self.estimator.step(readings, fired, t)
         seconds = time.perf_counter() - start
         if not isinstance(estimate, Estimate):
             raise ParameterError(
@@ -130,15 +164,23 @@ class OutputFeedback:
     def coasted(self, fired: np.ndarray, X: np.ndarray, t: float) -> None:
         """Pulse k, at ``t`` [s], fired the map input ``fired`` (energy 0 if dropped) and the
         plant coasted through Φ's dense states ``X`` (STATE.size, samples) to node k+1."""
-        self._fired = np.array(fired, dtype=float)
+        self._fired = self._held(fired)
+        self._resting = False
         self._coast = (np.asarray(X, dtype=float), t + self._after)
 
     def rested(self, fired: np.ndarray) -> None:
         """Pulse k was dropped (``fired``: energy 0) before any pulse fired: the pad held
         the craft where it was, and no coast was flown (the next readings get an empty
-        one)."""
-        self._fired = np.array(fired, dtype=float)
+        one). The estimator is started again from x0 at the next pulse: a craft the pad
+        holds does not fall, which its map, which has no pad, would predict."""
+        self._fired = self._held(fired)
+        self._resting = True
         self._coast = (np.empty((STATE.size, 0)), np.empty(0))
+
+    def _held(self, fired: np.ndarray) -> np.ndarray:
+        if self._inputs is None:
+            return np.array(fired, dtype=float)
+        return held_inputs(fired, self._inputs, self._thrusters)
 
     def log(self, pulses: int, p: np.ndarray) -> EstimationLog:
         """The :class:`EstimationLog` of the first ``pulses`` pulses; tilt and coning of the

@@ -70,6 +70,8 @@ _REFERENCE_ENERGY = PARAMETERS.slot("reference_pulse_energy").start
 _ENERGY = PULSE_INPUT.slot("energy").start
 _LOAD = REDUCED_STATE.slot("engine_load").start
 _NZ = REDUCED_STATE.size
+_H = REDUCED_STATE.index("H_L")
+_CONE = REDUCED_STATE.index("coning")
 _CALM = 1e-9  # m/s: below this the wind's direction is undefined (module docstring)
 
 
@@ -92,7 +94,15 @@ class ProcessNoise:
     - ``wind`` [m/s] each of east/north: 0.05 a pulse, a random walk of 0.25 m/s over a
       second (26 pulses): a slow mean wind with the gusts in it;
     - ``coupling``, relative: 1e-3 of C a pulse, a drift of 1 % over 100 pulses (the air
-      engine's health step near pulse 100 is in Ψ already).
+      engine's health step near pulse 100 is in Ψ already);
+    - ``inertia``, relative: 0.01, how well the craft's transverse moment A is known (the
+      campaigns disperse the rotor's inertias by 1 %). Ψ turns the coning offset c by
+      |H| T / A a pulse (8 turns for Flight 5), so an error of 1 % in A puts the cone's
+      phase at the next pulse 2π · 8 · 0.01 = 0.5 rad off: a noise along c's turn (the
+      direction J c, J the quarter turn), of standard deviation |H| T / A · ``inertia``.
+      Without it the filter believes its phase, which cameras alone barely see
+      (docs/estimation.md), and a 1 % heavier rotor puts it on the wrong side of the cone
+      within a few pulses.
     """
 
     position: float = 6e-5
@@ -103,6 +113,7 @@ class ProcessNoise:
     load: float = 1e-6
     wind: float = 0.05
     coupling: float = 1e-3
+    inertia: float = 0.01
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -199,6 +210,7 @@ class PsiEstimationModel:
         self._wind = _NZ if "wind" in self.slow else None
         self._coupling = self.n - 1 if "coupling" in self.slow else None
         self._Q = np.diag(np.square(self._sigmas()))
+        self._transverse = float(model.craft.inertia_transverse)  # A [kg m²]
         self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {}
         for name, (h, R) in sensors.items():
             R = np.atleast_2d(np.asarray(R, dtype=float))
@@ -323,8 +335,15 @@ class PsiEstimationModel:
         return s_next, F
 
     def process_noise(self, s: np.ndarray, u: np.ndarray, t: float) -> np.ndarray:
-        """Q (n, n): diagonal, :class:`ProcessNoise` squared (constant)."""
-        return self._Q.copy()
+        """Q (n, n): :class:`ProcessNoise` squared on the diagonal, plus the cone's phase
+        noise along J c (``ProcessNoise.inertia``: |H| T / A turns c a pulse)."""
+        Q = self._Q.copy()
+        s = np.asarray(s, dtype=float).ravel()
+        c = s[_CONE]
+        phase = float(np.linalg.norm(s[_H])) * self.period / self._transverse
+        turn = np.array([-c[1], c[0]]) * phase * self.noise.inertia
+        Q[_CONE, _CONE] += np.outer(turn, turn)
+        return Q
 
     def _measurement(self, name: str, h: ca.Function) -> ca.Function:
         """``measure_<name>(z, p, dt) -> [y H_z H_p]``: h at Ψ's lift of z, its Jacobians in z

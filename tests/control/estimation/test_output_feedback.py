@@ -29,8 +29,11 @@ from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
 from lightcraft_opt.control.controllers import OpenLoopController
 from lightcraft_opt.control.estimation import (
     CameraOptions,
+    EkfOptions,
     Estimate,
     Estimator,
+    ExtendedKalmanFilter,
+    MovingHorizonEstimator,
     Reading,
     ReadingSource,
     SensorOptions,
@@ -350,11 +353,22 @@ def test_the_sensor_suite_flies_in_the_loop(phi):
 
 def test_the_tracker_factory_builds_the_suite_and_the_estimator():
     """The truth: neither (the sensors, if any, are read by no one); an estimator: the
-    suite of the file's sensors (the default camera without), then the estimator, which
-    this build cannot make yet."""
+    suite of the file's sensors (the default camera without), then the estimator reading
+    it, on Ψ with the wind and the coupling, the file's priors over the filter's."""
     assert build_tracker(EstimatorSpec(), MODEL, SensorOptions()) == (None, None)
-    with pytest.raises(OptionError, match=r"'ekf' estimator is not available"):
-        build_tracker(EstimatorSpec(EstimatorKind.EKF), MODEL, None)
+    spec = EstimatorSpec(EstimatorKind.EKF, {"prior_position": 0.02})
+    suite, ekf = build_tracker(spec, MODEL, None)
+    assert isinstance(suite, SensorSuite) and suite.names == ("camera",)
+    assert isinstance(ekf, ExtendedKalmanFilter)
+    names = ekf.model.names
+    assert names[-3:] == ("wind_L[east]", "wind_L[north]", "coupling")
+    ekf.reset(X0)
+    sd = np.sqrt(np.diag(ekf.P))
+    r = [names.index(f"r_L[{a}]") for a in ("east", "north", "up")]
+    np.testing.assert_allclose(sd[r], 0.02)  # the file's, over the filter's 5 mm
+    np.testing.assert_allclose(sd[names.index("coupling")], dict(EkfOptions().prior)["coupling"])
+    # the camera's R is the suite's: one number for the noise drawn and the noise assumed
+    np.testing.assert_allclose(ekf.model.measurement_noise("camera"), suite.covariance("camera"))
 
 
 def test_the_open_loop_ignores_the_estimator(phi):
@@ -397,11 +411,17 @@ def test_what_the_loop_refuses_is_named(phi):
         closed_loop(MODEL, follow, 0.1, x0=X0, pulse_map=phi, estimator=_Wrong())  # type: ignore[arg-type]
 
 
-def test_the_factory_builds_none_for_the_truth_and_names_what_is_missing():
+def test_the_factory_builds_the_estimators_and_names_what_is_missing():
+    """None for the truth; the MHE with the file's window over the filter's priors; an
+    estimator without a suite, or a spec that is not one, is named."""
     assert build_estimator(EstimatorSpec(), MODEL, None) is None
+    suite = SensorSuite(MODEL, SensorOptions())
+    mhe = build_estimator(EstimatorSpec(EstimatorKind.MHE, {"horizon": 8}), MODEL, suite)
+    assert isinstance(mhe, MovingHorizonEstimator) and mhe.options.horizon == 8
+    assert mhe.options.prior_sigmas[: len(EkfOptions().prior)] == EkfOptions().prior
     for kind in (EstimatorKind.EKF, EstimatorKind.MHE):
-        with pytest.raises(OptionError, match=rf"'{kind.value}' estimator is not available"):
-            build_estimator(EstimatorSpec(kind), MODEL, _Suite())
+        with pytest.raises(OptionError, match=r"build_estimator.sensors: .* needs a suite"):
+            build_estimator(EstimatorSpec(kind), MODEL, None)
     with pytest.raises(OptionError, match=r"build_estimator.spec must be an EstimatorSpec"):
         build_estimator("ekf", MODEL, None)  # type: ignore[arg-type]
 
