@@ -132,6 +132,8 @@ def _fly(
             f", {log.estimator}: position error RMS {1e3 * log.rms_position_error():.2f} mm, "
             f"step median {1e3 * float(np.median(log.seconds)) if log.seconds.size else 0:.2f} ms"
         )
+        if np.any(log.restarts):
+            estimated += f", {int(np.sum(log.restarts))} estimator restarts"
     fallbacks = int(np.sum(result.log.fallbacks))
     print(
         f"{name}: {result.flight.status.value}: coning {coning[0]:.3f} -> "

@@ -111,6 +111,12 @@ def build_controller(
     return LqrController(model, prediction, mpc.weights)
 
 
+#: The slow states the built estimators carry beside Ψ's state: the wind, the coupling,
+#: and the rotor's moments, whose 1 % errors put the cone's phase half a radian off a pulse
+#: (docs/estimation.md#what-the-director-needs).
+SLOW_STATES = ("wind", "coupling", "inertia")
+
+
 def build_estimator(
     spec: EstimatorSpec, model: Model, sensors: SensorSuite | None
 ) -> Estimator | None:
@@ -140,6 +146,7 @@ def build_estimator(
     psi = PsiEstimationModel(
         estimation_model(model),
         {name: (sensors.measurement(name), sensors.covariance(name)) for name in sensors.names},
+        slow=SLOW_STATES,
     )
     ekf = EkfOptions()
     prior = ekf.prior + spec.prior_sigmas()  # later pairs override earlier ones

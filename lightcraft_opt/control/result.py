@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
@@ -135,6 +135,9 @@ class EstimationLog:
         its covariance's diagonal, L [m].
     seconds : (k,) wall time of each ``step`` call of the estimator [s], timed by the loop.
     readings : (k,) how many readings reached the estimator at each pulse.
+    restarts : (k,) True where the estimator failed (raised, or returned a non-finite
+        estimate) and was restarted from its last finite estimate, which the controller
+        was told instead (control/estimation/feedback.py).
     """
 
     estimator: str
@@ -146,6 +149,7 @@ class EstimationLog:
     sigma_r_L: np.ndarray
     seconds: np.ndarray
     readings: np.ndarray
+    restarts: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     def rms_position_error(self, start: int = 0) -> float:
         """Root mean square of |r̂_L - r_L| from pulse ``start`` [m] (NaN without rows)."""
@@ -269,7 +273,8 @@ class ClosedLoopResult(Presentable):
             step = 1e3 * float(np.median(est.seconds)) if est.seconds.size else math.nan
             rows.append(
                 f"  estimator        {est.estimator}: position error RMS "
-                f"{1e3 * est.rms_position_error():.2f} mm, step median {step:.3f} ms"
+                f"{1e3 * est.rms_position_error():.2f} mm, step median {step:.3f} ms, "
+                f"{int(np.sum(est.restarts))} restarts"
             )
         return "\n".join(
             [

@@ -57,6 +57,7 @@ class EkfOptions:
         ("coning", 0.02),
         ("wind_L", 2.0),
         ("coupling", 5e-6),
+        ("inertia", 0.01),
     )
     prior_default: float = 1e-6
     noise_scale: float = 1.0

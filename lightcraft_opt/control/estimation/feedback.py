@@ -27,7 +27,7 @@ import numpy as np
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.control.result import EstimationLog
-from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.errors import LightcraftError, ParameterError
 from lightcraft_opt.layout import PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
@@ -134,6 +134,7 @@ class OutputFeedback:
         self._sigma: list[np.ndarray] = []
         self._seconds: list[float] = []
         self._readings: list[int] = []
+        self._restarts: list[bool] = []
 
     def told(self, k: int, t: float, x: np.ndarray) -> np.ndarray:
         """The state the controller is told at pulse ``k`` (time ``t`` [s], true state ``x``
@@ -147,16 +148,31 @@ class OutputFeedback:
         if self._resting:  # the pad held the craft at x0: the ground station knows it
             self.estimator.reset(self._x0, t)
             fired = None
-        estimate = self.estimator.step(readings, fired, t)
-        seconds = time.perf_counter() - start
-        if not isinstance(estimate, Estimate):
+        restarted = False
+        try:
+            estimate = self.estimator.step(readings, fired, t)
+        except LightcraftError:  # a misuse (bad readings, wrong sizes): the caller's
+            raise
+        except (ArithmeticError, ValueError, RuntimeError):
+            estimate = None  # a numerical failure (LinAlgError is a ValueError): go on
+        if estimate is not None and not isinstance(estimate, Estimate):
             raise ParameterError(
                 "estimator.step", f"must return an Estimate, got {type(estimate).__name__}"
             )
-        told = np.array(checked_vector(f"estimate {k}", estimate.x, STATE.size))
+        seconds = time.perf_counter() - start
+        if estimate is None or not np.all(np.isfinite(estimate.x)):
+            # the controller is told the last finite estimate, from which the estimator
+            # starts again (its own prior covariance)
+            told = self._told[-1].copy() if self._told else self._x0.copy()
+            self.estimator.reset(told, t)
+            sigma, restarted = np.full(3, np.nan), True
+        else:
+            told = np.array(checked_vector(f"estimate {k}", estimate.x, STATE.size))
+            sigma = _position_sigma(estimate.covariance)
         self._truth.append(np.array(x, dtype=float))
         self._told.append(told)
-        self._sigma.append(_position_sigma(estimate.covariance))
+        self._restarts.append(restarted)
+        self._sigma.append(sigma)
         self._seconds.append(seconds)
         self._readings.append(len(readings))
         return told
@@ -206,6 +222,7 @@ class OutputFeedback:
             sigma_r_L=np.reshape(self._sigma[:n], (n, 3)),
             seconds=np.array(self._seconds[:n], dtype=float),
             readings=np.array(self._readings[:n], dtype=int),
+            restarts=np.array(self._restarts[:n], dtype=bool),
         )
 
 

@@ -62,11 +62,17 @@ __all__ = ["SLOW_STATES", "ProcessNoise", "PsiEstimationModel", "estimation_mode
 SLOW_STATES: dict[str, tuple[str, ...]] = {
     "wind": ("wind_L[east]", "wind_L[north]"),
     "coupling": ("coupling",),
+    "inertia": ("inertia[transverse]", "inertia[axial]"),
 }
 _WIND_P = ("wind_speed_ref", "wind_direction_from")
 _SPEED, _DIRECTION = (PARAMETERS.slot(n).start for n in _WIND_P)
 _IMPULSE = PARAMETERS.slot("impulse_per_pulse").start
 _REFERENCE_ENERGY = PARAMETERS.slot("reference_pulse_energy").start
+#: the rotor's dry moments [kg m²] the ``inertia`` slow states scale (transverse, axial)
+_INERTIA = tuple(
+    PARAMETERS.slot(n).start for n in ("rotor_transverse_inertia_dry", "rotor_axial_inertia_dry")
+)
+_INERTIA_STEP = 1e-6  # relative step of the inertia columns' central differences
 _ENERGY = PULSE_INPUT.slot("energy").start
 _LOAD = REDUCED_STATE.slot("engine_load").start
 _NZ = REDUCED_STATE.size
@@ -85,8 +91,13 @@ class ProcessNoise:
 
     - ``velocity`` [m/s], each L axis: 3e-3, Ψ's median one-pulse velocity error;
     - ``position`` [m], each L axis: 6e-5, that velocity error over half a pulse (26 Hz);
-    - ``angular_momentum`` [kg m²/s], each L axis: 1e-5, 1.6e-4 of Flight 5's |H| (0.063):
-      a tilt of 0.01° a pulse, a tenth of what an off-centre pulse tips H by;
+    - ``angular_momentum`` [kg m²/s], each L axis: 1e-4, 1.6e-3 of Flight 5's |H| (0.063):
+      a tilt of 0.09° a pulse. An off-centre pulse tips H by 0.1-1°, and the plant's
+      tipping is uncertain by 5-20 % of that (its blast angle, coupling and aerodynamic
+      moments are dispersed by 5, 5 and 20 % in the campaigns). With 1e-5 the filter
+      believed its own tipping, and a gyro's innovations ran to rad/s (the gyro sees H
+      across b1 to 5e-7 kg m²/s); 1e-4 kept 29-31 of 40 dispersed tracked flights in the
+      beam against 22 (docs/estimation.md#what-the-director-needs);
     - ``coning`` [-]: 1e-3, the coning angle's change by aerodynamic torques within a
       pulse interval, which Ψ leaves out (about 0.06°);
     - ``mass`` [kg] (liner, RCS propellant) 1e-9 and ``load`` [reference pulses] 1e-6: Ψ
@@ -102,18 +113,23 @@ class ProcessNoise:
       direction J c, J the quarter turn), of standard deviation |H| T / A · ``inertia``.
       Without it the filter believes its phase, which cameras alone barely see
       (docs/estimation.md), and a 1 % heavier rotor puts it on the wrong side of the cone
-      within a few pulses.
+      within a few pulses. Where the ``inertia`` slow states estimate the moments, it
+      stands for what they have not learnt yet;
+    - ``inertia_drift``, relative a pulse: 1e-4, the slow states ``inertia`` (the rotor's
+      transverse and axial dry moments over the model's) as random walks: the moments do
+      not change; this keeps the filter listening.
     """
 
     position: float = 6e-5
     velocity: float = 3e-3
-    angular_momentum: float = 1e-5
+    angular_momentum: float = 1e-4
     coning: float = 1e-3
     mass: float = 1e-9
     load: float = 1e-6
     wind: float = 0.05
     coupling: float = 1e-3
     inertia: float = 0.01
+    inertia_drift: float = 1e-4
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -133,6 +149,12 @@ def estimation_model(model: Model, quadrature: tuple[int, int] = (4, 16)) -> Mod
     engine = model.craft.engine
     coarse = replace(engine, quadrature_radial=quadrature[0], quadrature_azimuthal=quadrature[1])
     return replace(model, craft=replace(model.craft, engine=coarse))
+
+
+def _first_output(f: ca.Function) -> ca.Function:
+    """``f`` with its first output only (Ψ's values without the engine's)."""
+    ins = [ca.MX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    return ca.Function(f"{f.name()}_first", ins, [f(*ins)[0]], f.name_in(), [f.name_out(0)])
 
 
 class PsiEstimationModel:
@@ -208,7 +230,9 @@ class PsiEstimationModel:
         self.n = len(self.names)
         self.state_size = _NZ
         self._wind = _NZ if "wind" in self.slow else None
-        self._coupling = self.n - 1 if "coupling" in self.slow else None
+        self._coupling = self.names.index("coupling") if "coupling" in self.slow else None
+        self._inertia = self.names.index("inertia[transverse]") if "inertia" in self.slow else None
+        self._value = Evaluator(_first_output(d.value)) if "inertia" in self.slow else None
         self._Q = np.diag(np.square(self._sigmas()))
         self._transverse = float(model.craft.inertia_transverse)  # A [kg m²]
         self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {}
@@ -233,6 +257,8 @@ class PsiEstimationModel:
             out += [-speed * math.sin(frm), -speed * math.cos(frm)]
         if "coupling" in self.slow:
             out.append(p[_IMPULSE] / p[_REFERENCE_ENERGY])
+        if "inertia" in self.slow:
+            out += [p[i] / self.p[i] for i in _INERTIA]
         return np.array(out)
 
     def parameters(self, s: np.ndarray) -> np.ndarray:
@@ -246,6 +272,9 @@ class PsiEstimationModel:
                 p[_DIRECTION] = math.atan2(-east, -north)
         if self._coupling is not None:
             p[_IMPULSE] = s[self._coupling] * p[_REFERENCE_ENERGY]
+        if self._inertia is not None:
+            for j, i in enumerate(_INERTIA):
+                p[i] = self.p[i] * s[self._inertia + j]
         return p
 
     def start(self, x0: np.ndarray) -> np.ndarray:
@@ -279,7 +308,9 @@ class PsiEstimationModel:
         if "wind" in self.slow:
             sig += [q.wind, q.wind]
         if "coupling" in self.slow:
-            sig.append(q.coupling * float(self.slow_values()[-1]))
+            sig.append(q.coupling * float(self.slow_values()[self.names.index("coupling") - _NZ]))
+        if "inertia" in self.slow:
+            sig += [q.inertia_drift, q.inertia_drift]
         return np.array(sig)
 
     # -- the protocol ------------------------------------------------------------------------
@@ -330,6 +361,14 @@ class PsiEstimationModel:
             column = B[:, _ENERGY].copy()
             column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
             F[:_NZ, self._coupling] = column * energy / C
+        if self._inertia is not None and self._value is not None:
+            for j, i in enumerate(_INERTIA):  # central differences of Ψ's values in p[i]
+                h = _INERTIA_STEP * self.p[i]
+                up, down = p.copy(), p.copy()
+                up[i] += h
+                down[i] -= h
+                dz = self._value(z, u, up, t)[:, 0] - self._value(z, u, down, t)[:, 0]
+                F[:_NZ, self._inertia + j] = dz / (2 * h) * self.p[i]
         s_next = s.copy()
         s_next[:_NZ] = z_next
         return s_next, F

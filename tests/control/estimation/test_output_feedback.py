@@ -354,14 +354,21 @@ def test_the_sensor_suite_flies_in_the_loop(phi):
 def test_the_tracker_factory_builds_the_suite_and_the_estimator():
     """The truth: neither (the sensors, if any, are read by no one); an estimator: the
     suite of the file's sensors (the default camera without), then the estimator reading
-    it, on Ψ with the wind and the coupling, the file's priors over the filter's."""
+    it, on Ψ with the wind, the coupling and the moments, the file's priors over the
+    filter's."""
     assert build_tracker(EstimatorSpec(), MODEL, SensorOptions()) == (None, None)
     spec = EstimatorSpec(EstimatorKind.EKF, {"prior_position": 0.02})
     suite, ekf = build_tracker(spec, MODEL, None)
     assert isinstance(suite, SensorSuite) and suite.names == ("camera",)
     assert isinstance(ekf, ExtendedKalmanFilter)
     names = ekf.model.names
-    assert names[-3:] == ("wind_L[east]", "wind_L[north]", "coupling")
+    assert names[-5:] == (
+        "wind_L[east]",
+        "wind_L[north]",
+        "coupling",
+        "inertia[transverse]",
+        "inertia[axial]",
+    )
     ekf.reset(X0)
     sd = np.sqrt(np.diag(ekf.P))
     r = [names.index(f"r_L[{a}]") for a in ("east", "north", "up")]

@@ -151,3 +151,28 @@ def test_the_sensor_suites_functions_plug_in(kind: str) -> None:
 def _state_of(model: PsiEstimationModel) -> np.ndarray:
     x0 = initial_state(model.model, r_L=(0.01, 0.0, 2.0), v_L=(0.0, 0.0, 4.0), w_B=(0, 0.3, -0.2))
     return model.start(x0)
+
+
+def test_the_moments_columns_are_psis_derivative() -> None:
+    """With the rotor's moments as slow states (the estimators the factory builds), F's
+    columns in them (central differences inside predict, step 1e-6) against central
+    differences of f with another step (1e-5): rows to 1e-6 of their largest entry; the
+    transverse moment turns the cone (its column's coning rows are not zero; the axial
+    moment enters Ψ's step only through the lift, the spin that |H| means)."""
+    sensors = {"camera": (camera(), 0.005**2 * np.eye(3))}
+    model = PsiEstimationModel(
+        estimation_model(table1_flight5()),
+        sensors,
+        slow=("wind", "coupling", "inertia"),
+        compiled=False,
+    )
+    assert model.names[-2:] == ("inertia[transverse]", "inertia[axial]")
+    s = _state(model, (3.0, 0.5))
+    np.testing.assert_array_equal(s[-2:], [1.0, 1.0])  # the model's moments
+    u = nominal_inputs(model.model, model.psi.inputs)
+    _, F = model.predict(s, u, 0.0)
+    F_fd = _fd(lambda v: model.predict(v, u, 0.0)[0], s, _scale(model, s))
+    row = np.abs(F_fd).max(axis=1, keepdims=True)
+    assert np.all(np.abs(F - F_fd) <= 1e-6 * row + 1e-12)
+    cone = [model.names.index("coning[e1]"), model.names.index("coning[e2]")]
+    assert np.abs(F[cone, -2]).min() > 0.01
