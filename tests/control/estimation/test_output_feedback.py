@@ -464,3 +464,44 @@ def test_the_priors_are_named_by_the_slots_of_the_estimated_state():
     psi_slots = [slot for slot in PRIOR_SLOTS.values() if slot != "wind_L"]  # wind: slow
     assert psi_slots == ["r_L", "v_L", "coning"] and set(psi_slots) <= set(REDUCED_STATE.names)
     assert EstimatorSpec().prior_sigmas() == ()
+
+
+class _Failing(_Hooked):
+    """_Hooked that returns a non-finite state at pulse 3 and raises a numerical error at
+    pulse 5; records its resets."""
+
+    name = "failing"
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.k, self.resets = 0, []
+
+    def reset(self, x0: np.ndarray, t0: float = 0.0) -> None:
+        self.resets.append((np.array(x0), t0))
+        self.x0 = np.array(x0)
+
+    def step(self, readings: Sequence[Reading], u_fired: np.ndarray | None, t: float) -> Estimate:
+        k, self.k = self.k, self.k + 1
+        if k == 5:
+            raise np.linalg.LinAlgError("the covariance is not positive definite")
+        estimate = super().step(readings, u_fired, t)
+        if k == 3:
+            return Estimate(t, estimate.z, np.full(STATE.size, np.nan), estimate.covariance)
+        return estimate
+
+
+def test_an_estimator_that_fails_is_restarted_and_the_flight_goes_on(phi):
+    """A non-finite estimate or a numerical error ends no flight: the controller is told
+    the last finite estimate, the estimator starts again from it, and the log marks the
+    pulse; the other pulses are the truth-fed loop's told states."""
+    failing = _Failing()
+    follow = _Follow(phi)
+    fed = closed_loop(MODEL, follow, 0.5, x0=X0, pulse_map=phi, sensors=_Suite(), estimator=failing)
+    log = fed.estimation
+    assert log is not None and fed.pulses_commanded == 13
+    assert np.flatnonzero(log.restarts).tolist() == [3, 5]
+    np.testing.assert_array_equal(follow.told[3], follow.told[2])
+    np.testing.assert_array_equal(follow.told[5], follow.told[4])
+    assert [t for _, t in failing.resets] == [0.0, 3 * phi.period, 5 * phi.period]
+    np.testing.assert_array_equal(failing.resets[1][0], follow.told[2])
+    assert np.all(np.isnan(log.sigma_r_L[[3, 5]])) and np.all(np.isfinite(log.sigma_r_L[4]))
