@@ -72,7 +72,7 @@ _REFERENCE_ENERGY = PARAMETERS.slot("reference_pulse_energy").start
 _INERTIA = tuple(
     PARAMETERS.slot(n).start for n in ("rotor_transverse_inertia_dry", "rotor_axial_inertia_dry")
 )
-_INERTIA_STEP = 1e-6  # relative step of the inertia columns' central differences
+_INERTIA_STEP = 1e-7  # relative step of the inertia columns' forward differences
 _ENERGY = PULSE_INPUT.slot("energy").start
 _LOAD = REDUCED_STATE.slot("engine_load").start
 _NZ = REDUCED_STATE.size
@@ -362,13 +362,13 @@ class PsiEstimationModel:
             column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
             F[:_NZ, self._coupling] = column * energy / C
         if self._inertia is not None and self._value is not None:
-            for j, i in enumerate(_INERTIA):  # central differences of Ψ's values in p[i]
+            for j, i in enumerate(_INERTIA):  # forward differences of Ψ's values in p[i]
                 h = _INERTIA_STEP * self.p[i]
-                up, down = p.copy(), p.copy()
+                up = p.copy()
                 up[i] += h
-                down[i] -= h
-                dz = self._value(z, u, up, t)[:, 0] - self._value(z, u, down, t)[:, 0]
-                F[:_NZ, self._inertia + j] = dz / (2 * h) * self.p[i]
+                F[:_NZ, self._inertia + j] = (
+                    (self._value(z, u, up, t)[:, 0] - z_next) / h * self.p[i]
+                )
         s_next = s.copy()
         s_next[:_NZ] = z_next
         return s_next, F

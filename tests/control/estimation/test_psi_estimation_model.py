@@ -155,7 +155,7 @@ def _state_of(model: PsiEstimationModel) -> np.ndarray:
 
 def test_the_moments_columns_are_psis_derivative() -> None:
     """With the rotor's moments as slow states (the estimators the factory builds), F's
-    columns in them (central differences inside predict, step 1e-6) against central
+    columns in them (forward differences inside predict, step 1e-7) against central
     differences of f with another step (1e-5): rows to 1e-6 of their largest entry; the
     transverse moment turns the cone (its column's coning rows are not zero; the axial
     moment enters Ψ's step only through the lift, the spin that |H| means)."""
