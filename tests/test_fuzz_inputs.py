@@ -50,6 +50,7 @@ LOADERS: dict[str, Callable[[Path], Any]] = {
     "problems/closed_loop_gust.toml": load_closed_loop,
     "problems/director_crosswind.toml": load_closed_loop,
     "problems/director_tracked.toml": load_closed_loop,
+    "problems/director_tracked_gyro.toml": load_closed_loop,
     "problems/montecarlo_open_loop.toml": load_campaign,
     "problems/montecarlo_gust_mpc.toml": load_campaign,
 }

@@ -22,7 +22,7 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.controllers import OpenLoopController
-from lightcraft_opt.control.estimation import CameraOptions, SensorOptions
+from lightcraft_opt.control.estimation import CameraOptions, GyroOptions, SensorOptions
 from lightcraft_opt.control.options import EstimatorKind, EstimatorSpec, MeasurementNoise
 from lightcraft_opt.control.result import ClosedLoopResult, EstimationLog
 from lightcraft_opt.errors import ProblemFileError
@@ -224,21 +224,24 @@ def test_docs_outputs_names_every_estimate_column():
 TRACKED = {
     "director_tracked.toml": "director_crosswind.toml",
     "montecarlo_director_tracked.toml": "montecarlo_director.toml",
+    "director_tracked_gyro.toml": "director_crosswind.toml",
+    "montecarlo_director_tracked_gyro.toml": "montecarlo_director.toml",
 }
 
 
 @pytest.mark.parametrize("name", TRACKED)
 def test_the_tracked_problems_fly_the_ekf_on_a_camera(name):
     """problems/director_tracked.toml and its campaign: the director told the EKF's
-    estimate from a 5 mm position camera, one pulse late, 5 % of frames lost, and no
-    [plant.noise]; otherwise director_crosswind's (and montecarlo_director's) plant,
-    director and wind."""
+    estimate from a 5 mm position camera, one pulse late, 5 % of frames lost (the _gyro
+    files: and a 0.01 rad/s gyro), and no [plant.noise]; otherwise director_crosswind's
+    (and montecarlo_director's) plant, director and wind."""
     load = load_campaign if name.startswith("montecarlo") else load_closed_loop
     tracked = load(REPO_ROOT / "problems" / name)
     reference = load(REPO_ROOT / "problems" / TRACKED[name])
     assert tracked.estimator == EstimatorSpec(EstimatorKind.EKF)
     camera = CameraOptions(noise=5e-3, latency_pulses=1, lost_rate=0.05)
-    assert tracked.sensors == SensorOptions(camera)
+    gyro = GyroOptions(noise=0.01) if "gyro" in name else None
+    assert tracked.sensors == SensorOptions(camera, gyro=gyro)
     assert reference.sensors is None and reference.estimator == EstimatorSpec()
     assert tracked.loop.noise == MeasurementNoise() != reference.loop.noise
     assert dataclasses.replace(tracked.loop, noise=reference.loop.noise) == reference.loop
