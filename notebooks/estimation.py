@@ -309,19 +309,19 @@ for name, run in runs.items():
 #
 # Written from the quick size's numbers (2 s, seed 1); the full size tells the same story.
 #
-# - All three flights reach the end in the beam. Told an estimate, the director lets the
-#   craft drift further from the pad's vertical (1.67 and 1.75 cm against 1.08 cm told the
-#   truth), and the beam's offset at the optic peaks at 1.5 cm against 0.9 cm: far inside the
-#   5.5 cm capture radius.
-# - The camera's residuals have the noise they were drawn with (3.6 to 4.7 mm against 5 mm,
-#   51 frames), each frame a pulse late; the gyro's 0.009 to 0.0096 rad/s against 0.01.
-# - The EKF and the MHE give nearly the same estimates: position error RMS about 1.3 mm east,
-#   1.0 mm north, 6 mm up. Across the line of sight the error stays in its ±2σ band (0 to 4 %
-#   of the pulses outside). Up, it does not: 10 to 12 % outside, and 17.6 mm at 0.15 s. The
-#   estimate is then above the truth, as it would be with the plant's impulse per pulse
-#   6.5 % below the model's, which neither estimator estimates.
-# - The tilt error peaks at 0.9 degrees at 0.5 s (RMS 0.3 degrees). The gyro pins the coning
-#   angle: its error stays under 0.004 degrees.
-# - The MHE's median step costs several times the EKF's. The times move with the load of
-#   this shared 2-core machine: over eight runs of the quick size the medians were 5.0 to
-#   8.5 ms for the MHE and 0.8 to 1.8 ms for the EKF, four to nine times apart.
+# - All three flights stay in the beam. Told an estimate, the director lets the craft drift
+#   further from the pad's vertical (about 1.9 cm against 1.1 cm told the truth). The beam's
+#   offset at the optic peaks near 1.4 cm against 0.9 cm, far inside the 5.5 cm capture
+#   radius.
+# - The camera's residuals have the noise they were drawn with (3.6 to 4.7 mm against 5 mm),
+#   each frame a pulse late. The gyro's are 0.009 to 0.0096 rad/s against 0.01.
+# - The EKF and the MHE give nearly the same estimates. Across the line of sight the
+#   position error is about 1 mm RMS, inside its band. Up, it is 5.7 mm RMS against a median
+#   σ of 3.7 mm, and 17 mm at 0.15 s, with the estimate above the truth. The plant's impulse
+#   per pulse is 6.5 % below the model's, twice the coupling's prior (3 %). The filter learns
+#   the coupling, but only over many pulses.
+# - The gyro pins the coning angle (error under 0.003 degrees) and the tilt to about 0.3
+#   degrees RMS. With the camera alone the director loses this craft near 23 m
+#   (docs/estimation.md#what-the-director-needs).
+# - The MHE's step costs about six times the EKF's (8 against 1.3 ms median here). Both fit
+#   in the pulse's 38 ms beside the director's 3-4 ms.
