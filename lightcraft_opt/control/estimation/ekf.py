@@ -204,26 +204,57 @@ class ExtendedKalmanFilter:
         return len(self._nodes) - 1
 
     def step(self, readings: Sequence[Reading], u_fired: np.ndarray | None, t: float) -> Estimate:
-        """The estimate at pulse time ``t`` [s] (module docstring): predict with ``u_fired``
-        (the map input fired at the last node; None at the first step: no prediction), put
-        each reading at its node and filter again from the earliest node touched."""
+        """The estimate at pulse time ``t`` [s] (module docstring): put each reading that
+        belongs to a node of the history at it (latency) and filter again from the earliest
+        node touched, then predict with ``u_fired`` (the map input fired at the last node;
+        None at the first step: no prediction) and update with the new node's readings. The
+        late readings join before the prediction, so a step predicts once, not twice, where
+        the camera is a pulse late; the estimate is the same."""
         start = time.perf_counter()
         if not self._nodes:
             raise ParameterError("reset", "call reset(x0, t0) before step")
         self.innovations = []
-        if u_fired is not None:
-            last = self._nodes[-1]
-            last.u = np.asarray(u_fired, dtype=float).ravel()
-            s, P = self._filtered(last, set())
-            s, P = self._predict(s, P, last.u, last.t)
-            self._nodes.append(_Node(float(t), s, P))
-            if len(self._nodes) > self.options.history + 1:
-                self._nodes.pop(0)
-                self._k0 += 1
         record: set[int] = set()
         nodes = self._nodes
+        if u_fired is None:
+            late, new = list(readings), []
+        else:
+            if len(nodes) > self.options.history:  # the oldest node leaves the history
+                nodes.pop(0)
+                self._k0 += 1
+            now = nodes[-1].t + 1e-12
+            late = [r for r in readings if r.t <= now]
+            new = [r for r in readings if r.t > now]
+        period = (
+            float(t) - nodes[-1].t
+            if u_fired is not None
+            else nodes[1].t - nodes[0].t
+            if len(nodes) > 1
+            else math.inf
+        )
+        earliest = self._place(late, record, period)
+        for i in range(earliest, len(nodes) - 1):  # filter again up to the last node
+            node, nxt = nodes[i], nodes[i + 1]
+            s, P = self._filtered(node, record)
+            assert node.u is not None
+            nxt.s, nxt.P = self._predict(s, P, node.u, node.t)
+            nxt.post = None
+        if u_fired is not None:
+            last = nodes[-1]
+            last.u = np.asarray(u_fired, dtype=float).ravel()
+            s, P = self._filtered(last, record)
+            s, P = self._predict(s, P, last.u, last.t)
+            nodes.append(_Node(float(t), s, P))
+            self._place(new, record, period)
+        self.s, self.P = self._filtered(nodes[-1], record)
+        return self._estimate(float(t), time.perf_counter() - start)
+
+    def _place(self, readings: Sequence[Reading], record: set[int], period: float) -> int:
+        """Put each reading at the node of the history whose coast it lies in (a reading
+        older than the history is dropped and counted); the earliest node touched (the
+        last node's index when none)."""
+        nodes = self._nodes
         earliest = len(nodes) - 1
-        period = nodes[1].t - nodes[0].t if len(nodes) > 1 else math.inf
         for reading in readings:
             if self._k0 > 0 and reading.t <= nodes[0].t - period + 1e-12:
                 self.dropped += 1  # its node has left the history
@@ -233,14 +264,7 @@ class ExtendedKalmanFilter:
             nodes[i].post = None
             record.add(id(reading))
             earliest = min(earliest, i)
-        for i in range(earliest, len(nodes) - 1):  # filter again up to now
-            node, nxt = nodes[i], nodes[i + 1]
-            s, P = self._filtered(node, record)
-            assert node.u is not None
-            nxt.s, nxt.P = self._predict(s, P, node.u, node.t)
-            nxt.post = None
-        self.s, self.P = self._filtered(nodes[-1], record)
-        return self._estimate(float(t), time.perf_counter() - start)
+        return earliest
 
     def _estimate(self, t: float, seconds: float) -> Estimate:
         parts = getattr(self.model, "parts", None)
