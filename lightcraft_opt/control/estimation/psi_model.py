@@ -1,4 +1,4 @@
-"""The estimation model on Ψ: the reduced pulse map with the wind and the coupling as slow states.
+"""The estimation model on Ψ: the reduced pulse map with the wind, the coupling and the moments.
 
 The estimated vector is s = (z, σ): Ψ's state z (REDUCED_STATE, docs/frames.md) and the slow
 states σ, each a random walk:
@@ -12,7 +12,12 @@ states σ, each a random walk:
   is linear in the wind vector everywhere;
 - ``"coupling"``: the engine's coupling coefficient C [N s/J], the impulse a pulse of the
   reference energy gives over that energy (``Flight.coupling_coefficient``); it enters p as
-  ``impulse_per_pulse`` = C x ``reference_pulse_energy``.
+  ``impulse_per_pulse`` = C x ``reference_pulse_energy``;
+- ``"inertia"``: the rotor's transverse and axial dry moments as scales of the model's [-]
+  (``inertia[transverse]``, ``inertia[axial]``; p's ``rotor_transverse_inertia_dry``,
+  ``rotor_axial_inertia_dry``). Ψ turns the cone by |H| T / A a pulse (52 rad for Flight 5),
+  so 1 % of A moves its phase by 0.5 rad a pulse; a gyro makes the scale observable
+  (docs/estimation.md#what-the-director-needs).
 
 Between pulses s[k+1] = (Ψ(z, u, p(σ), t), σ) + w, w ~ N(0, Q) (:class:`ProcessNoise`), and
 its Jacobian is
@@ -26,7 +31,9 @@ piece that also differentiates in the two wind entries of p; the coupling column
 from the energy column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
 through their product only, and the energy also counts the engine's load (pulse_jump.py),
 so ∂Ψ/∂C = (E / C) (∂Ψ/∂E − e_load / E_ref). This holds where nothing ablates (the air mode,
-or a liner with ``ablation`` 0); elsewhere the coupling is refused.
+or a liner with ``ablation`` 0); elsewhere the coupling is refused. The moments' columns are
+forward differences of Ψ's compiled values (relative step 1e-7), checked against central
+differences of the whole prediction (tests/control/estimation/test_psi_estimation_model.py).
 
 A sensor is a casadi Function ``h(x, p, dt) -> y`` on the FULL state x (STATE) and its noise
 covariance R; the model composes it with Ψ's ``lift`` and differentiates the composition
