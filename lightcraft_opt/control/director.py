@@ -49,7 +49,6 @@ by the director's. "off": the thrusters rest.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 
 import numpy as np
 
@@ -126,10 +125,7 @@ _TORQUE_AXES = slice(
 def director_model(model: Model, options: DirectorOptions) -> Model:
     """The director's model of ``model``: the same craft with the optic quadrature of
     ``options.quadrature`` (the planner's coarser belief of the engine)."""
-    engine = model.craft.engine
-    radial, azimuthal = options.quadrature
-    coarse = replace(engine, quadrature_radial=radial, quadrature_azimuthal=azimuthal)
-    return replace(model, craft=replace(model.craft, engine=coarse))
+    return model.with_optic_quadrature(*options.quadrature)
 
 
 def _read(C: np.ndarray, rows: slice, columns: slice, gain: float = 1.0) -> None:

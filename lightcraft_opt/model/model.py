@@ -3,7 +3,7 @@ environment), and the checks that hold between its parts."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.model.craft import Craft
@@ -31,3 +31,12 @@ class Model:
                 "flight.pulse_energy",
                 f"{self.flight.pulse_energy} J exceeds the laser's {self.laser.pulse_energy_max} J",
             )
+
+    def with_optic_quadrature(self, radial: int, azimuthal: int) -> Model:
+        """This model with the engine's optic quadrature of ``radial`` x ``azimuthal``
+        points (the fluence integral over the optic: Engine), everything else the same:
+        a planner's or an estimator's coarser belief, or a replay's finer one."""
+        engine = replace(
+            self.craft.engine, quadrature_radial=radial, quadrature_azimuthal=azimuthal
+        )
+        return replace(self, craft=replace(self.craft, engine=engine))

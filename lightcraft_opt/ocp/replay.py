@@ -89,9 +89,7 @@ def replay_model(problem: OcpProblem) -> Model:
     azimuthal = max(engine.quadrature_azimuthal, REPLAY_QUADRATURE[1])
     if (radial, azimuthal) == (engine.quadrature_radial, engine.quadrature_azimuthal):
         return problem.model
-    finer = dataclasses.replace(engine, quadrature_radial=radial, quadrature_azimuthal=azimuthal)
-    craft = dataclasses.replace(problem.model.craft, engine=finer)
-    return dataclasses.replace(problem.model, craft=craft)
+    return problem.model.with_optic_quadrature(radial, azimuthal)
 
 
 def replay_plan(

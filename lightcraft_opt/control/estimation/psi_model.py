@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 
 import casadi as ca
 import numpy as np
@@ -56,6 +56,7 @@ from lightcraft_opt.control.estimation.psi_chain import (
     stage_with_wind,
     wind_substep,
 )
+from lightcraft_opt.control.options import DirectorOptions
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, REDUCED_STATE, parameter_values
 from lightcraft_opt.linear.signal_names import entry_names
@@ -149,13 +150,13 @@ class ProcessNoise:
         return ProcessNoise(**{f.name: getattr(self, f.name) * factor for f in fields(self)})
 
 
-def estimation_model(model: Model, quadrature: tuple[int, int] = (4, 16)) -> Model:
+def estimation_model(
+    model: Model, quadrature: tuple[int, int] = DirectorOptions().quadrature
+) -> Model:
     """The estimator's model of ``model``: the same craft with an optic quadrature of
     ``quadrature`` (radial, azimuthal), as ``control.director.director_model`` builds the
     director's (default ``DirectorOptions().quadrature``), so both share one compiled Ψ."""
-    engine = model.craft.engine
-    coarse = replace(engine, quadrature_radial=quadrature[0], quadrature_azimuthal=quadrature[1])
-    return replace(model, craft=replace(model.craft, engine=coarse))
+    return model.with_optic_quadrature(*quadrature)
 
 
 def _first_output(f: ca.Function) -> ca.Function:
