@@ -7,6 +7,8 @@
   which every estimator meets;
 - :mod:`.model`: :class:`EstimationModel`, the discrete model (prediction, process noise,
   each sensor's measurement, with Jacobians) both estimators run on;
+- :mod:`.kalman`: the algebra both estimators share (the prior by entry name, the
+  Joseph-form update);
 - :mod:`.sensor_options`: the sensors' options (:class:`SensorOptions`: a camera, gyros,
   a spin counter; their noise, frame rate, latency, lost frames);
 - :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
@@ -18,8 +20,9 @@
   suite meets it) and :class:`OutputFeedback`, the sensors and the estimator of one
   closed-loop flight with the log of the estimates against the truth
   (docs/estimation.md#output-feedback);
-- :mod:`.psi_model`: :class:`PsiEstimationModel`, that model on Ψ with the wind and the
-  engine's coupling as slow states (:class:`ProcessNoise`; its chains in :mod:`.psi_chain`);
+- :mod:`.psi_model`: :class:`PsiEstimationModel`, that model on Ψ with the wind, the
+  engine's coupling and the rotor's moments as slow states (:class:`ProcessNoise`; its
+  chains in :mod:`.psi_chain`);
 - :mod:`.ekf`: :class:`ExtendedKalmanFilter` (:class:`EkfOptions`), an :class:`Estimator`;
 - :mod:`.psi_observability`: :func:`model_flight`, :func:`model_observability`, the
   Gramian of an estimation model's flight.

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lightcraft_opt.control.estimation.estimate import Estimate
+from lightcraft_opt.control.estimation.kalman import joseph_update, prior_sigmas, symmetric
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -75,13 +76,9 @@ class EkfOptions:
         checked_int("EkfOptions", "history", self.history, 1)
 
     def prior_sigmas(self, names: Sequence[str]) -> np.ndarray:
-        """(len(names),) the prior standard deviation of each entry of s."""
-        out = np.full(len(names), self.prior_default)
-        for key, value in self.prior:
-            for i, name in enumerate(names):
-                if key in (name, name.split("[")[0]):
-                    out[i] = value
-        return out
+        """(len(names),) the prior standard deviation of each entry of s (a pair naming
+        no entry of this model, such as the moments' on a model without them, is unused)."""
+        return prior_sigmas(self.prior, names, self.prior_default)[0]
 
 
 @dataclass(frozen=True)
@@ -166,12 +163,8 @@ class ExtendedKalmanFilter:
         y_hat, H = self.model.measure(reading.sensor, s, dt)
         R = self.model.measurement_noise(reading.sensor)
         nu = np.asarray(reading.y, dtype=float).ravel() - y_hat
-        PHt = P @ H.T
-        S = H @ PHt + R
-        K = np.linalg.solve(S, PHt.T).T
-        I_KH = np.eye(s.size) - K @ H
-        P = I_KH @ P @ I_KH.T + K @ R @ K.T
-        return s + K @ nu, 0.5 * (P + P.T), Innovation(reading, nu, S)
+        s, P, S = joseph_update(s, P, nu, H, R)
+        return s, P, Innovation(reading, nu, S)
 
     def _filtered(self, node: _Node, record: set[int]) -> tuple[np.ndarray, np.ndarray]:
         """The node's posterior: its prior updated with its readings (kept until a reading
@@ -190,8 +183,7 @@ class ExtendedKalmanFilter:
     ) -> tuple[np.ndarray, np.ndarray]:
         s_next, F = self.model.predict(s, u, t)
         Q = self.options.noise_scale * self.model.process_noise(s, u, t)
-        P = F @ P @ F.T + Q
-        return s_next, 0.5 * (P + P.T)
+        return s_next, symmetric(F @ P @ F.T + Q)
 
     # -- the step --------------------------------------------------------------------------
 

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lightcraft_opt.control.estimation.estimate import Estimate
+from lightcraft_opt.control.estimation.kalman import joseph_update, symmetric
 from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
 from lightcraft_opt.control.estimation.mhe_qp import mhe_qp_function, mhe_qp_sizes
 from lightcraft_opt.control.estimation.model import EstimationModel
@@ -207,14 +208,14 @@ class MovingHorizonEstimator:
         for sensor, y, dt in node.readings:
             h, Hm = self._measure(sensor, s_hat, dt)
             R = self._noise_of(sensor)[0]
-            mean, P = _kalman_update(mean, P, y - h - Hm @ (mean - s_hat), Hm, R)
+            mean, P, _ = joseph_update(mean, P, y - h - Hm @ (mean - s_hat), Hm, R)
         assert node.u is not None
         if node.linear is not None and node.age == 0:
             f, F = node.linear
         else:
             f, F = self._predict(s_hat, node.u, node.t)
         assert node.noise is not None
-        mean, P = f + F @ (mean - s_hat), _symmetric(F @ P @ F.T + node.noise)
+        mean, P = f + F @ (mean - s_hat), symmetric(F @ P @ F.T + node.noise)
         if np.all(np.isfinite(mean)) and np.all(np.isfinite(P)):
             self._mean, self._cov = mean, P
         else:
@@ -248,7 +249,7 @@ class MovingHorizonEstimator:
         A, B, d, H, g = self._A, self._B, self._d, self._H, self._g
         A[:pad], B[:pad], d[: pad * n], g[:] = self._eye, 0.0, 0.0, 0.0
         H[:] = 0.0
-        info = _symmetric(np.linalg.inv(self._cov))
+        info = symmetric(np.linalg.inv(self._cov))
         H[0] = info
         g[:n] = info @ (nodes[0].s - self._mean)
         cov_pred, cov = self._cov, self._cov
@@ -269,7 +270,7 @@ class MovingHorizonEstimator:
                 H[j] += information
                 g[2 * n * j : 2 * n * j + n] += gradient
                 # the Kalman update in information form: P⁺ = (P⁻¹ + Hᵀ R⁻¹ H)⁻¹
-                cov = _symmetric(np.linalg.solve(self._eye + cov @ information, cov))
+                cov = symmetric(np.linalg.solve(self._eye + cov @ information, cov))
             if i == m:
                 break
             assert node.linear is not None
@@ -277,7 +278,7 @@ class MovingHorizonEstimator:
             assert node.noise_root is not None and node.noise is not None
             A[j], B[j] = F.T, node.noise_root.T
             d[j * n : (j + 1) * n] = f - nodes[i + 1].s
-            cov_pred = _symmetric(F @ cov @ F.T + node.noise)
+            cov_pred = symmetric(F @ cov @ F.T + node.noise)
             cov = cov_pred
         if not all(np.all(np.isfinite(v)) for v in (A, B, d, H, g, cov_pred)):
             for node in nodes:
@@ -348,25 +349,10 @@ class MovingHorizonEstimator:
 
 
 # --------------------------------------------------------------------------- linear algebra
-def _kalman_update(
-    mean: np.ndarray, P: np.ndarray, innovation: np.ndarray, Hm: np.ndarray, R: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The Kalman filter's measurement update (Joseph form): (mean + K ν, (I - K H) P
-    (I - K H)ᵀ + K R Kᵀ) with K = P Hᵀ (H P Hᵀ + R)⁻¹."""
-    PH = P @ Hm.T
-    K = np.linalg.solve(Hm @ PH + R, PH.T).T
-    IKH = np.eye(P.shape[0]) - K @ Hm
-    return mean + K @ innovation, _symmetric(IKH @ P @ IKH.T + K @ R @ K.T)
-
-
 def _root(Q: np.ndarray) -> np.ndarray:
     """L with L Lᵀ = Q for a symmetric positive semidefinite Q (its eigen-decomposition;
     the columns of zero eigenvalues are zero); NaN for a Q that is not finite."""
     if not np.all(np.isfinite(Q)):
         return np.full(Q.shape, np.nan)
-    lam, V = np.linalg.eigh(_symmetric(Q))
+    lam, V = np.linalg.eigh(symmetric(Q))
     return V * np.sqrt(np.clip(lam, 0.0, None))
-
-
-def _symmetric(P: np.ndarray) -> np.ndarray:
-    return 0.5 * (P + P.T)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.kalman import prior_sigmas
 from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.model.checks import checked_int, checked_number
@@ -69,15 +70,12 @@ class MheOptions:
     def prior_covariance(self, names: Sequence[str]) -> np.ndarray:
         """(n, n) diagonal prior covariance of s whose entries are ``names``; an override
         that names no entry is an OptionError listing them."""
-        sigma = np.full(len(names), float(self.prior_sigma))
-        for name, value in self.prior_sigmas:
-            hit = [i for i, e in enumerate(names) if e == name or e.split("[")[0] == name]
-            if not hit:
-                raise OptionError(
-                    f"MheOptions.prior_sigmas: {name!r} names no entry of the model, "
-                    f"whose entries are {list(names)}"
-                )
-            sigma[hit] = value
+        sigma, unmatched = prior_sigmas(self.prior_sigmas, names, self.prior_sigma)
+        if unmatched:
+            raise OptionError(
+                f"MheOptions.prior_sigmas: {unmatched[0]!r} names no entry of the model, "
+                f"whose entries are {list(names)}"
+            )
         return np.diag(sigma**2)
 
 
