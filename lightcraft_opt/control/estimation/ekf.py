@@ -42,7 +42,7 @@ class EkfOptions:
         0.016 %: the spin sets the coning's phase, 8 turns a pulse, so a prior of 1e-3 would
         leave it unknown at the next pulse and the filter's linearisation useless);
         0.02 on the coning offset (1.1°); 2 m/s on the wind; 5e-6 N s/J on the coupling
-        (3 % of Flight 5's).
+        (3 % of Flight 5's); 0.01 on the moments' scales (the campaigns' 1 %).
     prior_default : prior standard deviation of the entries not in ``prior`` (the
         bookkeeping: liner and RCS masses [kg], engine load [pulses]), > 0.
     noise_scale : the model's process-noise covariance Q times this, > 0 (tuning).

@@ -99,15 +99,19 @@ def stage_packed(stage: ca.Function) -> ca.Function:
 
 
 class Evaluator:
-    """A casadi Function of one output called through its buffers (``Function.buffer``): the
-    inputs copied into arrays it owns, the output (densified) read in place. A call costs
-    well under a microsecond beyond the Function's own work, against some 20 µs for a call
-    from Python with its conversions (what keeps the EKF's step inside its 0.3 ms)."""
+    """The first output of a casadi Function, called through its buffers
+    (``Function.buffer``): the inputs copied into arrays it owns, the output (densified)
+    read in place; the other outputs are not computed. A call costs well under a
+    microsecond beyond the Function's own work, against some 20 µs for a call from Python
+    with its conversions (what keeps the EKF's step inside its 0.3 ms)."""
 
     def __init__(self, f: ca.Function) -> None:
         rows, cols = f.size_out(0)
         ins = [ca.MX.sym(f.name_in(i), f.size_in(i)) for i in range(f.n_in())]
-        self.function = ca.Function(f.name(), ins, [ca.densify(f(*ins))], f.name_in(), f.name_out())
+        first = f.call(ins)[0]
+        self.function = ca.Function(
+            f.name(), ins, [ca.densify(first)], f.name_in(), [f.name_out(0)]
+        )
         self._buffer, self._trigger = self.function.buffer()
         self._args = [np.zeros(f.numel_in(i)) for i in range(f.n_in())]
         for i, a in enumerate(self._args):

@@ -159,12 +159,6 @@ def estimation_model(
     return model.with_optic_quadrature(*quadrature)
 
 
-def _first_output(f: ca.Function) -> ca.Function:
-    """``f`` with its first output only (Ψ's values without the engine's)."""
-    ins = [ca.MX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
-    return ca.Function(f"{f.name()}_first", ins, [f(*ins)[0]], f.name_in(), [f.name_out(0)])
-
-
 class PsiEstimationModel:
     """The :class:`~lightcraft_opt.control.estimation.model.EstimationModel` on Ψ with slow
     states (module docstring).
@@ -176,7 +170,8 @@ class PsiEstimationModel:
     sensors : {name: (h, R)}: ``h(x, p, dt) -> y`` a casadi Function on the full state x
         (STATE), p (PARAMETERS) and dt [s], the time from the reading to the node it ends
         at; R (m, m) the noise covariance of y [y's units²].
-    slow : the slow states, a sub-tuple of ("wind", "coupling") in that order of s.
+    slow : the slow states, a sub-tuple of ("wind", "coupling", "inertia") (:data:`SLOW_STATES`),
+        kept in that order in s.
     noise : the process noise (:class:`ProcessNoise`, default its defaults).
     p : the model's parameter vector (default its model's); the slow states overwrite
         their entries.
@@ -240,7 +235,7 @@ class PsiEstimationModel:
         self._wind = _NZ if "wind" in self.slow else None
         self._coupling = self.names.index("coupling") if "coupling" in self.slow else None
         self._inertia = self.names.index("inertia[transverse]") if "inertia" in self.slow else None
-        self._value = Evaluator(_first_output(d.value)) if "inertia" in self.slow else None
+        self._value = Evaluator(d.value) if "inertia" in self.slow else None
         self._Q = np.diag(np.square(self._sigmas()))
         self._transverse = float(model.craft.inertia_transverse)  # A [kg m²]
         self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {}
@@ -257,7 +252,7 @@ class PsiEstimationModel:
 
     def slow_values(self, p: np.ndarray | None = None) -> np.ndarray:
         """The slow states σ that ``p`` (default the model's) holds: the wind at the reference
-        height (east, north) [m/s] and C [N s/J]."""
+        height (east, north) [m/s], C [N s/J], the rotor's moments over the model's [-]."""
         p = self.p if p is None else p
         out: list[float] = []
         if "wind" in self.slow:
