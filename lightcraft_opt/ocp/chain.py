@@ -27,6 +27,7 @@ import time
 from dataclasses import dataclass, fields
 
 import casadi as ca
+import numpy as np
 
 from lightcraft_opt.compiled.cache import (
     BuildReport,
@@ -126,23 +127,33 @@ def chain_nlp(
         raise ParameterError(
             "derivatives", "the chain's NLP needs Φ's chain derivatives with Hessians"
         )
-    N, nx = tr.problem.horizon, STATE.size
+    N, nx, nu = tr.problem.horizon, STATE.size, tr.problem.inputs.size
+    design = tuple(int(i) for i in np.sort(tr.design.p_index))
+    has = tuple(getattr(der, "design", ()))
+    if has != design:
+        raise ParameterError(
+            "derivatives",
+            f"Φ's chain derivatives are in the design entries {has} of p, the problem "
+            f"designs {design}",
+        )
     w, P = tr.nlp["x"], tr.P
-    p = tr.parameters.get("p", P)
     s = build_surrogate(tr, upper=upper, report=report)
     # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
     values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, tr.threads))
     jacobians = SharedEvaluation("ocp_pulse_jacobians", horizon_map(der.jacobian, N, tr.threads))
     times = tr.pulse_times()
     z = s.arguments(w, P)
+    # each pulse's p: the problem's, its designed entries from z's last rows
+    p = _pulse_parameters(tr.parameters.get("p", P), np.array(design), z[nx + nu :, :])
+    x_z, u_z = z[:nx, :], z[nx : nx + nu, :]
     nlp = ca.Function(
         "ocp_nlp",
         [w, P],
-        s.outputs_nlp(w, *values(z[:nx, :], z[nx:, :], p, times), P),
+        s.outputs_nlp(w, *values(x_z, u_z, p, times), P),
         ["x", "p"],
         ["f", "g"],
     )
-    point = [z, *jacobians(z[:nx, :], z[nx:, :], p, times)]
+    point = [z, *jacobians(x_z, u_z, p, times)]
     grad_f = ca.Function(
         "nlp_grad_f", [w, P], s.grad_f.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
     )
@@ -154,7 +165,7 @@ def chain_nlp(
     mu_x, mu_e = s.multipliers(w, xn, en, P, lam_f, lam_g)
     # the chain's Hessian blocks, kept for re-solves that reuse them (OcpOptions.warm_hessian)
     kept = KeptBlocks("ocp_pulse_hessians", horizon_map(der.hessian, N, tr.threads))
-    Hb = kept(z[:nx, :], z[nx:, :], ca.repmat(p, 1, N), times, mu_x, mu_e)
+    Hb = kept(x_z, u_z, ca.repmat(p, 1, N) if p.size2() == 1 else p, times, mu_x, mu_e)
     # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
     psd = ConvexBlocks("ocp_convex_blocks", der.n_v, N)
     hess_lag, hess_convex = (
@@ -194,7 +205,8 @@ def build_surrogate(
     z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z])
     # Φ's structural zeros (casadi's sparsity propagation through Φ), so the NLP's
     # Jacobian and Hessian keep the sparsity AD would give them
-    jac_sp, hess_sp = _phi_sparsity(tr.phi, nx, ne, nv)
+    design = np.sort(tr.design.p_index)
+    jac_sp, hess_sp = _phi_sparsity(tr.phi, nx, ne, nv, design)
     key = structure_key(
         SURROGATE_CACHE,
         tilde,
@@ -254,11 +266,27 @@ def build_surrogate(
     return built
 
 
-def _phi_sparsity(phi: PulseMap, nx: int, ne: int, nv: int) -> tuple[ca.Sparsity, ca.Sparsity]:
-    """Structural patterns of Φ's Jacobian in v = (x, u), (nx + ne, nv), and of the Hessian
-    of any λᵀ(x_next, engine), (nv, nv), by sparsity propagation through Φ."""
+def _pulse_parameters(p: ca.MX, design: np.ndarray, d: ca.MX) -> ca.MX:
+    """p (PARAMETERS.size,) with the entries ``design`` (sorted) taken from ``d``
+    (len(design), n columns): one column per pulse, or ``p`` itself without a design."""
+    if design.size == 0:
+        return p
+    keep = np.ones(PARAMETERS.size)
+    keep[design] = 0.0
+    put = np.zeros((PARAMETERS.size, design.size))
+    put[design, np.arange(design.size)] = 1.0
+    return ca.repmat(ca.DM(keep) * p, 1, d.size2()) + ca.mtimes(ca.DM(put), d)
+
+
+def _phi_sparsity(
+    phi: PulseMap, nx: int, ne: int, nv: int, design: np.ndarray
+) -> tuple[ca.Sparsity, ca.Sparsity]:
+    """Structural patterns of Φ's Jacobian in v = (x, u, p[design]), (nx + ne, nv), and of
+    the Hessian of any λᵀ(x_next, engine), (nv, nv), by sparsity propagation through Φ."""
     v = ca.MX.sym("v", nv)
     p, t = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
-    out = ca.vertcat(*phi.step(v[:nx], v[nx:], p, t))
+    nu = nv - nx - design.size
+    p_v = _pulse_parameters(p, design, v[nx + nu :])
+    out = ca.vertcat(*phi.step(v[:nx], v[nx : nx + nu], p_v, t))
     lam = ca.MX.sym("lam", nx + ne)
     return ca.jacobian_sparsity(out, v), ca.jacobian_sparsity(ca.gradient(ca.dot(lam, out), v), v)

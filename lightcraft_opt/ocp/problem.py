@@ -52,6 +52,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.model.checks import checked_vector, number, numbers, set_frozen
+from lightcraft_opt.ocp.design import DesignLayout, DesignVariable
 from lightcraft_opt.ocp.hardware import HardwareLimits, hardware_limits
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
@@ -61,6 +62,7 @@ __all__ = [
     "ControlBound",
     "ControlEffort",
     "ControlRate",
+    "DesignVariable",
     "EnergyBudget",
     "FinalAltitude",
     "LaserEnergy",
@@ -413,11 +415,15 @@ class OcpProblem:
         profile other than HOLD needs a craft with an RCS.
     rcs_subintervals : sub-intervals of ``SUBINTERVALS`` (1 for the other profiles); the
         pulse map's substeps must be a multiple (checked when Φ is built).
+    design : entries of p (and the launch spin) the optimiser chooses with the inputs
+        (:class:`~lightcraft_opt.ocp.design.DesignVariable`, docs/design.md); their values
+        in ``parameters``/``x0`` are where the design starts.
 
     Derived (read-only): ``p`` (PARAMETERS.size,) parameter vector; ``inputs`` the
     map-input layout; ``lower``, ``upper``, ``slew`` (size of the map input,) bounds [unit]
     and slew limits per pulse [unit] (slew_rate T); ``free`` entries that are decision
-    variables; ``period`` T [s]. Default bounds of the RCS slots: each level
+    variables; ``period`` T [s]; ``design_layout`` where the design sits in p and x0.
+    Default bounds of the RCS slots: each level
     (``rcs_thrust``, the mean for PHASE_LOCKED) in [0, max_thrust], ``rcs_cos`` and
     ``rcs_sin`` in [-max_thrust / 2, max_thrust / 2].
     """
@@ -433,11 +439,13 @@ class OcpProblem:
     u_previous: np.ndarray | Sequence[float] | None = None
     rcs_profile: RcsProfile = RcsProfile.HOLD
     rcs_subintervals: int = 1
+    design: tuple[DesignVariable, ...] = ()
     p: np.ndarray = field(init=False, repr=False)
     inputs: VectorLayout = field(init=False, repr=False)
     lower: np.ndarray = field(init=False, repr=False)
     upper: np.ndarray = field(init=False, repr=False)
     slew: np.ndarray = field(init=False, repr=False)
+    design_layout: DesignLayout = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.model, Model):
@@ -464,6 +472,8 @@ class OcpProblem:
             u_prev = checked_vector("u_previous", self.u_previous, self.inputs.size)
             set_frozen(self, "u_previous", u_prev)
         set_frozen(self, "p", self._parameter_vector())
+        set_frozen(self, "design", self._kinds("design", self.design, (DesignVariable,)))
+        set_frozen(self, "design_layout", DesignLayout(self.model, self.design))
         self._set_bounds()
         self._check_envelope()
         for name in ("x0", "p", "lower", "upper", "slew"):

@@ -132,6 +132,9 @@ class OcpResult(Presentable):
     w, lam_x, lam_g : the NLP's (scaled) primal and dual solution, for a warm start.
     replay : the plan flown again by the simulator at full accuracy (:class:`PlanReplay`,
         ``OcpOptions.replay``); None when not replayed (the message says why).
+    design : {design variable: value [SI, unit in ``design_units``]} the optimiser chose
+        (ocp/design.py); empty without a design.
+    design_units : {design variable: its SI unit}.
     """
 
     status: OcpStatus
@@ -155,6 +158,8 @@ class OcpResult(Presentable):
     lam_x: np.ndarray = field(default_factory=lambda: np.empty(0))
     lam_g: np.ndarray = field(default_factory=lambda: np.empty(0))
     replay: PlanReplay | None = None
+    design: dict[str, float] = field(default_factory=dict)
+    design_units: dict[str, str] = field(default_factory=dict)
 
     @property
     def success(self) -> bool:
@@ -199,6 +204,10 @@ class OcpResult(Presentable):
             *self._term_rows(),
             ("violation", f"{self.constraint_violation:.3g} (scaled)"),
             ("horizon", f"{self.horizon} pulses, {float(self.t[-1] - self.t[0]):.3f} s"),
+        ]
+        rows += [
+            (f"design {name}", f"{value:.6g} {self.design_units.get(name, '')}".rstrip())
+            for name, value in self.design.items()
         ]
         if self.dynamics_closed:
             rows += [

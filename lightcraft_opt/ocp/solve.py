@@ -167,7 +167,9 @@ class CompiledOcp:
             )
         blocks = opts.blocks(problem.horizon)
         derivatives = None
-        if uses_chain(opts) and self.pulse_map.pieces is not None:
+        if problem.design_layout.in_p.any():
+            pass  # Φ's chain has no derivatives in p yet: casadi's AD through Φ
+        elif uses_chain(opts) and self.pulse_map.pieces is not None:
             derivatives = (
                 derivatives_for(problem.model, map_options, report=build_progress)
                 if pulse_map is None and opts.prediction is PredictionMap.FULL
@@ -289,7 +291,20 @@ class CompiledOcp:
             result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
         else:
             result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
-        return self.replayer.attach(result, pv) if self.options.replay else result
+        if not self.options.replay:
+            return result
+        return self.replayer.attach(result, self.designed_parameters(pv, result))
+
+    def designed_parameters(self, p: np.ndarray, result: OcpResult) -> np.ndarray:
+        """(PARAMETERS.size,) ``p`` with the design ``result`` chose put in (``p`` itself
+        without a design): the parameters its plan flies with."""
+        tr = self.transcription
+        if not tr.design.in_p.any():
+            return p
+        d = tr.design_of(result.w)
+        out = np.array(p, dtype=float)
+        out[tr.design.p_index] = d[tr.design.in_p]
+        return out
 
     # ----------------------------------------------------------------- helpers
     def _solve_once(
@@ -588,6 +603,8 @@ class CompiledOcp:
             w=w,
             lam_x=lam_x,
             lam_g=lam_g,
+            design=dict(zip(tr.design.labels, tr.design_of(w).tolist(), strict=True)),
+            design_units={v.label: v.unit for v in tr.design.variables},
         )
 
 

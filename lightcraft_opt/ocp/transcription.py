@@ -50,6 +50,7 @@ import numpy as np
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile, VectorLayout
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
+from lightcraft_opt.ocp.design_rows import designed_parameters, designed_state, physical_rows
 from lightcraft_opt.ocp.evaluation import horizon_map
 from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
 from lightcraft_opt.ocp.problem import (
@@ -207,18 +208,28 @@ class MultipleShooting:
         span = np.maximum(np.abs(self.lower), np.abs(self.upper))
         self.u_scale = np.where(np.isfinite(span) & (span > 0), span, 1.0)
 
+        # the design d (time-invariant, after the last node), scaled by its bounds
+        self.design = design = problem.design_layout
+        span = np.maximum(np.abs(design.lower), np.abs(design.upper))
+        self.d_scale = np.where(span > 0, span, 1.0)
+        d = ca.MX.sym("d", design.size)
+        self.D = ca.DM(self.d_scale) * d  # physical design [SI]
+        # Φ's design directions: the design's entries of p, in the order of p
+        self.design_order = np.flatnonzero(design.in_p)[np.argsort(design.p_index)]
+
         xs = [ca.MX.sym(f"x_{k}", STATE.size) for k in range(N + 1)]
         as_ = [ca.MX.sym(f"a_{k}", na) for k in range(N + 1)]
         vs = [ca.MX.sym(f"v_{k}", nf) for k in range(N)]
         parts: list[ca.MX] = []
         for k in range(N):
             parts += [xs[k], as_[k], vs[k]]
-        parts += [xs[N], as_[N]]
+        parts += [xs[N], as_[N], d]
         w = ca.vertcat(*parts)
         ends = np.cumsum([0] + [b.numel() for b in parts])
         self.x_index = [np.arange(ends[3 * k], ends[3 * k] + STATE.size) for k in range(N + 1)]
         self.a_index = [np.arange(ends[3 * k + 1], ends[3 * k + 2]) for k in range(N + 1)]
         self.v_index = [np.arange(ends[3 * k + 2], ends[3 * k + 3]) for k in range(N)]
+        self.d_index = np.arange(ends[-2], ends[-1])
         self.n_w = int(ends[-1])
 
         st = self._stages(phi, xs, as_, vs, threads)
@@ -249,7 +260,7 @@ class MultipleShooting:
         (x_next, engine) given as expressions (:meth:`nlp_of_outputs`)."""
         pr, P, N = self.problem, self.P, self.problem.horizon
         sx, su = ca.DM(self.x_scale), ca.DM(self.u_scale)
-        p = self.parameters.get("p", P)
+        p = self.designed_p()
         X = ca.horzcat(*[sx * x for x in xs])
         A = ca.horzcat(*[su * a for a in as_]) if self.coupled else ca.MX(0, N + 1)
         V = ca.horzcat(*[su * v for v in vs]) if self.free.size else ca.MX(0, N)
@@ -273,7 +284,7 @@ class MultipleShooting:
         """g with its bounds, stage by stage (module docstring)."""
         pr, P, N = self.problem, self.P, self.problem.horizon
         sx, su = ca.DM(self.x_scale), ca.DM(self.u_scale)
-        x0, p = self.parameters.get("x0", P), self.parameters.get("p", P)
+        x0, p = self.designed_x0(), self.designed_p()
         altitude, _, cos_tilt, fired = st.nodes
         _, use = st.pulses
         g: list[ca.MX] = []
@@ -375,6 +386,8 @@ class MultipleShooting:
                     pass  # on the nodes and pulses: above
                 case _:
                     assert_never(con)
+        for what, expr, top in physical_rows(self.design, p, x0):
+            add(expr, -math.inf, top, ConstraintRow("design_check", "design", what))
         lbg = np.concatenate([b[0] for b in bounds]).astype(float)
         ubg = np.concatenate([b[1] for b in bounds]).astype(float)
         self.constraint_rows = tuple(rows)
@@ -485,10 +498,24 @@ class MultipleShooting:
         return ca.sum1(terms), g
 
     def pulse_arguments(self) -> ca.MX:
-        """(STATE.size + map-input size, N) Φ's arguments z_k = (x_k, u_k) side by side in
-        physical units, affine in w."""
-        st = self._symbols[3]
-        return ca.vertcat(st.X[:, : self.problem.horizon], st.U)
+        """(STATE.size + map-input size + n_p, N) Φ's arguments z_k = (x_k, u_k, d_p) side
+        by side in physical units, affine in w: d_p the design's entries of p in the order
+        of p (:attr:`design_order`, Φ's design directions), the same at every pulse."""
+        st, N = self._symbols[3], self.problem.horizon
+        d_p = self.D[self.design_order.tolist()]
+        return ca.vertcat(st.X[:, :N], st.U, ca.repmat(d_p, 1, N))
+
+    def designed_p(self) -> ca.MX:
+        """(PARAMETERS.size,) p of the NLP's parameters with the design's entries from d."""
+        return designed_parameters(self.design, self.parameters.get("p", self.P), self.D)
+
+    def designed_x0(self) -> ca.MX:
+        """(STATE.size,) x0 of the NLP's parameters with the launch spin from d, if designed."""
+        return designed_state(self.design, self.parameters.get("x0", self.P), self.D)
+
+    def design_of(self, w: np.ndarray) -> np.ndarray:
+        """(n_d,) the design [SI] in the scaled decision vector ``w``."""
+        return self.d_scale * np.asarray(w, dtype=float).reshape(-1)[self.d_index]
 
     # ----------------------------------------------------------------- numbers
     def parameter_vector(
@@ -519,6 +546,8 @@ class MultipleShooting:
         lo, hi = self.lower / self.u_scale, self.upper / self.u_scale
         for idx in self.v_index:
             lbx[idx], ubx[idx] = lo, hi
+        lbx[self.d_index] = self.design.lower / self.d_scale
+        ubx[self.d_index] = self.design.upper / self.d_scale
         return lbx, ubx
 
     def decided(self, u_free: np.ndarray) -> np.ndarray:
@@ -528,9 +557,20 @@ class MultipleShooting:
         with np.errstate(divide="ignore"):
             return np.where(self.reciprocal, 1.0 / u, u)
 
-    def pack(self, X: np.ndarray, U: np.ndarray, u_previous: np.ndarray | None) -> np.ndarray:
-        """Scaled decision vector from states (N + 1, STATE.size) and map inputs (N, size)."""
+    def pack(
+        self,
+        X: np.ndarray,
+        U: np.ndarray,
+        u_previous: np.ndarray | None,
+        design: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Scaled decision vector from states (N + 1, STATE.size), map inputs (N, size)
+        and the design (n_d,) [SI] (default: the problem's values, within its bounds)."""
         w = np.zeros(self.n_w)
+        if design is None:
+            design = self.design.values_of(self.problem.p, np.asarray(self.problem.x0))
+        d = np.clip(np.asarray(design, dtype=float), self.design.lower, self.design.upper)
+        w[self.d_index] = d / self.d_scale
         free = self.decided(U[:, self.free]) / self.u_scale
         previous = None if u_previous is None else self.decided(u_previous[self.free])
         first = free[0] if previous is None else previous / self.u_scale
