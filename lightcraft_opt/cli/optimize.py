@@ -12,6 +12,8 @@ from lightcraft_opt.cli.args import integer, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import HORIZON, ITERATION_LIMIT, TIME_LIMIT
 from lightcraft_opt.cli.progress import build_line, in_place, progress_line
+from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.files.design_outputs import DESIGNED_MODEL
 from lightcraft_opt.files.ocp_outputs import max_offset_over_capture_radius
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.ocp.options import OcpSolver
@@ -55,7 +57,16 @@ def run(args: argparse.Namespace) -> int:
         f"{result.solve_time:.2f} s ({result.message})"
     )
     # the files and figures are written by the writers registered in files/outputs.py
-    result.save(out, problem=pf)
+    (out / DESIGNED_MODEL).unlink(missing_ok=True)  # never one of an earlier run
+    try:
+        result.save(out, problem=pf)
+    except ParameterError as err:  # a design the model's own checks refuse
+        print(f"WARNING: the design is no model ({err}); {DESIGNED_MODEL} not written")
+        result.save(out, problem=dataclasses.replace(pf, model_file=None))
+    for label, value in result.design.items():
+        print(f"design: {label} = {value:.6g} {result.design_units[label]}")
+    if result.design and (out / DESIGNED_MODEL).exists():
+        print(f"designed model: {out / DESIGNED_MODEL} (lightcraft simulate flies it)")
     if result.dynamics_closed:
         altitude = float(result.state("r_L")[-1, 2])
         offset = max_offset_over_capture_radius(result, problem)

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.files.design_outputs import design_summary
 from lightcraft_opt.files.problem import ProblemFile, objective_names
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import TRAJECTORY_COLUMNS, finite_or_none, model_hash
@@ -310,6 +311,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "build_time_s": result.build_time,
         "dynamics_closed": result.dynamics_closed,
         "dynamics_gap": finite_or_none(result.dynamics_gap),
+        "design": design_summary(result),
         "horizon_pulses": result.horizon,
         "pulse_period_s": problem.period,
         "laser_energy_j": result.laser_energy,

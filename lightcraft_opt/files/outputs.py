@@ -46,6 +46,7 @@ from lightcraft_opt.files.closed_loop_outputs import (
     write_closed_loop_summary,
     write_steps_csv,
 )
+from lightcraft_opt.files.design_outputs import DESIGNED_MODEL, write_designed_model
 from lightcraft_opt.files.ocp_outputs import (
     node_flight,
     solution_table,
@@ -288,6 +289,8 @@ def _ocp_save(
     _folder(folder)
     write_solution_csv(result, pf.problem, folder / "solution.csv")
     write_ocp_summary(result, pf, folder / "summary.json")
+    if result.design and result.dynamics_closed and pf.model_file is not None:
+        write_designed_model(pf, result, folder / DESIGNED_MODEL)
     _draw(figures, _ocp_plot, folder, result, problem=pf, title=title)
     return folder
 

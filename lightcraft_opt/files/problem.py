@@ -32,6 +32,7 @@ from lightcraft_opt.errors import (
 )
 from lightcraft_opt.files import model as mf
 from lightcraft_opt.files import schema
+from lightcraft_opt.files.design_tables import read_design
 from lightcraft_opt.files.problem_tables import (
     BLOCKS,
     CONSTRAINTS,
@@ -49,6 +50,7 @@ from lightcraft_opt.files.problem_tables import (
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import RcsProfile, initial_state
 from lightcraft_opt.model import Model
+from lightcraft_opt.ocp.design import DesignLayout
 from lightcraft_opt.ocp.options import (
     OCP_PULSE_MAP,
     HessianApproximation,
@@ -82,6 +84,7 @@ _TABLES = (
     "objective",
     "constraint",
     "control",
+    "design",
     "solver",
     "pulse_map",
 )
@@ -172,6 +175,8 @@ class ProblemFile:
         in the initial guess (:meth:`initial_guess`).
     title : the file's ``title`` (default: the file name without ``.toml``).
     source : the file read.
+    model_file : the model file it names (None when built otherwise).
+    model_overrides : its ``[model_overrides]`` tables as written.
     """
 
     problem: OcpProblem
@@ -179,6 +184,16 @@ class ProblemFile:
     title: str
     source: Path
     guess_inputs: Mapping[str, tuple[float, ...]] = dataclass_field(default_factory=dict)
+    model_file: Path | None = None
+    model_overrides: Mapping[str, Any] = dataclass_field(default_factory=dict)
+
+    def model_tables(self) -> dict[str, Any]:
+        """The model file's tables with ``[model_overrides]`` merged in, as written (units
+        in the keys): the model this problem flies."""
+        if self.model_file is None:
+            raise ParameterError("model_file", "this problem was not read from a file")
+        _, data = schema.read_toml(self.model_file)
+        return dict(_merge(data, self.model_overrides))
 
     def initial_guess(self) -> np.ndarray | None:
         """(N, map-input size) inputs to roll out as the initial guess: the problem's
@@ -274,6 +289,12 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
             item, value = read_item(src, file, raw, where, kind, tag, times)
             items[field].append(item)
             made[field].append(value)
+    design, design_tables = read_design(src, data)
+    try:
+        DesignLayout(model, design)
+    except ParameterError as err:
+        i = next((i for i, v in enumerate(design) if err.field in (v.name, f"design[{i}]")), 0)
+        raise ProblemFileError(src, f"{design_tables[i]}.parameter", err.reason) from err
     try:
         problem = OcpProblem(
             model,
@@ -285,6 +306,7 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
             t0=t0,
             rcs_profile=top.values.get("rcs_profile", RcsProfile.HOLD),
             rcs_subintervals=top.values.get("rcs_subintervals", 1),
+            design=design,
         )
     except HardwareLimitError as err:
         key = _problem_key(err.field, top, items)
@@ -299,7 +321,13 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
     title = top.values.get("title", file.stem)
     guess = _guess_inputs(src, problem, data.get("initial_guess"))
     return ProblemFile(
-        problem=problem, options=options, title=title, source=file, guess_inputs=guess
+        problem=problem,
+        options=options,
+        title=title,
+        source=file,
+        guess_inputs=guess,
+        model_file=Path(os.path.normpath(file.parent / top.values["model"])),
+        model_overrides=dict(data.get("model_overrides") or {}),
     )
 
 

@@ -38,6 +38,7 @@ from lightcraft_opt.control.options import (
 from lightcraft_opt.files import campaign, closed_loop, problem
 from lightcraft_opt.files.campaign import load_campaign
 from lightcraft_opt.files.closed_loop import load_closed_loop
+from lightcraft_opt.files.design_tables import DESIGN_TABLE
 from lightcraft_opt.files.model import SCHEMA, TABLES, load_model
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.problem_tables import (
@@ -134,7 +135,7 @@ def unit_word(spec: Spec) -> str:
         return spec.kind
     if spec == BLOCKS:
         return "pulses"
-    if spec.kind == "the quantity's":  # a dispersion's mean, sigma, low, high
+    if spec.kind in ("the quantity's", "the parameter's"):  # a dispersion's, a design's bounds
         return spec.kind
     if spec.shape == "integer":
         return "integer"
@@ -292,11 +293,13 @@ def test_the_problem_page_lists_every_key_of_the_problem_files() -> None:
         {anchor(f"constraint.{c}"): _item_schema(k, "kind") for c, k in CONSTRAINTS.items()}
     )
     expected["keys-control"] = _item_schema(CONTROL, "")
+    expected["keys-design"] = DESIGN_TABLE
     defaults: dict[str, dict[str, Any]] = {
         anchor(f"objective.{t}"): _item_defaults(k) for t, k in OBJECTIVES.items()
     }
     defaults.update({anchor(f"constraint.{c}"): _item_defaults(k) for c, k in CONSTRAINTS.items()})
     defaults["keys-control"] = {"input": REQUIRED}
+    defaults["keys-design"] = {"parameter": REQUIRED, "lower": REQUIRED, "upper": REQUIRED}
     options = dataclass_defaults(OcpOptions, {"name": "solver"})
     options["stall_iterations"] = OcpOptions().stall_iterations
     defaults["keys-solver"] = {f: options[f] for f in problem.TABLES["solver"] if f in options}

@@ -1,0 +1,217 @@
+"""Design variables (ocp/design.py, layout/designed.py, files/design_tables.py,
+files/design_outputs.py): entries of p and the launch spin chosen by the optimiser.
+
+References:
+
+- the closed form of a drag-free vertical pulse train (tests/ocp/test_ocp.py's
+  ``_vertical_flow``): with the pulse energies held, the height after N pulses is affine
+  in the velocity jump per joule c = I0 / (m E0), so the mass (or the impulse) that puts
+  the craft at exactly H is c* = (H - z_free) / (E0 sum_k s_k);
+- the model's own parameter vector: a designed model file, read back, has the designed
+  values in p (and its launch spin) to the last bit of the SI value written.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
+
+from lightcraft_opt.errors import ParameterError, ProblemFileError
+from lightcraft_opt.files.design_outputs import DESIGNED_MODEL, write_designed_model
+from lightcraft_opt.files.model import load_model
+from lightcraft_opt.files.problem import load_problem
+from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
+from lightcraft_opt.layout.designed import model_with_parameters
+from lightcraft_opt.ocp.options import OcpOptions
+from lightcraft_opt.ocp.problem import (
+    ControlBound,
+    DesignVariable,
+    LaserEnergy,
+    OcpProblem,
+    TerminalAltitude,
+)
+from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.solve import CompiledOcp
+from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def vertical():
+    model = drag_free_vertical()
+    return model, build_pulse_map(model, CHEAP_MAP)
+
+
+@pytest.mark.parametrize("name", ["rotor_mass_dry", "impulse_per_pulse"])
+def test_the_design_that_reaches_a_height_exactly_is_the_closed_form(vertical, name):
+    """8 pulses at the flight's 420 J, the altitude after them held at 1.5 m, the mass (or
+    the impulse per pulse) free: the one value that meets it is c* above. Tolerance 1e-9
+    relative: IPOPT's KKT tolerance 1e-8 on a problem whose only freedom is d."""
+    model, phi = vertical
+    n, height, energy = 8, 1.5, model.flight.pulse_energy
+    base = float(parameter_values(model)[PARAMETERS.index(name)][0])
+    problem = OcpProblem(
+        model,
+        n,
+        (LaserEnergy(),),
+        (TerminalAltitude(minimum=height, maximum=height),),
+        controls=(
+            ControlBound("pointing_L", 0.0, 0.0),
+            ControlBound("energy", energy, energy),
+        ),
+        design=(DesignVariable(name, 0.5 * base, 2.0 * base),),
+    )
+    result = CompiledOcp(problem, OcpOptions(tol=TOL, replay=False), pulse_map=phi).solve()
+    assert result.status is OcpStatus.SOLVED, result.message
+    z_free, a = _vertical_flow(model, n, phi.period)  # a_k = c0 s_k, at the model's c0
+    m, impulse = model.craft.mass, model.flight.impulse_per_pulse
+    s = a / (impulse / (m * energy))
+    c_star = (height - z_free) / (energy * np.sum(s))
+    expected = impulse / (c_star * energy) if name == "rotor_mass_dry" else c_star * m * energy
+    assert result.design[name] == pytest.approx(expected, rel=1e-9)
+    assert result.design_units[name] == ("kg" if name == "rotor_mass_dry" else "N s")
+    assert result.state("r_L")[-1, 2] == pytest.approx(height, abs=1e-8)
+
+
+def test_a_model_with_designed_parameters_has_them_in_p():
+    """layout/designed.py inverts parameter_values for the designable entries: the
+    rotor's dry values with and without a liner, the impulse, the Rayleigh range."""
+    flight5 = load_problem(REPO / "problems" / "beam_tracking_focus.toml").problem.model
+    assert flight5.laser.size_model.value == "waist"
+    values = {
+        "rotor_mass_dry": 0.030,
+        "rotor_axial_inertia_dry": 6.1e-5,
+        "rotor_transverse_inertia_dry": 4.4e-5,
+        "impulse_per_pulse": 0.07,
+        "beam_rayleigh_range": 40.0,
+        "launch_spin": 900.0,
+    }
+    designed = model_with_parameters(flight5, values)
+    p0, p = parameter_values(flight5), parameter_values(designed)
+    for name, value in values.items():
+        if name in PARAMETERS:
+            assert p[PARAMETERS.index(name)][0] == pytest.approx(value, rel=1e-14), name
+    changed = {PARAMETERS.slot(n).start for n in values if n in PARAMETERS}
+    others = [i for i in range(PARAMETERS.size) if i not in changed]
+    assert np.array_equal(p[others], p0[others])
+    assert initial_state(designed)[STATE.index("spin")][0] == 900.0
+    # a craft with a liner: the ring comes off and goes back on exactly
+    liner_model = load_model(REPO / "models" / "flight16.toml")
+    assert liner_model.craft.liner is not None
+    v = {"rotor_mass_dry": 0.04, "rotor_transverse_inertia_dry": 5e-5, "liner_offset": 0.004}
+    p16 = parameter_values(model_with_parameters(liner_model, v))
+    for name, value in v.items():
+        assert p16[PARAMETERS.index(name)][0] == pytest.approx(value, rel=1e-12), name
+
+
+def test_a_design_the_model_refuses_names_its_field():
+    flight5 = load_model(REPO / "models" / "flight5.toml")
+    with pytest.raises(ParameterError, match="inertia"):  # J > 2 I: no rigid body
+        model_with_parameters(flight5, {"rotor_axial_inertia_dry": 1e-3})
+    with pytest.raises(ParameterError, match="carrier"):
+        DesignVariable("carrier_mass", 0.0, 0.01)  # valid alone ...
+        OcpProblem(
+            flight5, 2, (LaserEnergy(),), design=(DesignVariable("carrier_mass", 0.001, 0.01),)
+        )  # ... but Flight 5 has no carrier
+    with pytest.raises(ParameterError, match="below upper"):
+        DesignVariable("rotor_mass_dry", 0.04, 0.03)
+    with pytest.raises(ParameterError, match="cannot be designed"):
+        DesignVariable("wind_speed_ref", 0.0, 1.0)
+
+
+DESIGN_PROBLEM = """
+title = "most altitude in 10 pulses, spin, moments and impulse free"
+model = "../models/flight5.toml"
+horizon_pulses = 10
+
+[model_overrides.craft.engine]
+quadrature_radial = 4
+quadrature_azimuthal = 16
+
+[[objective]]
+term = "final_altitude"
+
+[[control]]
+input = "pointing_L"
+lower_m = [0.0, 0.0]
+upper_m = [0.0, 0.0]
+[[control]]
+input = "energy"
+lower_j = 420.0
+upper_j = 420.0
+
+[[design]]
+parameter = "impulse_per_pulse"
+lower_ns = 0.05
+upper_ns = 0.07
+[[design]]
+parameter = "rotor_transverse_inertia_dry"
+lower_g_cm2 = 400.0
+upper_g_cm2 = 500.0
+[[design]]
+parameter = "launch_spin"
+lower_rpm = 6000.0
+upper_rpm = 12000.0
+
+[solver]
+tol = 1e-8
+
+[pulse_map]
+scheme = "split"
+substeps = 1
+dense = 1
+"""
+
+
+def test_a_problem_files_design_is_solved_written_and_flown_again(tmp_path: Path):
+    """A [[design]] problem file read in SI (g cm^2, rpm, N s), solved, its designed model
+    file written and read back: p and the launch spin are the design's. The impulse is at
+    its upper bound (more impulse, more altitude: the sign of the physics)."""
+    shutil.copytree(REPO / "models", tmp_path / "models")
+    (tmp_path / "problems").mkdir()
+    source = tmp_path / "problems" / "design.toml"
+    source.write_text(DESIGN_PROBLEM)
+    pf = load_problem(source)
+    labels = [v.label for v in pf.problem.design]
+    assert labels == ["impulse_per_pulse", "rotor_transverse_inertia_dry", "launch_spin"]
+    assert pf.problem.design[1].lower == pytest.approx(400.0e-7, rel=1e-15)
+    assert pf.problem.design[2].upper == pytest.approx(12000.0 * math.pi / 30.0, rel=1e-15)
+    result = CompiledOcp(pf.problem, pf.options).solve()
+    assert result.status is OcpStatus.SOLVED, result.message
+    assert result.design["impulse_per_pulse"] == pytest.approx(0.07, rel=1e-6)
+    path = write_designed_model(pf, result, tmp_path / DESIGNED_MODEL)
+    flown = load_model(path)
+    p = parameter_values(flown)
+    for label in ("impulse_per_pulse", "rotor_transverse_inertia_dry"):
+        assert p[PARAMETERS.index(label)][0] == result.design[label], label
+    assert flown.craft.spin == result.design["launch_spin"]
+    assert flown.craft.engine.quadrature_radial == 4  # the overrides came along
+    # the replay flew the designed craft: its plan is the prediction to the map's accuracy
+    assert result.replay is not None and result.replay.flies
+
+
+@pytest.mark.parametrize(
+    ("table", "key", "match"),
+    [
+        ('parameter = "wind_speed_ref"\nlower_mps = 0.0\nupper_mps = 1.0', "parameter", "cannot"),
+        ('parameter = "carrier_mass"\nlower_g = 1.0\nupper_g = 2.0', "parameter", "no carrier"),
+        ('parameter = "rotor_mass_dry"\nlower_g = 40.0\nupper_g = 30.0', "lower_g", "below"),
+        ('parameter = "rotor_mass_dry"\nlower_g = 30.0', "upper", "missing"),
+        ('parameter = "launch_spin"\nlower_mps = 1.0\nupper_rpm = 2.0', "lower_mps", "unit"),
+    ],
+)
+def test_bad_design_tables_name_the_key(tmp_path: Path, table: str, key: str, match: str):
+    shutil.copytree(REPO / "models", tmp_path / "models")
+    (tmp_path / "problems").mkdir()
+    source = tmp_path / "problems" / "bad.toml"
+    head = DESIGN_PROBLEM.split("[[design]]")[0]
+    source.write_text(head + "[[design]]\n" + table + "\n")
+    with pytest.raises(ProblemFileError, match=match) as err:
+        load_problem(source)
+    assert f"design[0].{key}" in str(err.value)
