@@ -67,6 +67,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"design: {label} = {value:.6g} {result.design_units[label]}")
     if result.design and (out / DESIGNED_MODEL).exists():
         print(f"designed model: {out / DESIGNED_MODEL} (lightcraft simulate flies it)")
+    if result.sensitivities is not None:  # [solver] sensitivities: the largest few
+        rows = result.sensitivities.summary_rows()
+        width = max(len(name) for name, _ in rows[1:]) if len(rows) > 1 else 0
+        print(f"{rows[0][0]}: {rows[0][1]}")
+        for name, text in rows[1:]:
+            print(f"{name:<{width}}  {text}")
     if result.dynamics_closed:
         altitude = float(result.state("r_L")[-1, 2])
         offset = max_offset_over_capture_radius(result, problem)

@@ -32,6 +32,7 @@ from lightcraft_opt.ocp.problem import (
     TiltLimit,
 )
 from lightcraft_opt.ocp.result import OcpResult
+from lightcraft_opt.ocp.sensitivity import SHOWN
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
@@ -44,6 +45,7 @@ __all__ = [
     "node_tilt",
     "offsets_over_capture_radius",
     "replay_summary",
+    "sensitivity_summary",
     "solution_columns",
     "solution_table",
     "write_ocp_summary",
@@ -276,16 +278,57 @@ def replay_summary(result: OcpResult) -> dict[str, Any]:
     }
 
 
+#: An SI unit of p or x0 (layout/vectors.py) as a key suffix (docs/files.md#units).
+_KEY_UNITS: dict[str, str] = {
+    **COLUMN_SUFFIXES,
+    "-": "",
+    "s": "s",
+    "rad": "rad",
+    "rad/m": "rad_per_m",
+    "kg m^2": "kg_m2",
+    "kg/J": "kg_per_j",
+    "N s/J": "ns_per_j",
+}
+
+
+def sensitivity_summary(result: OcpResult) -> dict[str, Any] | None:
+    """summary.json's ``sensitivities`` (ocp/sensitivity.py), None when not asked: each
+    held parameter under its name with its SI unit (``rotor_mass_dry_kg``,
+    ``gust_L_east_mps``, ``launch_spin_rad_per_s``), largest |elasticity| first, with its
+    ``value`` [that unit], ``derivative`` dJ*/dθ [cost units per that unit] and
+    ``elasticity`` θ dJ*/dθ [cost units]; ``ranked`` the first few keys; ``reason`` why
+    there are none (null when computed); ``evaluation_time_s``."""
+    s = result.sensitivities
+    if s is None:
+        return None
+    entries: dict[str, dict[str, float]] = {}
+    for item in s.ranked():
+        unit = _KEY_UNITS[item.unit]
+        key = item.name.replace("[", "_").rstrip("]") + (f"_{unit}" if unit else "")
+        entries[key] = {
+            "value": item.value,
+            "derivative": item.derivative,
+            "elasticity": item.elasticity,
+        }
+    return {
+        "reason": s.reason or None,
+        "evaluation_time_s": s.evaluation_time,
+        "ranked": list(entries)[:SHOWN],
+        "parameters": entries,
+    }
+
+
 def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:
     """summary.json: how the solve went (status, cost and its terms by name, iterations,
-    times), what it asked (solver, horizon) and what it achieved (laser energy, final
-    altitude, largest beam offset over the capture radius against its limit, largest
-    tilt, RCS propellant and liner used, each constraint's margin
-    (:func:`constraint_margins`), constraint violation), whether the returned iterate is a
-    trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest dynamics gap,
-    scaled units; when not, the achieved figures keep their keys but are no results), and
-    how its plan flew when the simulator flew it again (:func:`replay_summary`). Beside it,
-    result.json and result.npz: the exact result (:mod:`.result_archive`)."""
+        times), what it asked (solver, horizon) and what it achieved (laser energy, final
+        altitude, largest beam offset over the capture radius against its limit, largest
+        tilt, RCS propellant and liner used, each constraint's margin
+        (:func:`constraint_margins`), constraint violation), whether the returned iterate is a
+        trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest dynamics gap,
+        scaled units; when not, the achieved figures keep their keys but are no results), and
+        how its plan flew when the simulator flew it again (:func:`replay_summary`), and the
+    optimum's sensitivities when asked (:func:`sensitivity_summary`). Beside it,
+        result.json and result.npz: the exact result (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
     limits = [
         c.max_offset_over_capture_radius for c in problem.constraints if isinstance(c, OffsetLimit)
@@ -312,6 +355,7 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "dynamics_closed": result.dynamics_closed,
         "dynamics_gap": finite_or_none(result.dynamics_gap),
         "design": design_summary(result),
+        "sensitivities": sensitivity_summary(result),
         "horizon_pulses": result.horizon,
         "pulse_period_s": problem.period,
         "laser_energy_j": result.laser_energy,

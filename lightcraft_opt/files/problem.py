@@ -47,7 +47,7 @@ from lightcraft_opt.files.problem_tables import (
     si_note,
     slot_spec,
 )
-from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
+from lightcraft_opt.files.schema import INTEGER, NUMBER, SWITCH, TEXT, Spec, choice, quantity
 from lightcraft_opt.layout import RcsProfile, initial_state
 from lightcraft_opt.model import Model
 from lightcraft_opt.ocp.design import DesignLayout
@@ -120,6 +120,7 @@ _SOLVER: Mapping[str, Spec] = {
     "linear_solver": choice(LinearSolver),
     "time_limit": quantity("time"),
     "stall_iterations": INTEGER,
+    "sensitivities": SWITCH,
 }
 
 

@@ -205,6 +205,9 @@ class OcpOptions:
         attach the comparison with the prediction to the result (``OcpResult.replay``,
         ocp/replay.py), with a ``PlanWarning`` when the plan does not fly. False: skip it
         (an MPC re-solving every pulse has no use for it).
+    sensitivities : attach to every solved result the optimal cost's derivative with
+        respect to each held parameter (``OcpResult.sensitivities``, ocp/sensitivity.py,
+        docs/design.md#sensitivities): one gradient of the Lagrangian after the solve.
     """
 
     solver: OcpSolver = OcpSolver.IPOPT
@@ -225,6 +228,7 @@ class OcpOptions:
     linear_solver: LinearSolver = LinearSolver.MUMPS
     start: OcpStart = OcpStart.FLOWN
     replay: bool = True
+    sensitivities: bool = False
 
     def __post_init__(self) -> None:
         w = self.stall_iterations
@@ -246,6 +250,10 @@ class OcpOptions:
         checked_choice("OcpOptions", "prediction", self.prediction, PredictionMap)
         if not isinstance(self.replay, bool):
             raise OptionError(f"OcpOptions.replay must be true or false, got {self.replay!r}")
+        if not isinstance(self.sensitivities, bool):
+            raise OptionError(
+                f"OcpOptions.sensitivities must be true or false, got {self.sensitivities!r}"
+            )
         if not isinstance(self.chain_derivatives, bool):
             raise OptionError(
                 "OcpOptions.chain_derivatives must be true or false, got "

@@ -15,6 +15,7 @@ from enum import Enum
 import numpy as np
 
 from lightcraft_opt.layout import STATE, VectorLayout
+from lightcraft_opt.ocp.sensitivity import Sensitivities
 from lightcraft_opt.presenters import Presentable
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -135,6 +136,9 @@ class OcpResult(Presentable):
     design : {design variable: value [SI, unit in ``design_units``]} the optimiser chose
         (ocp/design.py); empty without a design.
     design_units : {design variable: its SI unit}.
+    sensitivities : the optimal cost's derivative with respect to each held parameter
+        (ocp/sensitivity.py; ``OcpOptions.sensitivities`` or
+        :meth:`~lightcraft_opt.ocp.solve.CompiledOcp.sensitivities`); None when not asked.
     """
 
     status: OcpStatus
@@ -160,6 +164,7 @@ class OcpResult(Presentable):
     replay: PlanReplay | None = None
     design: dict[str, float] = field(default_factory=dict)
     design_units: dict[str, str] = field(default_factory=dict)
+    sensitivities: Sensitivities | None = None
 
     @property
     def success(self) -> bool:
@@ -219,6 +224,8 @@ class OcpResult(Presentable):
         else:
             rows.append(("no flyable plan", self.open_dynamics()))
         rows.append(("replay", "not replayed" if self.replay is None else self.replay.summary()))
+        if self.sensitivities is not None:
+            rows += self.sensitivities.summary_rows()
         width = max(len(n) for n, _ in rows)
         return "\n".join(["OcpResult", *(f"  {n:<{width}}  {v}" for n, v in rows)])
 

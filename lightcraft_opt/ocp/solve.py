@@ -62,6 +62,7 @@ from lightcraft_opt.ocp.options import (
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.sensitivity import Sensitivities, parameter_sensitivities
 from lightcraft_opt.ocp.start import (
     Start,
     StartKind,
@@ -226,6 +227,8 @@ class CompiledOcp:
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
+        #: the Lagrangian's gradient in P and the entries of P it reads (built on first use)
+        self._gradient: tuple[ca.Function, np.ndarray] | None = None
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
 
@@ -269,6 +272,63 @@ class CompiledOcp:
         stopped by ``OcpOptions.time_limit`` (status ``TIME_LIMIT``: the wall time counts
         from this call; a wind ramp's solves share it).
         """
+        x0v, pv, t0v, u_prev, ref = self._run_time_values(x0, p, t0, u_previous, reference)
+        limit = self.options.time_limit
+        until = math.inf if limit is None else time.perf_counter() + limit
+        ramped = warm_start is None and initial_guess is None and self.options.wind_ramp
+        if ramped and not np.array_equal(wind_scaled(pv, 0.0), pv):
+            result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
+        else:
+            result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
+        if self.options.sensitivities:
+            sens = self._sensitivities(result, self._parameter_vector(x0v, pv, t0v, u_prev, ref))
+            result = dataclasses.replace(result, sensitivities=sens)
+        if not self.options.replay:
+            return result
+        return self.replayer.attach(result, self.designed_parameters(pv, result))
+
+    def sensitivities(
+        self,
+        result: OcpResult,
+        *,
+        x0: np.ndarray | Sequence[float] | None = None,
+        p: np.ndarray | Sequence[float] | None = None,
+        t0: float | None = None,
+        u_previous: np.ndarray | Sequence[float] | None = None,
+        reference: np.ndarray | None = None,
+    ) -> Sensitivities:
+        """The optimal cost's derivative with respect to every held parameter at
+        ``result``, a solve of this compiled problem with these run-time values (each
+        defaults to the compiled problem's, as in :meth:`solve`): ocp/sensitivity.py,
+        docs/design.md#sensitivities. What ``OcpOptions.sensitivities`` attaches to every
+        result; empty, with the reason, when ``result`` is no optimum.
+        """
+        if not isinstance(result, OcpResult) or result.w.size != self.transcription.n_w:
+            raise ParameterError("result", "must be a result of this compiled problem")
+        values = self._run_time_values(x0, p, t0, u_previous, reference)
+        return self._sensitivities(result, self._parameter_vector(*values))
+
+    def designed_parameters(self, p: np.ndarray, result: OcpResult) -> np.ndarray:
+        """(PARAMETERS.size,) ``p`` with the design ``result`` chose put in (``p`` itself
+        without a design): the parameters its plan flies with."""
+        tr = self.transcription
+        if not tr.design.in_p.any():
+            return p
+        d = tr.design_of(result.w)
+        out = np.array(p, dtype=float)
+        out[tr.design.p_index] = d[tr.design.in_p]
+        return out
+
+    # ----------------------------------------------------------------- helpers
+    def _run_time_values(
+        self,
+        x0: np.ndarray | Sequence[float] | None,
+        p: np.ndarray | Sequence[float] | None,
+        t0: float | None,
+        u_previous: np.ndarray | Sequence[float] | None,
+        reference: np.ndarray | None,
+    ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray | None, np.ndarray]:
+        """The run-time values of :meth:`solve`, checked, the problem's where not given."""
         pr = self.problem
         nu = pr.inputs.size
         x0v = checked_vector("x0", cast(np.ndarray, pr.x0) if x0 is None else x0, STATE.size)
@@ -284,29 +344,48 @@ class CompiledOcp:
         ref = pr.reference() if reference is None else np.asarray(reference, dtype=float)
         if ref.shape != pr.reference().shape or not np.all(np.isfinite(ref)):
             raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
-        limit = self.options.time_limit
-        until = math.inf if limit is None else time.perf_counter() + limit
-        ramped = warm_start is None and initial_guess is None and self.options.wind_ramp
-        if ramped and not np.array_equal(wind_scaled(pv, 0.0), pv):
-            result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
-        else:
-            result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
-        if not self.options.replay:
-            return result
-        return self.replayer.attach(result, self.designed_parameters(pv, result))
+        return x0v, pv, t0v, u_prev, ref
 
-    def designed_parameters(self, p: np.ndarray, result: OcpResult) -> np.ndarray:
-        """(PARAMETERS.size,) ``p`` with the design ``result`` chose put in (``p`` itself
-        without a design): the parameters its plan flies with."""
+    def _parameter_vector(
+        self,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        u_previous: np.ndarray | None,
+        reference: np.ndarray,
+    ) -> np.ndarray:
+        """The NLP's parameter vector of checked run-time values (the held inputs the
+        problem's)."""
+        u_fixed = np.where(self.problem.free, 0.0, self.problem.lower)
+        return self.transcription.parameter_vector(x0, p, t0, u_previous, u_fixed, reference)
+
+    def _sensitivities(self, result: OcpResult, P: np.ndarray) -> Sensitivities:
+        """ocp/sensitivity.py's figures at ``result``, solved with parameter vector ``P``:
+        the Lagrangian's gradient in P (built on first use) at its primal and dual point."""
+        if not result.success or not result.dynamics_closed:
+            return Sensitivities.none(
+                f"the solve ended {result.status.value}"
+                + ("" if result.dynamics_closed else " with its dynamics gaps open")
+                + ": the optimum's derivatives need an optimum"
+            )
         tr = self.transcription
-        if not tr.design.in_p.any():
-            return p
-        d = tr.design_of(result.w)
-        out = np.array(p, dtype=float)
-        out[tr.design.p_index] = d[tr.design.in_p]
-        return out
+        start = time.perf_counter()
+        try:
+            if self._gradient is None:
+                self._gradient = (tr.lagrangian_gradient(), tr.parameters_read())
+            function, read = self._gradient
+            grad = np.asarray(function(result.w, P, result.lam_g), dtype=float).ravel()
+        except RuntimeError as err:  # a Φ without derivatives (a compiled one without them)
+            message = str(err).strip().splitlines()[-1] if str(err).strip() else repr(err)
+            return Sensitivities.none(f"no derivative of the NLP in its parameters: {message}")
+        if not np.all(np.isfinite(grad)):
+            return Sensitivities.none("the Lagrangian's gradient is not finite at this optimum")
+        lay, seconds = tr.parameters, time.perf_counter() - start
+        x0, p = lay.index("x0"), lay.index("p")
+        return parameter_sensitivities(
+            grad[x0], grad[p], P[x0], P[p], tr.design, read[x0], read[p], seconds
+        )
 
-    # ----------------------------------------------------------------- helpers
     def _solve_once(
         self,
         x0: np.ndarray,
@@ -320,9 +399,8 @@ class CompiledOcp:
     ) -> OcpResult:
         """One call of the NLP solver for checked run-time values, stopped at the
         ``time.perf_counter()`` time ``until`` (+inf: no limit)."""
-        pr, tr = self.problem, self.transcription
-        u_fixed = np.where(pr.free, 0.0, pr.lower)
-        P = tr.parameter_vector(x0, p, t0, u_previous, u_fixed, reference)
+        tr = self.transcription
+        P = self._parameter_vector(x0, p, t0, u_previous, reference)
         lam_x0, lam_g0 = np.zeros(tr.n_w), np.zeros(tr.lbg.size)
         if warm_start is not None:
             if not isinstance(warm_start, OcpResult) or warm_start.w.size != tr.n_w:

@@ -482,6 +482,33 @@ class MultipleShooting:
             ["hess_gamma_x_x"],
         )
 
+    def lagrangian_gradient(self) -> ca.Function:
+        """casadi.Function ``ocp_lagrangian_gradient_p(w, P, lam_g) -> grad_P``: the
+        gradient of the NLP's Lagrangian f + lam_gᵀ g with respect to its parameter vector
+        P (:attr:`parameters`; SI, as P holds them) at scaled w and multipliers lam_g of
+        the scaled g, by casadi's AD through Φ (one reverse sweep: Φ's chain has no
+        derivatives in p). At a solution it is the optimal cost's derivative with respect
+        to P (the envelope theorem; ocp/sensitivity.py). Its output's sparsity marks the
+        entries of P the NLP reads."""
+        w, P = self.nlp["x"], self.P
+        lam_g = ca.MX.sym("lam_g", self.lbg.size)
+        lagrangian = self.nlp["f"] + ca.dot(lam_g, self.nlp["g"])
+        return ca.Function(
+            "ocp_lagrangian_gradient_p",
+            [w, P, lam_g],
+            [ca.gradient(lagrangian, P)],
+            ["w", "P", "lam_g"],
+            ["grad_P"],
+        )
+
+    def parameters_read(self) -> np.ndarray:
+        """(P.size,) bool: the entries of the parameter vector that f or g depend on
+        (structurally: casadi's sparsity of their Jacobians, no evaluation)."""
+        read = np.zeros(self.P.numel(), dtype=bool)
+        for expr in (self.nlp["f"], self.nlp["g"]):
+            read[np.asarray(ca.jacobian_sparsity(expr, self.P).get_col(), dtype=int)] = True
+        return read
+
     def pulse_times(self) -> ca.MX:
         """(1, N) t_k = t0 + k T [s]."""
         N = self.problem.horizon
