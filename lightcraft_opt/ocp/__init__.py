@@ -11,6 +11,8 @@ transcription, solve) and what came out (result).
 - :mod:`.replay`: :func:`replay_plan`, a solve's plan flown again by the simulator
   (every solve does it: ``OcpOptions.replay``);
 - :mod:`.result`: :class:`OcpResult` with its :class:`OcpStatus` and :class:`PlanReplay`;
+- :mod:`.sensitivity`: :class:`Sensitivities`, the optimum's derivative in each held
+  parameter (OcpOptions.sensitivities), computed by :mod:`.envelope`;
 - :mod:`.stall`: the stall rule that ends a solve making no progress toward its constraints;
 - :mod:`.constraint_rows`: the names of the NLP's constraint rows and the constraint an
   infeasible solve cannot meet.
@@ -50,6 +52,7 @@ from lightcraft_opt.ocp.problem import (
 )
 from lightcraft_opt.ocp.replay import PLAN_GAP_LIMIT, PlanWarning, replay_plan
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus, PlanReplay
+from lightcraft_opt.ocp.sensitivity import Sensitivities, Sensitivity
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout, solve
 from lightcraft_opt.ocp.start import Start, director_start
 from lightcraft_opt.ocp.transcription import MultipleShooting, state_scale
@@ -84,6 +87,8 @@ __all__ = [
     "PlanWarning",
     "PredictionMap",
     "RcsEnvelope",
+    "Sensitivities",
+    "Sensitivity",
     "Start",
     "TerminalAltitude",
     "TerminalState",

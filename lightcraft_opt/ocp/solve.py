@@ -42,6 +42,7 @@ from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
+from lightcraft_opt.ocp.envelope import EnvelopeGradient
 from lightcraft_opt.ocp.nlp_solver import (
     CONVEX_PHASE_TOL,
     QP_SOLVERS,
@@ -62,7 +63,7 @@ from lightcraft_opt.ocp.options import (
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
-from lightcraft_opt.ocp.sensitivity import Sensitivities, parameter_sensitivities
+from lightcraft_opt.ocp.sensitivity import Sensitivities
 from lightcraft_opt.ocp.start import (
     Start,
     StartKind,
@@ -215,7 +216,8 @@ class CompiledOcp:
         names = ["x0", "p", "t0", "u_previous", "reference"]
         syms = {n: ca.MX.sym(n, tr.parameters.slot(n).size) for n in names}
         w0 = ca.MX.sym("w0", tr.n_w)
-        u_fixed = ca.DM(np.where(problem.free, 0.0, problem.lower))
+        self._u_fixed = np.where(problem.free, 0.0, problem.lower)  # the held inputs
+        u_fixed = ca.DM(self._u_fixed)
         P = ca.vertcat(*(syms[n] for n in names[:4]), u_fixed, syms["reference"])
         sol = self.solver(x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg)
         X, U, _ = tr.trajectory(sol["x"], P)
@@ -227,8 +229,7 @@ class CompiledOcp:
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
-        #: the Lagrangian's gradient in P and the entries of P it reads (built on first use)
-        self._gradient: tuple[ca.Function, np.ndarray] | None = None
+        self._envelope = EnvelopeGradient(tr)  # the sensitivities, built on first use
         self.replayer = PlanReplayer(problem)  # the simulator's Φ, built at the first replay
         self.build_time = time.perf_counter() - start
 
@@ -281,7 +282,8 @@ class CompiledOcp:
         else:
             result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
         if self.options.sensitivities:
-            sens = self._sensitivities(result, self._parameter_vector(x0v, pv, t0v, u_prev, ref))
+            P = self.transcription.parameter_vector(x0v, pv, t0v, u_prev, self._u_fixed, ref)
+            sens = self._envelope(result, P)
             result = dataclasses.replace(result, sensitivities=sens)
         if not self.options.replay:
             return result
@@ -297,16 +299,14 @@ class CompiledOcp:
         u_previous: np.ndarray | Sequence[float] | None = None,
         reference: np.ndarray | None = None,
     ) -> Sensitivities:
-        """The optimal cost's derivative with respect to every held parameter at
-        ``result``, a solve of this compiled problem with these run-time values (each
-        defaults to the compiled problem's, as in :meth:`solve`): ocp/sensitivity.py,
-        docs/design.md#sensitivities. What ``OcpOptions.sensitivities`` attaches to every
-        result; empty, with the reason, when ``result`` is no optimum.
-        """
+        """The optimal cost's derivative in every held parameter at ``result``, solved
+        with these run-time values (defaults as in :meth:`solve`), as
+        ``OcpOptions.sensitivities`` attaches it (docs/design.md#sensitivities)."""
         if not isinstance(result, OcpResult) or result.w.size != self.transcription.n_w:
             raise ParameterError("result", "must be a result of this compiled problem")
-        values = self._run_time_values(x0, p, t0, u_previous, reference)
-        return self._sensitivities(result, self._parameter_vector(*values))
+        x0v, pv, t0v, u_prev, ref = self._run_time_values(x0, p, t0, u_previous, reference)
+        P = self.transcription.parameter_vector(x0v, pv, t0v, u_prev, self._u_fixed, ref)
+        return self._envelope(result, P)
 
     def designed_parameters(self, p: np.ndarray, result: OcpResult) -> np.ndarray:
         """(PARAMETERS.size,) ``p`` with the design ``result`` chose put in (``p`` itself
@@ -346,46 +346,6 @@ class CompiledOcp:
             raise ParameterError("reference", f"needs finite shape {pr.reference().shape}")
         return x0v, pv, t0v, u_prev, ref
 
-    def _parameter_vector(
-        self,
-        x0: np.ndarray,
-        p: np.ndarray,
-        t0: float,
-        u_previous: np.ndarray | None,
-        reference: np.ndarray,
-    ) -> np.ndarray:
-        """The NLP's parameter vector of checked run-time values (the held inputs the
-        problem's)."""
-        u_fixed = np.where(self.problem.free, 0.0, self.problem.lower)
-        return self.transcription.parameter_vector(x0, p, t0, u_previous, u_fixed, reference)
-
-    def _sensitivities(self, result: OcpResult, P: np.ndarray) -> Sensitivities:
-        """ocp/sensitivity.py's figures at ``result``, solved with parameter vector ``P``:
-        the Lagrangian's gradient in P (built on first use) at its primal and dual point."""
-        if not result.success or not result.dynamics_closed:
-            return Sensitivities.none(
-                f"the solve ended {result.status.value}"
-                + ("" if result.dynamics_closed else " with its dynamics gaps open")
-                + ": the optimum's derivatives need an optimum"
-            )
-        tr = self.transcription
-        start = time.perf_counter()
-        try:
-            if self._gradient is None:
-                self._gradient = (tr.lagrangian_gradient(), tr.parameters_read())
-            function, read = self._gradient
-            grad = np.asarray(function(result.w, P, result.lam_g), dtype=float).ravel()
-        except RuntimeError as err:  # a Φ without derivatives (a compiled one without them)
-            message = str(err).strip().splitlines()[-1] if str(err).strip() else repr(err)
-            return Sensitivities.none(f"no derivative of the NLP in its parameters: {message}")
-        if not np.all(np.isfinite(grad)):
-            return Sensitivities.none("the Lagrangian's gradient is not finite at this optimum")
-        lay, seconds = tr.parameters, time.perf_counter() - start
-        x0, p = lay.index("x0"), lay.index("p")
-        return parameter_sensitivities(
-            grad[x0], grad[p], P[x0], P[p], tr.design, read[x0], read[p], seconds
-        )
-
     def _solve_once(
         self,
         x0: np.ndarray,
@@ -400,7 +360,7 @@ class CompiledOcp:
         """One call of the NLP solver for checked run-time values, stopped at the
         ``time.perf_counter()`` time ``until`` (+inf: no limit)."""
         tr = self.transcription
-        P = self._parameter_vector(x0, p, t0, u_previous, reference)
+        P = tr.parameter_vector(x0, p, t0, u_previous, self._u_fixed, reference)
         lam_x0, lam_g0 = np.zeros(tr.n_w), np.zeros(tr.lbg.size)
         if warm_start is not None:
             if not isinstance(warm_start, OcpResult) or warm_start.w.size != tr.n_w:
