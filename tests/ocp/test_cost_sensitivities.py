@@ -38,6 +38,7 @@ from test_ocp import (
     lateral_problem,
 )
 
+from lightcraft_opt.cli import main
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary
 from lightcraft_opt.files.problem import ProblemFile, load_problem
 from lightcraft_opt.files.result_archive import read_archive
@@ -272,3 +273,63 @@ def test_a_problem_file_asks_for_them(tmp_path):
     path = tmp_path / "asks.toml"
     path.write_text(text.replace("[solver]\n", "[solver]\nsensitivities = true\n", 1))
     assert load_problem(path).options.sensitivities is True
+
+
+STEER = """\
+title = "steer the beam under Flight 5 in a crosswind, sensitivities asked"
+model = "{models}/flight5.toml"
+horizon_pulses = 3
+
+[model_overrides.environment.wind]
+speed_ref_mps = 3.0
+direction_from_deg = 90.0
+[model_overrides.craft.engine]
+quadrature_radial = 4
+quadrature_azimuthal = 16
+
+[initial]
+position_L_m = [0.01, 0.0, 2.0]
+velocity_L_mps = [0.0, 0.0, 4.0]
+
+[[objective]]
+term = "lateral_offset"
+weight = 1e4
+[[objective]]
+term = "control_effort"
+input = "pointing_L"
+weight = 1e3
+
+[[control]]
+input = "pointing_L"
+lower_cm = -5
+upper_cm = 5
+[[control]]
+input = "energy"
+lower_j = 420.0
+upper_j = 420.0
+
+[solver]
+sensitivities = true
+
+[pulse_map]
+scheme = "split"
+substeps = 1
+dense = 1
+"""
+
+
+@pytest.mark.slow  # the replay's simulator Φ and the figures: ~16 s
+def test_optimize_prints_the_largest_and_writes_them_all(tmp_path, capsys):
+    """``lightcraft optimize`` on a file that asks for them: the five largest printed in
+    the order of summary.json's ``ranked``, every one in summary.json."""
+    path = tmp_path / "steer.toml"
+    path.write_text(STEER.format(models=REPO / "models"))
+    out = tmp_path / "out"
+    assert main(["optimize", str(path), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    summary = json.loads((out / "summary.json").read_text())["sensitivities"]
+    assert summary["reason"] is None and len(summary["ranked"]) == 5
+    first = next(i for i, line in enumerate(printed) if line.startswith("sensitivities:"))
+    shown = [line.split()[0] for line in printed[first + 1 : first + 6]]
+    keys = [name.replace("[", "_").rstrip("]") for name in shown]  # + the unit
+    assert all(k.startswith(n) for k, n in zip(summary["ranked"], keys, strict=True))
