@@ -6,15 +6,16 @@ lbx <= w <= ubx, the optimal cost J*(θ) = f(w*(θ), θ) has the derivative
 
     dJ*/dθ = ∂L/∂θ (w*, λ*, θ),   L = f + λ_gᵀ g + λ_xᵀ w
 
-(the envelope theorem; Nocedal & Wright, Numerical Optimization, Sec. 12.8, the
-multipliers as sensitivities, see docs/references.md): w*'s own change drops out because
+(the envelope theorem; Nocedal & Wright section 12.8, the multipliers as sensitivities,
+docs/references.md#nocedal-wright): w*'s own change drops out because
 ∇_w L = 0, the active constraints stay active, and the bounds on w do not depend on θ, so
 λ_x drops out too. It holds where the active set does not change with θ (strict
 complementarity) and the second-order sufficient conditions hold: a first-order figure,
 exact for small changes of θ. The transcription gives ∂L/∂θ as one casadi Function of its
 own f and g (:meth:`~lightcraft_opt.ocp.transcription.MultipleShooting.lagrangian_gradient`:
 one reverse sweep through Φ, whichever derivatives the solver used), in the SI units of
-the NLP's parameter vector; the multipliers are those of the scaled g the solver saw.
+the NLP's parameter vector; the multipliers are those of the scaled g the solver saw
+(ocp/envelope.py evaluates it at a result).
 
 This module is numpy only: :func:`parameter_sensitivities` picks the held entries of p
 and of the launch state x0 out of that gradient and names them; :class:`Sensitivities`
