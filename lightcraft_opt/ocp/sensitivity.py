@@ -32,7 +32,7 @@ import numpy as np
 from lightcraft_opt.layout import PARAMETERS, STATE, VectorLayout
 from lightcraft_opt.ocp.design import DesignLayout
 
-__all__ = ["Sensitivities", "Sensitivity", "parameter_sensitivities"]
+__all__ = ["SHOWN", "Sensitivities", "Sensitivity", "parameter_sensitivities"]
 
 #: Rows of :meth:`Sensitivities.summary_rows` (and of the CLI's print-out).
 SHOWN = 5

@@ -39,12 +39,13 @@ from test_ocp import (
 )
 
 from lightcraft_opt.cli import main
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary
 from lightcraft_opt.files.problem import ProblemFile, load_problem
 from lightcraft_opt.files.result_archive import read_archive
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.model import Engine
-from lightcraft_opt.ocp.options import OcpOptions
+from lightcraft_opt.ocp.options import OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     DesignVariable,
@@ -163,15 +164,20 @@ def _least_squared_energies(model, n, height, **design) -> OcpProblem:
     )
 
 
-def test_sensitivities_of_a_vertical_pulse_train_are_the_closed_form(vertical):
+@pytest.mark.parametrize("solver", [OcpSolver.IPOPT, OcpSolver.SQP_QRQP, OcpSolver.FATROP])
+def test_sensitivities_of_a_vertical_pulse_train_are_the_closed_form(vertical, solver):
     """6 pulses, 0.7 m exactly, least sum (E_k / E_max)²: the elasticities to I0, m and
     E0 are -2 J*, +2 J*, +2 J*, and the launch climb rate's derivative is
-    -2 (H - z_free) S / (|a|² E_max²) (module docstring). Tolerance 1e-6 relative:
-    IPOPT's KKT tolerance 1e-8, the multiplier of the height constraint to as much."""
+    -2 (H - z_free) S / (|a|² E_max²) (module docstring). Tolerance 1e-6 relative: the
+    solvers' KKT tolerance 1e-8, the multiplier of the height constraint to as much. The
+    multipliers of an interior point method (IPOPT, fatrop) and of an active-set SQP
+    (qrqp) in casadi's one sign convention."""
     model, phi = vertical
     n, height, e_max = 6, 0.7, model.laser.pulse_energy_max
     problem = _least_squared_energies(model, n, height)
-    options = OcpOptions(tol=TOL, replay=False, sensitivities=True, chain_derivatives=False)
+    options = OcpOptions(
+        solver=solver, tol=TOL, replay=False, sensitivities=True, chain_derivatives=False
+    )
     result = CompiledOcp(problem, options, pulse_map=phi).solve()
     assert result.status is OcpStatus.SOLVED, result.message
     sens = result.sensitivities
@@ -223,6 +229,8 @@ def test_an_unsolved_result_has_no_sensitivities_and_says_why(vertical):
     result = compiled.solve()
     assert result.status is OcpStatus.MAX_ITER
     assert result.sensitivities is None
+    with pytest.raises(ParameterError, match="result"):
+        compiled.sensitivities(replace(result, w=result.w[:-1]))
     sens = compiled.sensitivities(result)
     assert not sens.computed and len(sens) == 0
     assert "max_iter" in sens.reason
