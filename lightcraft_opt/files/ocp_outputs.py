@@ -320,15 +320,15 @@ def sensitivity_summary(result: OcpResult) -> dict[str, Any] | None:
 
 def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) -> dict[str, Any]:
     """summary.json: how the solve went (status, cost and its terms by name, iterations,
-        times), what it asked (solver, horizon) and what it achieved (laser energy, final
-        altitude, largest beam offset over the capture radius against its limit, largest
-        tilt, RCS propellant and liner used, each constraint's margin
-        (:func:`constraint_margins`), constraint violation), whether the returned iterate is a
-        trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest dynamics gap,
-        scaled units; when not, the achieved figures keep their keys but are no results), and
-        how its plan flew when the simulator flew it again (:func:`replay_summary`), and the
+    times), what it asked (solver, horizon) and what it achieved (laser energy, final
+    altitude, largest beam offset over the capture radius against its limit, largest
+    tilt, RCS propellant and liner used, each constraint's margin
+    (:func:`constraint_margins`), constraint violation), whether the returned iterate is a
+    trajectory of Φ at all (``dynamics_closed``, ``dynamics_gap``: its largest dynamics gap,
+    scaled units; when not, the achieved figures keep their keys but are no results), how
+    its plan flew when the simulator flew it again (:func:`replay_summary`), and the
     optimum's sensitivities when asked (:func:`sensitivity_summary`). Beside it,
-        result.json and result.npz: the exact result (:mod:`.result_archive`)."""
+    result.json and result.npz: the exact result (:mod:`.result_archive`)."""
     problem, options = problem_file.problem, problem_file.options
     limits = [
         c.max_offset_over_capture_radius for c in problem.constraints if isinstance(c, OffsetLimit)

@@ -488,8 +488,8 @@ class MultipleShooting:
         P (:attr:`parameters`; SI, as P holds them) at scaled w and multipliers lam_g of
         the scaled g, by casadi's AD through Φ (one reverse sweep: Φ's chain has no
         derivatives in p). At a solution it is the optimal cost's derivative with respect
-        to P (the envelope theorem; ocp/sensitivity.py). Its output's sparsity marks the
-        entries of P the NLP reads."""
+        to P (the envelope theorem; ocp/sensitivity.py); :meth:`parameters_read` says
+        which entries of P it depends on."""
         w, P = self.nlp["x"], self.P
         lam_g = ca.MX.sym("lam_g", self.lbg.size)
         lagrangian = self.nlp["f"] + ca.dot(lam_g, self.nlp["g"])

@@ -128,6 +128,37 @@ def test_sensitivities_are_central_differences_of_re_solves(lateral, name):
     assert again.of(name).derivative == item.derivative
 
 
+def test_the_lagrangian_gradient_is_its_finite_differences(lateral):
+    """MultipleShooting.lagrangian_gradient against central differences of
+    f + lam_gᵀ g in P at the optimum, for the entries of P that Φ, the constraints and
+    the cost read (docs/architecture.md#rule-3); parameters_read marks every entry with
+    a nonzero gradient. Step 1e-6 relative, agreement 1e-6 relative to the largest term
+    (measured: 1e-9); an entry nothing reads (the RCS's specific impulse) is not read."""
+    problem, _, compiled, result = lateral
+    tr = compiled.transcription
+    P = tr.parameter_vector(
+        problem.x0, problem.p, problem.t0, None, compiled._u_fixed, problem.reference()
+    )
+    grad = np.asarray(tr.lagrangian_gradient()(result.w, P, result.lam_g)).ravel()
+    read = tr.parameters_read()
+    assert np.all(read[grad != 0.0])
+    p0 = tr.parameters.slot("p").start
+    assert not read[p0 + PARAMETERS.slot("rcs_isp").start]
+
+    def lagrangian(P: np.ndarray) -> float:
+        f = float(np.sum(np.asarray(tr.cost_terms(result.w, P))))
+        return f + float(np.dot(result.lam_g, np.asarray(tr.constraints(result.w, P)).ravel()))
+
+    for name in ("wind_speed_ref", "cd_scale", "capture_radius", "beam_side"):
+        i = p0 + PARAMETERS.slot(name).start
+        h = 1e-6 * abs(P[i])
+        up, down = P.copy(), P.copy()
+        up[i] += h
+        down[i] -= h
+        difference = (lagrangian(up) - lagrangian(down)) / (2 * h)
+        assert grad[i] == pytest.approx(difference, rel=1e-6), name
+
+
 def test_chain_and_ad_nlps_give_the_same_sensitivities(lateral):
     """The NLP solved with Φ's chain derivatives reaches the same point and multipliers
     as with casadi's AD (both to 1e-10): every sensitivity within 1e-6 of the largest
