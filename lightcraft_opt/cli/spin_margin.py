@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
         grid_step=args.grid_step_rpm * RPM,
         altitudes=args.altitudes_m,
         offsets=tuple(0.01 * d for d in args.offsets_cm),
+        spin_decay=not args.frozen_spin,
         pulse_map_options=PulseMapOptions(substeps=args.substeps, dense=args.substeps),
     )
     out = output_folder(args.out or Path("runs") / f"{source.stem}-spin-margin")
@@ -106,7 +107,8 @@ def add(sub: argparse._SubParsersAction) -> None:
         description="For each mass-centre position along the craft's axis (from the optic's "
         "ring plane; the carrier moves it if the craft has one, else the ring), the least "
         "launch spin whose beam-riding multipliers stay at or below --limit at every climb "
-        "point (--altitudes-m x --offsets-cm, 10 m/s up), by a spin grid then bisection; "
+        "point (--altitudes-m x --offsets-cm, 10 m/s up, the spin decayed on the way up), "
+        "by a spin grid then bisection; "
         "writes spin_margin.csv (units in the column keys; least spin nan where no spin of "
         "the range reaches the limit) and spin_margin.png. Exit status 0: done (a limit no "
         "spin reaches is a result, not an error); 2: bad input.",
@@ -154,6 +156,12 @@ def add(sub: argparse._SubParsersAction) -> None:
         type=integer(1, 1024, why="8 moves the multipliers by under 1e-3 from 32"),
         default=8,
         help="coast substeps of the pulse map (default 8)",
+    )
+    sm.add_argument(
+        "--frozen-spin",
+        action="store_true",
+        help="every climb point at the launch spin (default: the launch spin decayed by the "
+        "rotor's air friction over the climb to it)",
     )
     sm.add_argument("--out", default=None, help="output folder (default runs/<model>-spin-margin)")
     sm.add_argument("--no-figure", action="store_true", help="write the table only")

@@ -28,7 +28,7 @@ each other:
   (:func:`side_stability`);
 - :mod:`.spin_margin`: the least launch spin keeping the beam-riding multipliers under a
   limit along a climb (:func:`least_stable_spin`), against the mass centre's position along
-  b1 (:func:`spin_margin_sweep`).
+  b1 (:func:`spin_margin_sweep`), the spin decayed along the climb (:func:`climb_spin`).
 
 Only :mod:`.state_space`, :mod:`.modes` and :mod:`.state_feedback` import python-control
 (an import-linter contract), and ``import lightcraft_opt`` reaches this package on first use
@@ -58,6 +58,7 @@ from lightcraft_opt.linearize.beam_riding import (
     altitude_stability,
     side_stability,
 )
+from lightcraft_opt.linearize.climb_spin import climb_spin
 from lightcraft_opt.linearize.modes import (
     Controllability,
     ModeKind,
@@ -108,6 +109,7 @@ __all__ = [
     "altitude_stability",
     "beam_riding_modes",
     "climb_point",
+    "climb_spin",
     "coning_state_space",
     "controllability",
     "dlqr_gain",

@@ -27,8 +27,10 @@ carrier nothing else in the model is referred to the mass centre's place along b
 aerodynamic moments are about the mass centre wherever it is, docs/physics.md#aero).
 docs/design.md#stability-constrained-spin gives the method and Flight 5's table.
 
-Frozen time and spin: each node is one pulse of Φ at the launch spin (the spin decay along
-the climb is left out), the same frozen-time multipliers as docs/beam_riding.md.
+Frozen time: each node is one pulse of Φ, the frozen-time multipliers of
+docs/beam_riding.md. The spin there is the launch spin decayed by the rotor's air friction
+over the reference climb to that node (:mod:`.climb_spin`: Flight 5 keeps 83 % of it at 20
+m, 77 % at 30 m of a 10 m/s climb), or the launch spin itself with ``spin_decay=False``.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ from lightcraft_opt.layout import initial_state, parameter_values
 from lightcraft_opt.layout.designed import LAUNCH_SPIN, model_with_parameters
 from lightcraft_opt.linear.focus import scheduled_focus
 from lightcraft_opt.linear.operating_points import PulseMapJacobian, jacobian_for
+from lightcraft_opt.linearize.climb_spin import build_climb_spin
 from lightcraft_opt.linearize.stability_grid import climb_multipliers, grid
 from lightcraft_opt.model import FocusSchedule, Model
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -100,7 +103,9 @@ class SpinMarginOptions:
         while the shipped linear beam still holds the craft).
     offsets : craft offsets east of the beam axis at each node [m] (L frame; 1 and 3 cm as
         docs/beam_riding.md).
-    speed : climb speed at every node [m/s] (up, L frame).
+    speed : climb speed at every node [m/s] (up, L frame; > 0 with ``spin_decay``).
+    spin_decay : the spin at a node is the launch spin decayed over the climb to it at
+        ``speed`` (:mod:`.climb_spin`); False: the launch spin at every node.
     energy : pulse energy [J] (None: the flight's).
     schedule : the director's focus schedule (:class:`FocusSchedule`; only the ``waist``
         size model feels it).
@@ -117,6 +122,7 @@ class SpinMarginOptions:
     altitudes: tuple[float, ...] = (10.0, 20.0, 30.0)
     offsets: tuple[float, ...] = (0.01, 0.03)
     speed: float = 10.0
+    spin_decay: bool = True
     energy: float | None = None
     schedule: FocusSchedule = FocusSchedule.FAR
     reference_spins: tuple[float, ...] = (6000 * RPM, 10000 * RPM)
@@ -145,6 +151,12 @@ class SpinMarginOptions:
         object.__setattr__(self, "reference_spins", tuple(float(s) for s in spins))
         if not (isinstance(self.speed, int | float) and math.isfinite(self.speed)):
             raise ParameterError(f"{name}.speed", f"must be finite [m/s], got {self.speed!r}")
+        if self.spin_decay and self.speed <= 0:
+            raise ParameterError(
+                f"{name}.speed",
+                f"must be > 0 [m/s] for the spin to decay along a climb (or spin_decay=False); "
+                f"got {self.speed!r}",
+            )
         if self.energy is not None and not (
             isinstance(self.energy, int | float) and math.isfinite(self.energy) and self.energy > 0
         ):
@@ -177,13 +189,19 @@ def climb_worst_multiplier(
     jacobian: PulseMapJacobian,
 ) -> np.ndarray:
     """(n_alt, n_off) largest beam-riding |λ| [-] at each climb node of ``options``, the
-    craft spinning at ``spin`` [rad/s] (module docstring); NaN where no mode is
-    beam riding. μ(spin) is its largest entry."""
+    craft launched at ``spin`` [rad/s] (decayed to each node unless
+    ``options.spin_decay`` is False; module docstring); NaN where no mode is beam riding.
+    μ(spin) is its largest entry."""
     energy = model.flight.pulse_energy if options.energy is None else options.energy
     p = parameter_values(model)
+    J = float(mass_properties(ca.DM(initial_state(model)), ca.DM(p)).J)
+    decay = build_climb_spin(model.craft.spin_decay.model)
     out = np.empty((len(options.altitudes), len(options.offsets)))
     for i, altitude in enumerate(options.altitudes):
         focus = scheduled_focus(options.schedule, altitude, model.laser, p)
+        at_node = spin
+        if options.spin_decay:
+            at_node = float(decay(spin, altitude / options.speed, options.speed, J, p))
         for j, offset in enumerate(options.offsets):
             out[i, j], _ = climb_multipliers(
                 model,
@@ -192,7 +210,7 @@ def climb_worst_multiplier(
                 options.speed,
                 offset,
                 energy=energy,
-                spin=spin,
+                spin=at_node,
                 focus=focus,
             )
     return out

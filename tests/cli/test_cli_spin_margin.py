@@ -22,7 +22,7 @@ MODEL = REPO_ROOT / "models" / "flight5.toml"
 RPM = 2 * math.pi / 60
 #: A short sweep: two positions, one climb node, a coarse grid.
 FLAGS = [
-    "--positions-cm=-4,0",
+    "--positions-cm=-6,-4",
     "--limit", "1.03",
     "--spin-min-rpm", "6000",
     "--spin-max-rpm", "18000",
@@ -48,7 +48,7 @@ def test_the_csv_is_the_python_sweep_with_units_in_the_keys(tmp_path, capsys):
         offsets=(0.01,),
         pulse_map_options=PulseMapOptions(substeps=8, dense=8),
     )
-    sweep = spin_margin_sweep(load_model(MODEL), [-0.04, 0.0], options)
+    sweep = spin_margin_sweep(load_model(MODEL), [-0.06, -0.04], options)
     expected = sweep.rows()
     assert [r["status"] for r in rows] == ["found", "found"]
     for row, want in zip(rows, expected, strict=True):
