@@ -48,11 +48,8 @@ def _list_of(convert: Callable[[str], float], name: str) -> Callable[[str], tupl
 
 def run(args: argparse.Namespace) -> int:
     # python-control is imported with the linear analysis, only when the command runs
-    from lightcraft_opt.linearize.spin_margin import (
-        SpinMarginOptions,
-        SpinMarginStatus,
-        spin_margin_sweep,
-    )
+    from lightcraft_opt.linearize.spin_margin import SpinMarginOptions, SpinMarginStatus
+    from lightcraft_opt.linearize.spin_margin_sweep import spin_margin_sweep
 
     source = Path(args.model)
     check_kind(source, "spin-margin")

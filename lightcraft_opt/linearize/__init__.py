@@ -27,8 +27,9 @@ each other:
   (:func:`altitude_stability`) and over the beam's side at the craft
   (:func:`side_stability`);
 - :mod:`.spin_margin`: the least launch spin keeping the beam-riding multipliers under a
-  limit along a climb (:func:`least_stable_spin`), against the mass centre's position along
-  b1 (:func:`spin_margin_sweep`), the spin decayed along the climb (:func:`climb_spin`).
+  limit along a climb (:func:`least_stable_spin`), the spin decayed along the climb
+  (:mod:`.climb_spin`, :func:`climb_spin`); :mod:`.spin_margin_sweep` against the mass
+  centre's position along b1 (:func:`spin_margin_sweep`; :mod:`.mass_centre` moves it).
 
 Only :mod:`.state_space`, :mod:`.modes` and :mod:`.state_feedback` import python-control
 (an import-linter contract), and ``import lightcraft_opt`` reaches this package on first use
@@ -59,6 +60,7 @@ from lightcraft_opt.linearize.beam_riding import (
     side_stability,
 )
 from lightcraft_opt.linearize.climb_spin import climb_spin
+from lightcraft_opt.linearize.mass_centre import MassCentreHandle, model_with_mass_centre
 from lightcraft_opt.linearize.modes import (
     Controllability,
     ModeKind,
@@ -68,15 +70,12 @@ from lightcraft_opt.linearize.modes import (
     multipliers,
 )
 from lightcraft_opt.linearize.spin_margin import (
-    MassCentreHandle,
     SpinMarginOptions,
     SpinMarginStatus,
-    SpinMarginSweep,
     SpinScan,
     least_stable_spin,
-    model_with_mass_centre,
-    spin_margin_sweep,
 )
+from lightcraft_opt.linearize.spin_margin_sweep import SpinMarginSweep, spin_margin_sweep
 from lightcraft_opt.linearize.stability_grid import StabilityMap, stability_map
 from lightcraft_opt.linearize.state_feedback import (
     LqrResult,

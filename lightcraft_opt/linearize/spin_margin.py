@@ -17,15 +17,9 @@ frequency J ω / A an integer multiple of the pulse rate, near n × 1204 RPM for
 docs/linearize.md) are reported, not hidden. A bracket in which no spin meets the limit is
 a status (``NOT_REACHED``), with the best spin of the grid.
 
-:func:`spin_margin_sweep` repeats it over the mass centre's position along b1, measured
-from the optic's ring plane (the lever arm of the engine's impulses about the mass centre,
-docs/physics.md#sector-model), moved by a :class:`MassCentreHandle`: the carrier's
-position ``carrier_position_B[b1]`` when the craft has a carrier (the mass moves: the
-moments about the mass centre follow by the parallel-axis theorem), else the ring's height
-``ring_height`` (the optic moves against the mass, the moments held: for a craft without a
-carrier nothing else in the model is referred to the mass centre's place along b1; the
-aerodynamic moments are about the mass centre wherever it is, docs/physics.md#aero).
-docs/design.md#stability-constrained-spin gives the method and Flight 5's table.
+:func:`~.spin_margin_sweep.spin_margin_sweep` repeats it over the mass centre's position
+along b1 (:mod:`.mass_centre`); docs/design.md#stability-constrained-spin gives the method
+and Flight 5's table.
 
 Frozen time: each node is one pulse of Φ, the frozen-time multipliers of
 docs/beam_riding.md. The spin there is the launch spin decayed by the rotor's air friction
@@ -36,8 +30,8 @@ m, 77 % at 30 m of a 10 m/s climb), or the launch spin itself with ``spin_decay=
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from enum import Enum
 
 import casadi as ca
@@ -57,27 +51,15 @@ from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
 
 __all__ = [
     "RPM",
-    "MassCentreHandle",
     "SpinMarginOptions",
     "SpinMarginStatus",
-    "SpinMarginSweep",
     "SpinScan",
     "climb_worst_multiplier",
     "least_stable_spin",
-    "mass_centre_from_ring",
-    "model_with_mass_centre",
-    "spin_margin_sweep",
 ]
 
 #: rad/s per RPM.
 RPM = 2 * math.pi / 60
-
-
-class MassCentreHandle(Enum):
-    """What moves the mass centre against the optic along b1."""
-
-    CARRIER = "carrier"  # carrier_position_B[b1]: the carrier's mass moves
-    RING = "ring"  # engine.ring_height: the optic moves, the mass and its moments stay
 
 
 class SpinMarginStatus(Enum):
@@ -389,190 +371,4 @@ def least_stable_spin(
         bands=bands,
         evaluations=evaluations,
         **common,  # type: ignore[arg-type]
-    )
-
-
-# --------------------------------------------------------------------------- the mass centre
-def mass_centre_from_ring(model: Model) -> float:
-    """The system mass centre's position along b1 from the optic's ring plane at launch [m]
-    (B frame; > 0: the mass centre ahead of the ring, toward the nose):
-    ``cm_B[b1] − ring_height`` (docs/physics.md#mass-rcs; positions in B from P)."""
-    x0 = initial_state(model)
-    p = parameter_values(model)
-    cm_b1 = float(mass_properties(ca.DM(x0), ca.DM(p)).cm_B[0])
-    return cm_b1 - model.craft.engine.ring_height
-
-
-def _handle_for(model: Model, handle: MassCentreHandle | str | None) -> MassCentreHandle:
-    if handle is None:
-        has_carrier = model.craft.carrier is not None
-        return MassCentreHandle.CARRIER if has_carrier else MassCentreHandle.RING
-    try:
-        chosen = MassCentreHandle(handle)
-    except ValueError:
-        allowed = [h.value for h in MassCentreHandle]
-        raise ParameterError("handle", f"must be one of {allowed}, got {handle!r}") from None
-    if chosen is MassCentreHandle.CARRIER and model.craft.carrier is None:
-        raise ParameterError("handle", f"{model.name!r} has no carrier to move; use 'ring'")
-    return chosen
-
-
-def model_with_mass_centre(
-    model: Model, position: float, handle: MassCentreHandle | str | None = None
-) -> Model:
-    """``model`` with its launch mass centre ``position`` [m] along b1 from the ring plane
-    (:func:`mass_centre_from_ring`), moved by ``handle`` (default: the carrier if the craft
-    has one, else the ring; module docstring). The new model's own checks run."""
-    if not math.isfinite(position):
-        raise ParameterError("positions", f"must be finite [m], got {position!r}")
-    kind = _handle_for(model, handle)
-    shift = position - mass_centre_from_ring(model)  # the mass centre moves by this
-    if kind is MassCentreHandle.RING:
-        engine = replace(model.craft.engine, ring_height=model.craft.engine.ring_height - shift)
-        return replace(model, craft=replace(model.craft, engine=engine))
-    carrier = model.craft.carrier
-    assert carrier is not None  # _handle_for
-    x0 = initial_state(model)
-    total = float(mass_properties(ca.DM(x0), ca.DM(parameter_values(model))).mass)
-    # cm_B = (Σ others + m_c c) / M: c moves by M shift / m_c; the ring stays
-    c = np.array(carrier.position_B, dtype=float)
-    c[0] += total * shift / carrier.mass
-    return model_with_parameters(model, {"carrier_position_B": c})
-
-
-# --------------------------------------------------------------------------- the sweep
-@dataclass(frozen=True)
-class SpinMarginSweep:
-    """The least stable launch spin against the mass centre's position along b1.
-
-    Attributes
-    ----------
-    positions : (np,) launch mass centre along b1 from the ring plane [m] (B frame).
-    handle : what moved it (:class:`MassCentreHandle`).
-    scans : (np,) :class:`SpinScan` of each position.
-    reference_spins : (nr,) [rad/s] (6,000 and 10,000 RPM by default).
-    reference_multipliers : (np, nr) μ at each reference spin [-].
-    nominal_position : the model's own position [m].
-    spin_range : (lowest, highest) spin of the bracket [rad/s].
-    limit : the multiplier limit [-].
-    altitudes, offsets, speed, energy : the climb nodes [m], [m] east, [m/s], [J].
-    model_name : which model.
-    """
-
-    positions: np.ndarray
-    handle: MassCentreHandle
-    scans: tuple[SpinScan, ...]
-    reference_spins: np.ndarray
-    reference_multipliers: np.ndarray
-    nominal_position: float
-    spin_range: tuple[float, float]
-    limit: float
-    altitudes: tuple[float, ...]
-    offsets: tuple[float, ...]
-    speed: float
-    energy: float
-    model_name: str
-
-    @property
-    def least_spins(self) -> np.ndarray:
-        """(np,) least stable launch spin [rad/s] (NaN: none in the bracket)."""
-        return np.array([s.least_spin for s in self.scans])
-
-    @property
-    def statuses(self) -> tuple[SpinMarginStatus, ...]:
-        return tuple(s.status for s in self.scans)
-
-    @property
-    def best_multipliers(self) -> np.ndarray:
-        """(np,) the smallest μ of each spin grid [-]."""
-        return np.array([s.best_multiplier for s in self.scans])
-
-    def rows(self) -> list[dict[str, float | str]]:
-        """The table, one dict a position, units in the keys (SI, and RPM for reading)."""
-        out: list[dict[str, float | str]] = []
-        for k, scan in enumerate(self.scans):
-            row: dict[str, float | str] = {
-                "mass_centre_b1_m": float(self.positions[k]),
-                "status": scan.status.value,
-                "least_spin_rad_per_s": scan.least_spin,
-                "least_spin_rpm": scan.least_spin / RPM,
-                "multiplier_at_least": scan.multiplier_at_least,
-            }
-            for s, m in zip(self.reference_spins, self.reference_multipliers[k], strict=True):
-                row[f"multiplier_at_{s / RPM:.0f}_rpm"] = float(m)
-            row["best_multiplier"] = scan.best_multiplier
-            row["best_spin_rpm"] = scan.best_spin / RPM
-            row["bands_above_least"] = len(scan.bands)
-            row["grid_rises"] = scan.rises
-            out.append(row)
-        return out
-
-    def summary(self, length_unit_factor: float = 100.0, length_unit: str = "cm") -> str:
-        """The table as text (positions in ``length_unit``, spins in RPM)."""
-        refs = [f"μ@{s / RPM:.0f}" for s in self.reference_spins]
-        head = f"{'b1 ' + length_unit:>8}  {'least RPM':>10}  {'μ there':>8}  " + "  ".join(
-            f"{r:>9}" for r in refs
-        )
-        lines = [
-            f"{self.model_name}: least launch spin with beam-riding |λ| <= {self.limit:g} "
-            f"along the climb ({self.handle.value} moved)",
-            head + f"  {'best μ':>8}  {'at RPM':>7}",
-        ]
-        for k, scan in enumerate(self.scans):
-            least = (
-                f"{scan.least_spin / RPM:>10.0f}"
-                if scan.status is not SpinMarginStatus.NOT_REACHED
-                else f"{'none':>10}"
-            )
-            if scan.status is SpinMarginStatus.AT_BRACKET_LOW:
-                least = f"{'<=' + format(scan.least_spin / RPM, '.0f'):>10}"
-            ref = "  ".join(f"{m:>9.4f}" for m in self.reference_multipliers[k])
-            lines.append(
-                f"{self.positions[k] * length_unit_factor:>8.2f}  {least}  "
-                f"{scan.multiplier_at_least:>8.4f}  {ref}  {scan.best_multiplier:>8.4f}  "
-                f"{scan.best_spin / RPM:>7.0f}"
-            )
-        return "\n".join(lines)
-
-
-def spin_margin_sweep(
-    model: Model,
-    positions: Sequence[float] | np.ndarray,
-    options: SpinMarginOptions | None = None,
-    *,
-    handle: MassCentreHandle | str | None = None,
-    pulse_map: PulseMap | PulseMapJacobian | None = None,
-    progress: Callable[[int, int], None] | None = None,
-) -> SpinMarginSweep:
-    """:func:`least_stable_spin` at each launch mass-centre ``positions`` [m] along b1
-    from the ring plane (:func:`model_with_mass_centre`, moved by ``handle``), with μ at
-    ``options.reference_spins``. One Φ Jacobian serves every position (the position is
-    an entry of p). ``progress(done, total)`` after each position."""
-    options = SpinMarginOptions() if options is None else options
-    x = grid(positions, "positions")
-    kind = _handle_for(model, handle)
-    jac = _pulse_map_jacobian(model, pulse_map, options)
-    scans, refs = [], np.empty((x.size, len(options.reference_spins)))
-    for k, position in enumerate(x):
-        moved = model_with_mass_centre(model, float(position), kind)
-        scans.append(least_stable_spin(moved, options, pulse_map=jac))
-        for r, spin in enumerate(options.reference_spins):
-            refs[k, r] = float(np.max(climb_worst_multiplier(moved, spin, options, jac)))
-        if progress is not None:
-            progress(k + 1, x.size)
-    energy = model.flight.pulse_energy if options.energy is None else options.energy
-    return SpinMarginSweep(
-        x,
-        kind,
-        tuple(scans),
-        np.asarray(options.reference_spins, dtype=float),
-        refs,
-        mass_centre_from_ring(model),
-        options.spin_range,
-        float(options.limit),
-        options.altitudes,
-        options.offsets,
-        float(options.speed),
-        float(energy),
-        model.name,
     )

@@ -27,17 +27,19 @@ from lightcraft_opt.linear.operating_points import climb_point
 from lightcraft_opt.linear.signal_names import select_entries
 from lightcraft_opt.linearize import pulse_map_jacobian
 from lightcraft_opt.linearize.climb_spin import climb_spin
+from lightcraft_opt.linearize.mass_centre import (
+    MassCentreHandle,
+    mass_centre_from_ring,
+    model_with_mass_centre,
+)
 from lightcraft_opt.linearize.spin_margin import (
     RPM,
-    MassCentreHandle,
     SpinMarginOptions,
     SpinMarginStatus,
     climb_worst_multiplier,
     least_stable_spin,
-    mass_centre_from_ring,
-    model_with_mass_centre,
-    spin_margin_sweep,
 )
+from lightcraft_opt.linearize.spin_margin_sweep import spin_margin_sweep
 from lightcraft_opt.linearize.stability_grid import climb_multipliers
 from lightcraft_opt.model import Carrier, SpinDecay, SpinDecayModel
 from lightcraft_opt.plots import plot_spin_margin, spin_margin_figure
