@@ -238,6 +238,16 @@ class SpinScan:
     evaluations: int
 
     @property
+    def held_fraction(self) -> float:
+        """The share of the grid's spins at or above ``least_spin`` that meet the limit [-]
+        (1: it holds to the bracket's top; small: ``least_spin`` opens a narrow window
+        between resonance bands); NaN when not reached."""
+        if not math.isfinite(self.least_spin):
+            return math.nan
+        above = self.spins >= self.least_spin
+        return float(np.mean(self.multipliers[above] <= self.limit)) if above.any() else 1.0
+
+    @property
     def monotone(self) -> bool:
         """μ fell (or held) with spin at every step of the grid."""
         return self.rises == 0

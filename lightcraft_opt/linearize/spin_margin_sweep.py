@@ -96,6 +96,7 @@ class SpinMarginSweep:
                 row[f"multiplier_at_{s / RPM:.0f}_rpm"] = float(m)
             row["best_multiplier"] = scan.best_multiplier
             row["best_spin_rpm"] = scan.best_spin / RPM
+            row["held_fraction_above_least"] = scan.held_fraction
             row["bands_above_least"] = len(scan.bands)
             row["grid_rises"] = scan.rises
             out.append(row)
@@ -110,7 +111,7 @@ class SpinMarginSweep:
         lines = [
             f"{self.model_name}: least launch spin with beam-riding |λ| <= {self.limit:g} "
             f"along the climb ({self.handle.value} moved)",
-            head + f"  {'best μ':>8}  {'at RPM':>7}",
+            head + f"  {'held':>5}  {'best μ':>8}  {'at RPM':>7}",
         ]
         for k, scan in enumerate(self.scans):
             least = (
@@ -123,7 +124,8 @@ class SpinMarginSweep:
             ref = "  ".join(f"{m:>9.4f}" for m in self.reference_multipliers[k])
             lines.append(
                 f"{self.positions[k] * length_unit_factor:>8.2f}  {least}  "
-                f"{scan.multiplier_at_least:>8.4f}  {ref}  {scan.best_multiplier:>8.4f}  "
+                f"{scan.multiplier_at_least:>8.4f}  {ref}  {scan.held_fraction:>5.2f}  "
+                f"{scan.best_multiplier:>8.4f}  "
                 f"{scan.best_spin / RPM:>7.0f}"
             )
         return "\n".join(lines)

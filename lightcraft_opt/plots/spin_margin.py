@@ -103,7 +103,7 @@ def plot_spin_margin(
     factor = length_factor(length_unit)
     artists: list[Any] = []
     top = max(s.spin_range[1] for s in sweeps) / RPM
-    for sweep in sweeps:
+    for k, sweep in enumerate(sweeps):
         x = sweep.positions * factor
         y = sweep.least_spins / RPM
         (line,) = ax.plot(x, y, marker="o", label=f"|λ| ≤ {sweep.limit:g}")
@@ -112,7 +112,7 @@ def plot_spin_margin(
         if none.any():
             artists += ax.plot(
                 x[none],
-                np.full(int(none.sum()), top),
+                np.full(int(none.sum()), top * (1 + 0.025 * k)),  # one row a sweep
                 "^",
                 mfc="none",
                 color=line.get_color(),
@@ -131,7 +131,7 @@ def plot_spin_margin(
         )
     _position_axis(ax, first, factor, length_unit)
     ax.set_ylabel("least launch spin [RPM]")
-    ax.set_ylim(0.0, 1.08 * top)
+    ax.set_ylim(0.0, (1.06 + 0.025 * len(sweeps)) * top)
     heights = ", ".join(f"{h:g}" for h in first.altitudes)
     ax.set_title(f"{first.model_name}: {first.speed:g} m/s climb at {heights} m", fontsize="medium")
     ax.legend(fontsize="x-small", loc="best")

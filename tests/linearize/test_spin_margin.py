@@ -85,6 +85,8 @@ def test_the_found_spin_meets_the_limit_and_a_tolerance_below_does_not(flight5, 
     assert scan.multiplier_at_least == pytest.approx(options.limit, abs=2e-5)
     assert 10000 * RPM < scan.least_spin < 11500 * RPM  # 10,605 RPM measured
     assert scan.limiting_node == (30.0, 0.01)
+    above = scan.spins >= scan.least_spin
+    assert scan.held_fraction == np.mean(scan.multipliers[above] <= options.limit) > 0
     assert scan.evaluations == scan.spins.size + math.ceil(math.log2(1000 / 1))
 
 
@@ -152,7 +154,7 @@ def test_no_spin_reaches_0_98_on_the_shipped_craft_a_status_not_a_crash(flight5,
     options = SpinMarginOptions(spin_range=(6000 * RPM, 20000 * RPM), grid_step=2000 * RPM, **CLIMB)
     scan = least_stable_spin(flight5, options, pulse_map=jac)
     assert scan.status is SpinMarginStatus.NOT_REACHED
-    assert math.isnan(scan.least_spin) and scan.bands == ()
+    assert math.isnan(scan.least_spin) and math.isnan(scan.held_fraction) and scan.bands == ()
     assert scan.best_spin == options.spin_range[1]
     assert 1.0 < scan.best_multiplier < 1.04  # 1.032 at 20,000 RPM measured
     # a limit the bracket's lowest spin already meets
