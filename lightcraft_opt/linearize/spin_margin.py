@@ -30,6 +30,7 @@ m, 77 % at 30 m of a 10 m/s climb), or the launch spin itself with ``spin_decay=
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
@@ -60,6 +61,11 @@ __all__ = [
 
 #: rad/s per RPM.
 RPM = 2 * math.pi / 60
+
+
+def _number(v: object) -> bool:
+    """A real number (numpy's too), not a bool."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
 
 
 class SpinMarginStatus(Enum):
@@ -116,7 +122,7 @@ class SpinMarginOptions:
         name = type(self).__name__
         for key in ("limit", "grid_step", "tolerance"):
             v = getattr(self, key)
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            if not (_number(v) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"{name}.{key}", f"must be a finite number > 0, got {v!r}")
         lo_hi = np.asarray(self.spin_range, dtype=float).ravel()
         if not (lo_hi.size == 2 and np.all(np.isfinite(lo_hi)) and 0 < lo_hi[0] < lo_hi[1]):
@@ -131,7 +137,7 @@ class SpinMarginOptions:
             object.__setattr__(self, key, tuple(float(a) for a in v))
         spins = grid(self.reference_spins, f"{name}.reference_spins", positive=True)
         object.__setattr__(self, "reference_spins", tuple(float(s) for s in spins))
-        if not (isinstance(self.speed, int | float) and math.isfinite(self.speed)):
+        if not (_number(self.speed) and math.isfinite(self.speed)):
             raise ParameterError(f"{name}.speed", f"must be finite [m/s], got {self.speed!r}")
         if self.spin_decay and self.speed <= 0:
             raise ParameterError(
@@ -140,7 +146,7 @@ class SpinMarginOptions:
                 f"got {self.speed!r}",
             )
         if self.energy is not None and not (
-            isinstance(self.energy, int | float) and math.isfinite(self.energy) and self.energy > 0
+            _number(self.energy) and math.isfinite(self.energy) and self.energy > 0
         ):
             raise ParameterError(f"{name}.energy", f"must be > 0 [J] or None, got {self.energy!r}")
         try:
