@@ -200,6 +200,7 @@ REQUIRED = {
     "closed-loop": ["p.toml"],
     "montecarlo": ["p.toml"],
     "calibrate": ["m.toml", "--track", "t.csv", "--fit", "cm"],
+    "spin-margin": ["m.toml"],
 }
 FLAG_VALUES = ("nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "1.5", "text", "", "0x10")
 

@@ -23,6 +23,7 @@ _KINDS = (
 _READS = {
     "simulate": ("model",),
     "calibrate": ("model",),
+    "spin-margin": ("model",),
     "optimize": ("problem",),
     "closed-loop": ("closed-loop",),
     "montecarlo": ("campaign",),

@@ -16,16 +16,24 @@ import warnings
 from collections.abc import Sequence
 
 from lightcraft_opt import __version__
-from lightcraft_opt.cli import calibrate, closed_loop, montecarlo, optimize, simulate
+from lightcraft_opt.cli import (
+    calibrate,
+    closed_loop,
+    montecarlo,
+    optimize,
+    simulate,
+    spin_margin,
+)
 from lightcraft_opt.cli.progress import build_line
 from lightcraft_opt.compiled.cache import reported_builds
 from lightcraft_opt.errors import LightcraftError
 
 DESCRIPTION = (
     "Laser-propelled lightcraft flight: simulate a flight, solve an optimal control "
-    "problem, fly a closed loop under a controller, run a Monte Carlo campaign or fit a "
-    "model to a tracked flight. Each command reads one TOML file (models/, problems/) and "
-    "writes CSV, JSON and figures to an output folder named after it under runs/. Units "
+    "problem, fly a closed loop under a controller, run a Monte Carlo campaign, fit a "
+    "model to a tracked flight or find the least launch spin for beam riding. Each "
+    "command reads one TOML file (models/, problems/) and writes CSV, JSON and figures "
+    "to an output folder named after it under runs/. Units "
     "are in the names of flags and columns (degrees, cm, m/s). Exit status 0: done; 1: "
     "not converged or ended early (files still written); 2: bad input."
 )
@@ -54,7 +62,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"lightcraft {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    for command in (simulate, optimize, closed_loop, montecarlo, calibrate):
+    for command in (simulate, optimize, closed_loop, montecarlo, calibrate, spin_margin):
         command.add(sub)
     return parser
 

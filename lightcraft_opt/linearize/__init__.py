@@ -25,7 +25,11 @@ each other:
   (:func:`stability_map`);
 - :mod:`.beam_riding`: multipliers over altitude × focus schedule × offset
   (:func:`altitude_stability`) and over the beam's side at the craft
-  (:func:`side_stability`).
+  (:func:`side_stability`);
+- :mod:`.spin_margin`: the least launch spin keeping the beam-riding multipliers under a
+  limit along a climb (:func:`least_stable_spin`), the spin decayed along the climb
+  (:mod:`.climb_spin`, :func:`climb_spin`); :mod:`.spin_margin_sweep` against the mass
+  centre's position along b1 (:func:`spin_margin_sweep`; :mod:`.mass_centre` moves it).
 
 Only :mod:`.state_space`, :mod:`.modes` and :mod:`.state_feedback` import python-control
 (an import-linter contract), and ``import lightcraft_opt`` reaches this package on first use
@@ -55,6 +59,8 @@ from lightcraft_opt.linearize.beam_riding import (
     altitude_stability,
     side_stability,
 )
+from lightcraft_opt.linearize.climb_spin import climb_spin
+from lightcraft_opt.linearize.mass_centre import MassCentreHandle, model_with_mass_centre
 from lightcraft_opt.linearize.modes import (
     Controllability,
     ModeKind,
@@ -63,6 +69,13 @@ from lightcraft_opt.linearize.modes import (
     controllability,
     multipliers,
 )
+from lightcraft_opt.linearize.spin_margin import (
+    SpinMarginOptions,
+    SpinMarginStatus,
+    SpinScan,
+    least_stable_spin,
+)
+from lightcraft_opt.linearize.spin_margin_sweep import SpinMarginSweep, spin_margin_sweep
 from lightcraft_opt.linearize.stability_grid import StabilityMap, stability_map
 from lightcraft_opt.linearize.state_feedback import (
     LqrResult,
@@ -79,6 +92,7 @@ __all__ = [
     "Coordinates",
     "FocusSchedule",
     "LqrResult",
+    "MassCentreHandle",
     "ModeKind",
     "Multipliers",
     "OperatingPoint",
@@ -86,23 +100,31 @@ __all__ = [
     "PulseMapJacobian",
     "SaturationWarning",
     "SideStability",
+    "SpinMarginOptions",
+    "SpinMarginStatus",
+    "SpinMarginSweep",
+    "SpinScan",
     "StabilityMap",
     "altitude_stability",
     "beam_riding_modes",
     "climb_point",
+    "climb_spin",
     "coning_state_space",
     "controllability",
     "dlqr_gain",
     "error_state",
     "focus_for_side",
+    "least_stable_spin",
     "linearize",
     "lqr",
     "lqr_policy",
+    "model_with_mass_centre",
     "multipliers",
     "pulse_map_jacobian",
     "reachable_sides",
     "scheduled_focus",
     "side_stability",
+    "spin_margin_sweep",
     "stability_map",
     "trim_hover",
 ]

@@ -13,6 +13,11 @@ from lightcraft_opt.plots.figures import (
     flight_overview,
     track_figure,
 )
+from lightcraft_opt.plots.spin_margin import (
+    plot_spin_margin,
+    plot_spin_margin_multipliers,
+    spin_margin_figure,
+)
 from lightcraft_opt.plots.stability import (
     plot_altitude_stability,
     plot_multipliers,
@@ -29,6 +34,9 @@ __all__ = [
     "plot_altitude_stability",
     "plot_multipliers",
     "plot_side_stability",
+    "plot_spin_margin",
+    "plot_spin_margin_multipliers",
     "plot_stability_map",
+    "spin_margin_figure",
     "track_figure",
 ]

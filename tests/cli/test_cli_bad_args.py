@@ -146,11 +146,12 @@ def _commands(tmp_path: Path) -> dict[str, list[str]]:
         "closed-loop": ["closed-loop", str(PROBLEMS / "nutation_suppression.toml")],
         "montecarlo": ["montecarlo", str(PROBLEMS / "montecarlo_open_loop.toml"), "--runs", "1"],
         "calibrate": ["calibrate", str(MODEL), "--track", str(track), "--fit", "cm"],
+        "spin-margin": ["spin-margin", str(MODEL)],
     }
 
 
 @pytest.mark.parametrize("command", ["simulate", "optimize", "closed-loop", "montecarlo",
-                                     "calibrate"])  # fmt: skip
+                                     "calibrate", "spin-margin"])  # fmt: skip
 def test_an_out_that_cannot_be_made_names_out_before_the_work(command, tmp_path, capsys):
     argv = _commands(tmp_path)[command]
     a_file = tmp_path / "a_file"

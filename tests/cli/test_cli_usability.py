@@ -22,7 +22,7 @@ from lightcraft_opt.cli.progress import progress_line
 
 MODELS = REPO_ROOT / "models"
 PROBLEMS = REPO_ROOT / "problems"
-COMMANDS = ("simulate", "optimize", "closed-loop", "montecarlo", "calibrate")
+COMMANDS = ("simulate", "optimize", "closed-loop", "montecarlo", "calibrate", "spin-margin")
 
 
 def test_version_and_top_level_help(capsys):
