@@ -53,6 +53,7 @@ from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
     build_derivative_pieces,
     chain_derivatives,
+    check_design,
 )
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 
@@ -112,15 +113,19 @@ def compile_pulse_map_derivatives(
     workers: int | None = None,
     max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
     report: BuildReport | None = None,
+    design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
-    """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) over compiled
-    pieces: each value piece (``DEFAULT_FLAGS``) and derivative piece (``DERIVATIVE_FLAGS``,
-    compiled/cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
-    cached like any other, compiled ``workers`` at a time (default: the cores); bigger
-    pieces stay interpreted. A piece that does not compile stays interpreted (with the
-    warning of ``compile_function``). ``report`` is told what is being built and how many
-    libraries are compiled so far."""
-    return _compiled_derivatives(phi, derivatives, compiler, workers, max_instructions, report)[0]
+    """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) in v = (x, u,
+    p[design]) over compiled pieces: each value piece (``DEFAULT_FLAGS``) and derivative
+    piece (``DERIVATIVE_FLAGS``, compiled/cache/compiler.py) of at most ``max_instructions``
+    SX instructions is its own library, cached like any other, compiled ``workers`` at a
+    time (default: the cores); bigger pieces stay interpreted. A piece that does not compile
+    stays interpreted (with the warning of ``compile_function``). ``report`` is told what is
+    being built and how many libraries are compiled so far. ``derivatives``, if given, must
+    have been built with the same ``design`` (sorted indices into PARAMETERS)."""
+    return _compiled_derivatives(
+        phi, derivatives, compiler, workers, max_instructions, report, design
+    )[0]
 
 
 def _compiled_derivatives(
@@ -130,6 +135,7 @@ def _compiled_derivatives(
     workers: int | None,
     max_instructions: int,
     report: BuildReport | None,
+    design: tuple[int, ...] = (),
 ) -> tuple[PulseMapDerivatives, list[Path]]:
     """(:func:`compile_pulse_map_derivatives`, the libraries its chain loads)."""
     if phi.pieces is None:
@@ -137,7 +143,7 @@ def _compiled_derivatives(
     if derivatives is None:
         if report is not None:
             report(BUILDING_PIECES)
-        derivatives = build_derivative_pieces(phi.pieces)
+        derivatives = build_derivative_pieces(phi.pieces, design=design)
     built = [f for f in derivatives.functions() if f is not None]
     fast, done, libraries = compile_pieces(
         phi.pieces, built, compiler, workers, max_instructions, report, "Φ's derivative pieces"
@@ -146,7 +152,7 @@ def _compiled_derivatives(
     replaced = tuple(
         None if f is None else next(compiled_derivatives) for f in derivatives.functions()
     )
-    return chain_derivatives(phi, DerivativePieces.of(replaced), fast), libraries
+    return chain_derivatives(phi, DerivativePieces.of(replaced), fast, design=design), libraries
 
 
 def compile_pieces(
@@ -189,8 +195,11 @@ def saved_pulse_map_derivatives(
     *,
     max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
     report: BuildReport | None = None,
+    design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
-    """:func:`compile_pulse_map_derivatives` of ``phi``, kept on disk by structure
+    """:func:`compile_pulse_map_derivatives` of ``phi`` in v = (x, u, p[design])
+    (``design``: sorted indices into PARAMETERS, the OCP's designed entries of p), kept on
+    disk by structure
     (compiled/cache/functions.py): the chain's Functions over the compiled pieces, serialised with
     the libraries they call (verified before loading), under the key
     :func:`derivatives_key`. A hit loads in milliseconds instead of seconds of casadi's AD
@@ -198,15 +207,18 @@ def saved_pulse_map_derivatives(
     :class:`~lightcraft_opt.compiled.cache.CacheWarning`. Derivatives with a piece that failed to
     compile (no compiler ...) are used, never saved.
     ``max_instructions`` as in :func:`compile_pulse_map_derivatives`."""
+    design = check_design(design)
     start = time.perf_counter()
-    key = derivatives_key(phi, max_instructions)
+    key = derivatives_key(phi, max_instructions, design)
     loaded = None if key is None else load_functions(DERIVATIVES_CACHE, key)
     if loaded is not None and len(loaded) == 3 + len(fields(DerivativePieces)):
         if report is not None:
             report(f"Φ's derivatives: loaded from the cache in {time.perf_counter() - start:.1f} s")
         pieces_of = DerivativePieces.of(tuple(loaded[3:]))
-        return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of)
-    derivatives, libraries = _compiled_derivatives(phi, None, None, None, max_instructions, report)
+        return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of, design)
+    derivatives, libraries = _compiled_derivatives(
+        phi, None, None, None, max_instructions, report, design
+    )
     pieces = derivatives.pieces.functions()
     complete = derivatives.hessian is not None and _all_compiled(pieces, max_instructions)
     if key is not None and complete:
@@ -226,19 +238,23 @@ def _all_compiled(derivative_pieces: Sequence[ca.Function | None], limit: int) -
 
 
 def derivatives_key(
-    phi: PulseMap, max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT
+    phi: PulseMap,
+    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    design: tuple[int, ...] = (),
 ) -> str | None:
-    """The structure key of ``phi``'s compiled derivatives: Φ's graph (its dense Function
-    and pieces, which hold the model's structure and the options; the model's numbers go
-    in through p), the options and input layout, the compiler's version, flags and
-    instruction limit, and the source of the chain and of this module; None without a C
-    compiler."""
+    """The structure key of ``phi``'s compiled derivatives in v = (x, u, p[design]): Φ's
+    graph (its dense Function and pieces, which hold the model's structure and the options;
+    the model's numbers go in through p), the options and input layout, the designed
+    entries of p (a key of its own per design; none: the key of the chain without them),
+    the compiler's version, flags and instruction limit, and the source of the chain and
+    of this module; None without a C compiler."""
     version = compiler_version()
     if version is None:
         return None
     pieces = phi.pieces
     assert pieces is not None
     numbers = (pieces.substeps, pieces.step_length, pieces.n_thrusters, pieces.has_carrier)
+    designed = (repr(("design", check_design(design))),) if design else ()
     return structure_key(
         "pulse_map_derivatives",
         phi.dense,
@@ -250,4 +266,5 @@ def derivatives_key(
         version,
         repr((DEFAULT_FLAGS, DERIVATIVE_FLAGS, max_instructions)),
         source_digest(derivative_chain, _THIS_MODULE),
+        *designed,
     )

@@ -129,11 +129,10 @@ def chain_nlp(
         )
     N, nx, nu = tr.problem.horizon, STATE.size, tr.problem.inputs.size
     design = tuple(int(i) for i in np.sort(tr.design.p_index))
-    has = tuple(getattr(der, "design", ()))
-    if has != design:
+    if der.design != design:
         raise ParameterError(
             "derivatives",
-            f"Φ's chain derivatives are in the design entries {has} of p, the problem "
+            f"Φ's chain derivatives are in the design entries {der.design} of p, the problem "
             f"designs {design}",
         )
     w, P = tr.nlp["x"], tr.P
