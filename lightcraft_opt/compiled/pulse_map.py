@@ -61,18 +61,29 @@ __all__ = [
     "BUILDING_PIECES",
     "DERIVATIVES_CACHE",
     "DERIVATIVE_INSTRUCTION_LIMIT",
+    "DESIGN_INSTRUCTION_LIMIT",
     "compile_pieces",
     "compile_pulse_map",
     "compile_pulse_map_derivatives",
     "derivatives_key",
+    "instruction_limit",
     "saved_pulse_map_derivatives",
 ]
 
 #: Derivative pieces above this many SX instructions stay interpreted: gcc's time and memory
 #: grow faster than the code (the Hessian of one Yoshida substep, 553k instructions, is 13 MB
 #: of C that takes 3.3 GB and over a minute even at -O0). The OCP's Strang map (2 substeps,
-#: 4 x 16 optic; substep Hessian 229k) compiles whole.
+#: 4 x 16 optic; substep Hessian 241k) compiles whole.
 DERIVATIVE_INSTRUCTION_LIMIT = 250_000
+
+#: The limit for the pieces of a chain also in designed entries of p (a design, ocp/design.py):
+#: each designed entry adds a few per cent to the substep's Hessian (the OCP's Strang map: 241k
+#: instructions, 255k with two entries, which gcc compiled in 100 s under load 5, the run's
+#: largest process 2.2 GB), and
+#: a design problem is solved offline over hundreds of iterations, where one longer gcc run per
+#: structure pays for itself: the interpreted substep Hessian made an iteration at 30 pulses
+#: 255 ms instead of 20-35 ms (bench/README.md#design_chainpy).
+DESIGN_INSTRUCTION_LIMIT = 300_000
 
 #: What a build reports when it starts casadi's AD of Φ's pieces.
 BUILDING_PIECES = "building Φ's derivative pieces (casadi's AD of each piece, seconds) ..."
@@ -111,21 +122,21 @@ def compile_pulse_map_derivatives(
     *,
     compiler: str | None = None,
     workers: int | None = None,
-    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    max_instructions: int | None = None,
     report: BuildReport | None = None,
     design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
     """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) in v = (x, u,
     p[design]) over compiled pieces: each value piece (``DEFAULT_FLAGS``) and derivative
     piece (``DERIVATIVE_FLAGS``, compiled/cache/compiler.py) of at most ``max_instructions``
-    SX instructions is its own library, cached like any other, compiled ``workers`` at a
-    time (default: the cores); bigger pieces stay interpreted. A piece that does not compile
+    SX instructions (default :func:`instruction_limit`) is its own library, cached like
+    any other, compiled ``workers`` at a time (default: the cores); bigger pieces stay
+    interpreted. A piece that does not compile
     stays interpreted (with the warning of ``compile_function``). ``report`` is told what is
     being built and how many libraries are compiled so far. ``derivatives``, if given, must
     have been built with the same ``design`` (sorted indices into PARAMETERS)."""
-    return _compiled_derivatives(
-        phi, derivatives, compiler, workers, max_instructions, report, design
-    )[0]
+    limit = instruction_limit(design, max_instructions)
+    return _compiled_derivatives(phi, derivatives, compiler, workers, limit, report, design)[0]
 
 
 def _compiled_derivatives(
@@ -193,21 +204,21 @@ DERIVATIVES_CACHE = "pulse_map_derivatives"
 def saved_pulse_map_derivatives(
     phi: PulseMap,
     *,
-    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    max_instructions: int | None = None,
     report: BuildReport | None = None,
     design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
     """:func:`compile_pulse_map_derivatives` of ``phi`` in v = (x, u, p[design])
     (``design``: sorted indices into PARAMETERS, the OCP's designed entries of p), kept on
-    disk by structure
-    (compiled/cache/functions.py): the chain's Functions over the compiled pieces, serialised with
-    the libraries they call (verified before loading), under the key
+    disk by structure (compiled/cache/functions.py): the chain's Functions over the compiled
+    pieces, serialised with the libraries they call (verified before loading), under the key
     :func:`derivatives_key`. A hit loads in milliseconds instead of seconds of casadi's AD
     on each piece; a damaged entry, or one whose library is damaged, is built again with a
     :class:`~lightcraft_opt.compiled.cache.CacheWarning`. Derivatives with a piece that failed to
     compile (no compiler ...) are used, never saved.
     ``max_instructions`` as in :func:`compile_pulse_map_derivatives`."""
     design = check_design(design)
+    max_instructions = instruction_limit(design, max_instructions)
     start = time.perf_counter()
     key = derivatives_key(phi, max_instructions, design)
     loaded = None if key is None else load_functions(DERIVATIVES_CACHE, key)
@@ -237,20 +248,30 @@ def _all_compiled(derivative_pieces: Sequence[ca.Function | None], limit: int) -
     )
 
 
+def instruction_limit(design: tuple[int, ...], max_instructions: int | None = None) -> int:
+    """``max_instructions`` if given, else the limit for a chain in ``design``:
+    :data:`DESIGN_INSTRUCTION_LIMIT` with designed entries of p, else
+    :data:`DERIVATIVE_INSTRUCTION_LIMIT`."""
+    if max_instructions is not None:
+        return max_instructions
+    return DESIGN_INSTRUCTION_LIMIT if design else DERIVATIVE_INSTRUCTION_LIMIT
+
+
 def derivatives_key(
     phi: PulseMap,
-    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    max_instructions: int | None = None,
     design: tuple[int, ...] = (),
 ) -> str | None:
     """The structure key of ``phi``'s compiled derivatives in v = (x, u, p[design]): Φ's
     graph (its dense Function and pieces, which hold the model's structure and the options;
     the model's numbers go in through p), the options and input layout, the designed
     entries of p (a key of its own per design; none: the key of the chain without them),
-    the compiler's version, flags and instruction limit, and the source of the chain and
-    of this module; None without a C compiler."""
+    the compiler's version, flags and instruction limit (default :func:`instruction_limit`),
+    and the source of the chain and of this module; None without a C compiler."""
     version = compiler_version()
     if version is None:
         return None
+    max_instructions = instruction_limit(design, max_instructions)
     pieces = phi.pieces
     assert pieces is not None
     numbers = (pieces.substeps, pieces.step_length, pieces.n_thrusters, pieces.has_carrier)
