@@ -74,10 +74,10 @@ def _ad_functions(tr: MultipleShooting) -> tuple[ca.Function, ...]:
     lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
     hess = ca.triu(ca.hessian(lf * f + ca.dot(lg, g), w)[0])
     return (
-        ca.Function("nlp", [w, P], [f, g]),
-        ca.Function("grad_f", [w, P], [f, ca.gradient(f, w)]),
-        ca.Function("jac_g", [w, P], [g, ca.jacobian(g, w)]),
-        ca.Function("hess", [w, P, lf, lg], [hess]),
+        ca.Function("ad_nlp", [w, P], [f, g]),
+        ca.Function("ad_grad_f", [w, P], [f, ca.gradient(f, w)]),
+        ca.Function("ad_jac_g", [w, P], [g, ca.jacobian(g, w)]),
+        ca.Function("ad_hess_l", [w, P, lf, lg], [hess]),
     )
 
 
