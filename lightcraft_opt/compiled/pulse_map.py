@@ -79,10 +79,10 @@ DERIVATIVE_INSTRUCTION_LIMIT = 250_000
 #: The limit for the pieces of a chain also in designed entries of p (a design, ocp/design.py):
 #: each designed entry adds a few per cent to the substep's Hessian (the OCP's Strang map: 241k
 #: instructions, 255k with two entries, which gcc compiled in 100 s under load 5, the run's
-#: largest process 2.2 GB), and
-#: a design problem is solved offline over hundreds of iterations, where one longer gcc run per
-#: structure pays for itself: the interpreted substep Hessian made an iteration at 30 pulses
-#: 255 ms instead of 20-35 ms (bench/README.md#design_chainpy).
+#: largest process 2.2 GB), and a design problem is solved offline over hundreds of
+#: iterations, where one longer gcc run per structure pays for itself: with that Hessian
+#: interpreted a chain-NLP iteration at 130 pulses took 831 ms instead of 101-191 ms (bench/
+#: README.md#design_chainpy-a-chain-nlp-iteration-with-and-without-a-design).
 DESIGN_INSTRUCTION_LIMIT = 300_000
 
 #: What a build reports when it starts casadi's AD of Φ's pieces.
