@@ -43,8 +43,15 @@ from lightcraft_opt.compiled.cache import (
     load_functions,
 )
 from lightcraft_opt.compiled.cache import compiler as cache_compiler
+from lightcraft_opt.compiled.pulse_map import DESIGN_INSTRUCTION_LIMIT
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import initial_state, map_input_layout, nominal_inputs, parameter_values
+from lightcraft_opt.layout import (
+    PARAMETERS,
+    initial_state,
+    map_input_layout,
+    nominal_inputs,
+    parameter_values,
+)
 from lightcraft_opt.model import Engine
 from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
@@ -403,6 +410,12 @@ def test_compiled_chain_derivatives_are_saved_and_loaded_by_structure(small, mon
     other = build_pulse_map(model, PulseMapOptions(substeps=2, dense=2))
     assert derivatives_key(other, limit) not in (key, None)
     assert derivatives_key(phi) != key  # another instruction limit
+    # a chain also in designed entries of p: a key per design, none the plain chain's
+    i, j = PARAMETERS.slot("rotor_mass_dry").start, PARAMETERS.slot("impulse_per_pulse").start
+    designed = {derivatives_key(phi, limit, design) for design in ((i,), (j,), (i, j))}
+    assert len(designed) == 3 and not designed & {key, None}
+    assert derivatives_key(phi, limit, ()) == key
+    assert derivatives_key(phi, None, (i,)) == derivatives_key(phi, DESIGN_INSTRUCTION_LIMIT, (i,))
 
     def no_build(*args, **kwargs):
         raise AssertionError("built again instead of loading the saved derivatives")

@@ -42,6 +42,7 @@ from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
     build_derivative_pieces,
     chain_derivatives,
+    check_design,
 )
 from lightcraft_opt.symbolic.maps.pulse_map_sensitivities import (
     SensitivityPieces,
@@ -139,24 +140,31 @@ def _compilation_warned_once() -> Iterator[None]:
             warnings.warn(w.message, CompilationWarning, stacklevel=4)
 
 
-#: Φ's chain derivatives built in this process, likewise.
-_DERIVATIVES: OrderedDict[_Key, PulseMapDerivatives] = OrderedDict()
+#: Φ's chain derivatives built in this process, by (model, options, compiled, design),
+#: likewise.
+_DERIVATIVES: OrderedDict[
+    tuple[Model, PulseMapOptions, bool, tuple[int, ...]], PulseMapDerivatives
+] = OrderedDict()
 
 
 def derivatives_for(
     model: Model,
     options: PulseMapOptions | None = None,
     *,
+    design: tuple[int, ...] = (),
     compiled: bool | None = None,
     report: BuildReport | None = None,
 ) -> PulseMapDerivatives:
-    """Φ's explicit-chain derivatives for ``model``: built once per process for equal
-    models and options, over compiled pieces unless ``compiled`` is False or
-    :func:`compile_by_default` says no; those come from the disk cache
-    (:func:`saved_pulse_map_derivatives`: the first build of the OCP's map takes about a
-    minute on 2 cores, a later one milliseconds). ``report`` hears what a build does."""
+    """Φ's explicit-chain derivatives for ``model`` in v = (x, u, p[design]) (``design``:
+    sorted indices into PARAMETERS, the OCP's designed entries of p): built once per
+    process for equal models, options and designs, over compiled pieces unless
+    ``compiled`` is False or :func:`compile_by_default` says no; those come from the disk
+    cache (:func:`saved_pulse_map_derivatives`: the first build of the OCP's map takes
+    about a minute on 2 cores, a later one milliseconds). ``report`` hears what a build
+    does."""
     opts = options or PulseMapOptions()
     want = compile_by_default() if compiled is None else bool(compiled)
+    design = check_design(design)
 
     def build() -> PulseMapDerivatives:
         phi = pulse_map_for(model, opts, compiled=False)
@@ -164,11 +172,12 @@ def derivatives_for(
         if not want:
             if report is not None:
                 report(BUILDING_PIECES)
-            return chain_derivatives(phi, build_derivative_pieces(phi.pieces))
+            pieces = build_derivative_pieces(phi.pieces, design=design)
+            return chain_derivatives(phi, pieces, design=design)
         with _compilation_warned_once():
-            return saved_pulse_map_derivatives(phi, report=report)
+            return saved_pulse_map_derivatives(phi, report=report, design=design)
 
-    return _remembered(_DERIVATIVES, (model, opts, want), build)
+    return _remembered(_DERIVATIVES, (model, opts, want, design), build)
 
 
 #: Φ's pieces in forward mode built in this process, by (model, options, compiled,

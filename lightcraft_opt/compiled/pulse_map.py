@@ -53,6 +53,7 @@ from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
     build_derivative_pieces,
     chain_derivatives,
+    check_design,
 )
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 
@@ -60,18 +61,29 @@ __all__ = [
     "BUILDING_PIECES",
     "DERIVATIVES_CACHE",
     "DERIVATIVE_INSTRUCTION_LIMIT",
+    "DESIGN_INSTRUCTION_LIMIT",
     "compile_pieces",
     "compile_pulse_map",
     "compile_pulse_map_derivatives",
     "derivatives_key",
+    "instruction_limit",
     "saved_pulse_map_derivatives",
 ]
 
 #: Derivative pieces above this many SX instructions stay interpreted: gcc's time and memory
 #: grow faster than the code (the Hessian of one Yoshida substep, 553k instructions, is 13 MB
 #: of C that takes 3.3 GB and over a minute even at -O0). The OCP's Strang map (2 substeps,
-#: 4 x 16 optic; substep Hessian 229k) compiles whole.
+#: 4 x 16 optic; substep Hessian 241k) compiles whole.
 DERIVATIVE_INSTRUCTION_LIMIT = 250_000
+
+#: The limit for the pieces of a chain also in designed entries of p (a design, ocp/design.py):
+#: each designed entry adds a few per cent to the substep's Hessian (the OCP's Strang map: 241k
+#: instructions, 255k with two entries, which gcc compiled in 100 s under load 5, the run's
+#: largest process 2.2 GB), and a design problem is solved offline over hundreds of
+#: iterations, where one longer gcc run per structure pays for itself: with that Hessian
+#: interpreted a chain-NLP iteration at 130 pulses took 831 ms instead of 101-191 ms (bench/
+#: README.md#design_chainpy-a-chain-nlp-iteration-with-and-without-a-design).
+DESIGN_INSTRUCTION_LIMIT = 300_000
 
 #: What a build reports when it starts casadi's AD of Φ's pieces.
 BUILDING_PIECES = "building Φ's derivative pieces (casadi's AD of each piece, seconds) ..."
@@ -110,17 +122,21 @@ def compile_pulse_map_derivatives(
     *,
     compiler: str | None = None,
     workers: int | None = None,
-    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    max_instructions: int | None = None,
     report: BuildReport | None = None,
+    design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
-    """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) over compiled
-    pieces: each value piece (``DEFAULT_FLAGS``) and derivative piece (``DERIVATIVE_FLAGS``,
-    compiled/cache/compiler.py) of at most ``max_instructions`` SX instructions is its own library,
-    cached like any other, compiled ``workers`` at a time (default: the cores); bigger
-    pieces stay interpreted. A piece that does not compile stays interpreted (with the
-    warning of ``compile_function``). ``report`` is told what is being built and how many
-    libraries are compiled so far."""
-    return _compiled_derivatives(phi, derivatives, compiler, workers, max_instructions, report)[0]
+    """Φ's explicit-chain derivatives (symbolic/maps/pulse_map_derivatives.py) in v = (x, u,
+    p[design]) over compiled pieces: each value piece (``DEFAULT_FLAGS``) and derivative
+    piece (``DERIVATIVE_FLAGS``, compiled/cache/compiler.py) of at most ``max_instructions``
+    SX instructions (default :func:`instruction_limit`) is its own library, cached like
+    any other, compiled ``workers`` at a time (default: the cores); bigger pieces stay
+    interpreted. A piece that does not compile
+    stays interpreted (with the warning of ``compile_function``). ``report`` is told what is
+    being built and how many libraries are compiled so far. ``derivatives``, if given, must
+    have been built with the same ``design`` (sorted indices into PARAMETERS)."""
+    limit = instruction_limit(design, max_instructions)
+    return _compiled_derivatives(phi, derivatives, compiler, workers, limit, report, design)[0]
 
 
 def _compiled_derivatives(
@@ -130,6 +146,7 @@ def _compiled_derivatives(
     workers: int | None,
     max_instructions: int,
     report: BuildReport | None,
+    design: tuple[int, ...] = (),
 ) -> tuple[PulseMapDerivatives, list[Path]]:
     """(:func:`compile_pulse_map_derivatives`, the libraries its chain loads)."""
     if phi.pieces is None:
@@ -137,7 +154,7 @@ def _compiled_derivatives(
     if derivatives is None:
         if report is not None:
             report(BUILDING_PIECES)
-        derivatives = build_derivative_pieces(phi.pieces)
+        derivatives = build_derivative_pieces(phi.pieces, design=design)
     built = [f for f in derivatives.functions() if f is not None]
     fast, done, libraries = compile_pieces(
         phi.pieces, built, compiler, workers, max_instructions, report, "Φ's derivative pieces"
@@ -146,7 +163,7 @@ def _compiled_derivatives(
     replaced = tuple(
         None if f is None else next(compiled_derivatives) for f in derivatives.functions()
     )
-    return chain_derivatives(phi, DerivativePieces.of(replaced), fast), libraries
+    return chain_derivatives(phi, DerivativePieces.of(replaced), fast, design=design), libraries
 
 
 def compile_pieces(
@@ -187,26 +204,32 @@ DERIVATIVES_CACHE = "pulse_map_derivatives"
 def saved_pulse_map_derivatives(
     phi: PulseMap,
     *,
-    max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT,
+    max_instructions: int | None = None,
     report: BuildReport | None = None,
+    design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
-    """:func:`compile_pulse_map_derivatives` of ``phi``, kept on disk by structure
-    (compiled/cache/functions.py): the chain's Functions over the compiled pieces, serialised with
-    the libraries they call (verified before loading), under the key
+    """:func:`compile_pulse_map_derivatives` of ``phi`` in v = (x, u, p[design])
+    (``design``: sorted indices into PARAMETERS, the OCP's designed entries of p), kept on
+    disk by structure (compiled/cache/functions.py): the chain's Functions over the compiled
+    pieces, serialised with the libraries they call (verified before loading), under the key
     :func:`derivatives_key`. A hit loads in milliseconds instead of seconds of casadi's AD
     on each piece; a damaged entry, or one whose library is damaged, is built again with a
     :class:`~lightcraft_opt.compiled.cache.CacheWarning`. Derivatives with a piece that failed to
     compile (no compiler ...) are used, never saved.
     ``max_instructions`` as in :func:`compile_pulse_map_derivatives`."""
+    design = check_design(design)
+    max_instructions = instruction_limit(design, max_instructions)
     start = time.perf_counter()
-    key = derivatives_key(phi, max_instructions)
+    key = derivatives_key(phi, max_instructions, design)
     loaded = None if key is None else load_functions(DERIVATIVES_CACHE, key)
     if loaded is not None and len(loaded) == 3 + len(fields(DerivativePieces)):
         if report is not None:
             report(f"Φ's derivatives: loaded from the cache in {time.perf_counter() - start:.1f} s")
         pieces_of = DerivativePieces.of(tuple(loaded[3:]))
-        return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of)
-    derivatives, libraries = _compiled_derivatives(phi, None, None, None, max_instructions, report)
+        return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of, design)
+    derivatives, libraries = _compiled_derivatives(
+        phi, None, None, None, max_instructions, report, design
+    )
     pieces = derivatives.pieces.functions()
     complete = derivatives.hessian is not None and _all_compiled(pieces, max_instructions)
     if key is not None and complete:
@@ -225,20 +248,34 @@ def _all_compiled(derivative_pieces: Sequence[ca.Function | None], limit: int) -
     )
 
 
+def instruction_limit(design: tuple[int, ...], max_instructions: int | None = None) -> int:
+    """``max_instructions`` if given, else the limit for a chain in ``design``:
+    :data:`DESIGN_INSTRUCTION_LIMIT` with designed entries of p, else
+    :data:`DERIVATIVE_INSTRUCTION_LIMIT`."""
+    if max_instructions is not None:
+        return max_instructions
+    return DESIGN_INSTRUCTION_LIMIT if design else DERIVATIVE_INSTRUCTION_LIMIT
+
+
 def derivatives_key(
-    phi: PulseMap, max_instructions: int = DERIVATIVE_INSTRUCTION_LIMIT
+    phi: PulseMap,
+    max_instructions: int | None = None,
+    design: tuple[int, ...] = (),
 ) -> str | None:
-    """The structure key of ``phi``'s compiled derivatives: Φ's graph (its dense Function
-    and pieces, which hold the model's structure and the options; the model's numbers go
-    in through p), the options and input layout, the compiler's version, flags and
-    instruction limit, and the source of the chain and of this module; None without a C
-    compiler."""
+    """The structure key of ``phi``'s compiled derivatives in v = (x, u, p[design]): Φ's
+    graph (its dense Function and pieces, which hold the model's structure and the options;
+    the model's numbers go in through p), the options and input layout, the designed
+    entries of p (a key of its own per design; none: the key of the chain without them),
+    the compiler's version, flags and instruction limit (default :func:`instruction_limit`),
+    and the source of the chain and of this module; None without a C compiler."""
     version = compiler_version()
     if version is None:
         return None
+    max_instructions = instruction_limit(design, max_instructions)
     pieces = phi.pieces
     assert pieces is not None
     numbers = (pieces.substeps, pieces.step_length, pieces.n_thrusters, pieces.has_carrier)
+    designed = (repr(("design", check_design(design))),) if design else ()
     return structure_key(
         "pulse_map_derivatives",
         phi.dense,
@@ -250,4 +287,5 @@ def derivatives_key(
         version,
         repr((DEFAULT_FLAGS, DERIVATIVE_FLAGS, max_instructions)),
         source_digest(derivative_chain, _THIS_MODULE),
+        *designed,
     )

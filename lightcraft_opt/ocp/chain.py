@@ -9,9 +9,10 @@ and at the point w̄
 
     L(w) ≈ ℓ(w, Y(w̄) + J(w̄) (z(w) - z(w̄))) + Σ_k ½ (z_k(w) - z_k(w̄))ᵀ H_k(w̄) (z_k(w) - z_k(w̄))
 
-(z_k = (x_k, u_k) the physical arguments of pulse k, affine in w; J the chain's Jacobian;
-H_k the chain's Hessian of μ_kᵀ Φ with μ_k = ∂ℓ/∂Y_k) has L's gradient and Hessian at w̄
-exactly; casadi differentiates that surrogate, never Φ.
+(z_k = (x_k, u_k, d_p) the physical arguments of pulse k, d_p the designed entries of p,
+affine in w; J the chain's Jacobian in them; H_k the chain's Hessian of μ_kᵀ Φ with μ_k =
+∂ℓ/∂Y_k) has L's gradient and Hessian at w̄ exactly; casadi differentiates that
+surrogate, never Φ.
 
 Φ over the horizon is evaluated once per primal point and shared (ocp/evaluation.py): its
 values by f and g, its values and Jacobians by ∇f, ∂g/∂w and the Hessian's multipliers;
@@ -61,7 +62,7 @@ class Surrogate:
         as symbols.
     multipliers : ``ocp_output_multipliers(w, Y_x, Y_e, P, lam_f, lam_g) -> (mu_x, mu_e)``,
         ∂ℓ/∂Y.
-    arguments : ``ocp_pulse_arguments(w, P) -> Z``, Φ's arguments (x_k, u_k) side by side.
+    arguments : ``ocp_pulse_arguments(w, P) -> Z``, Φ's arguments (x_k, u_k, d_p) side by side.
     grad_f, jac_g, hess : the surrogate's ``(w, P, z_bar, x_next_bar, engine_bar, dx_bar,
         de_bar) -> (f, ∇f)``, ``-> (g, ∂g/∂w)`` and ``(..., hess_bar, lam_f, lam_g) -> H``.
     """
@@ -129,11 +130,10 @@ def chain_nlp(
         )
     N, nx, nu = tr.problem.horizon, STATE.size, tr.problem.inputs.size
     design = tuple(int(i) for i in np.sort(tr.design.p_index))
-    has = tuple(getattr(der, "design", ()))
-    if has != design:
+    if der.design != design:
         raise ParameterError(
             "derivatives",
-            f"Φ's chain derivatives are in the design entries {has} of p, the problem "
+            f"Φ's chain derivatives are in the design entries {der.design} of p, the problem "
             f"designs {design}",
         )
     w, P = tr.nlp["x"], tr.P
@@ -200,7 +200,7 @@ def build_surrogate(
     Yx, Ye = ca.MX.sym("Y_x", nx, N), ca.MX.sym("Y_e", ne, N)
     f_y, g_y = tr.nlp_of_outputs(Yx, Ye)
     tilde = ca.Function("ocp_nlp_of_outputs", [w, Yx, Ye, P], [f_y, g_y])
-    # Φ's arguments z_k = (x_k, u_k), affine in w
+    # Φ's arguments z_k = (x_k, u_k, d_p), affine in w
     Z = tr.pulse_arguments()
     z_of = ca.Function("ocp_pulse_arguments", [w, P], [Z])
     # Φ's structural zeros (casadi's sparsity propagation through Φ), so the NLP's

@@ -169,15 +169,17 @@ class CompiledOcp:
             )
         blocks = opts.blocks(problem.horizon)
         derivatives = None
-        if problem.design_layout.in_p.any():
-            pass  # Φ's chain has no derivatives in p yet: casadi's AD through Φ
-        elif uses_chain(opts) and self.pulse_map.pieces is not None:
+        if uses_chain(opts) and self.pulse_map.pieces is not None:
+            # Φ's chain also in the designed entries of p (the launch spin is x0's, not p's)
+            design = tuple(sorted(int(i) for i in problem.design_layout.p_index))
             derivatives = (
-                derivatives_for(problem.model, map_options, report=build_progress)
+                derivatives_for(problem.model, map_options, design=design, report=build_progress)
                 if pulse_map is None and opts.prediction is PredictionMap.FULL
-                else saved_pulse_map_derivatives(self.pulse_map, report=build_progress)
+                else saved_pulse_map_derivatives(
+                    self.pulse_map, report=build_progress, design=design
+                )
                 if compile_by_default()
-                else build_pulse_map_derivatives(self.pulse_map)
+                else build_pulse_map_derivatives(self.pulse_map, design=design)
             )
         self.transcription = tr = MultipleShooting(
             problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives

@@ -4,18 +4,23 @@ casadi's AD through the composed MX graph of Φ works (tests use it as the refer
 it is slow in the virtual machine and its generated C is too big to compile in reasonable
 time. Here the chain rule is written out over the pieces of pulse_map_pieces.py, each
 piece differentiated on its own (small SX Functions with ``{"cse": True}`` that compile in
-seconds), in the order the pieces run. With v = (x, u) the pulse's variables:
+seconds), in the order the pieces run. The pulse's variables are v = (x, u, p_d), p_d =
+p[design] the entries of p an OCP designs (ocp/design.py; ``design`` sorted indices into
+PARAMETERS, none by default: v = (x, u)). The pieces that take p (the jump, the substep,
+the coning rate) are differentiated also in p_d, whose columns follow their other inputs';
+P = [0 0 I] selects p_d from v.
 
 Forward (the Jacobian), s_0 = x_+ the state after the jump, s_k after substep k::
 
-    D_n  = ∂N(x)/∂x [I 0]                        (normalised entry state)
-    D_y  = [D_n; 0 I_pulse]                      (the jump's inputs (x_n, pulse))
+    D_n  = ∂N(x)/∂x [I 0 0]                      (normalised entry state)
+    D_y  = [D_n; 0 I_pulse 0; P]                 (the jump's inputs (x_n, pulse, p_d))
     D_0  = J_y D_y,   D_e = E_y D_y              (state after the jump, engine)
-    D_{k+1} = A_k D_k + B_k W_k                  (A_k = ∂S/∂s, B_k = ∂S/∂w; W_k = ∂w_k/∂v)
+    D_{k+1} = A_k D_k + B_k W_k + C_k P          (A_k = ∂S/∂s, B_k = ∂S/∂w, C_k = ∂S/∂p_d;
+                                                  W_k = ∂w_k/∂v)
     ∂x_next/∂v = ∂N(s_n)/∂s D_n
 
 where W_k selects u's entries of substep k, plus, for the PHASE_LOCKED profile, the coning
-rate ω(x_+): W_k += e_ω ∂ω/∂x D_0.
+rate ω(x_+, p_d), the only way p enters w: W_k += e_ω ∂ω/∂(x, p_d) [D_0; P].
 
 Backward (the Hessian of the Lagrangian term λᵀ x_next + νᵀ engine): every piece adds
 G^T ∇²(ρ^T piece) G, where G is the Jacobian of the piece's inputs with respect to v (from
@@ -24,10 +29,12 @@ the forward sweep) and ρ the adjoint of its outputs, swept back from λ and ν:
     ρ_n = ∂N(s_n)/∂sᵀ λ;   ρ_k = A_kᵀ ρ_{k+1};   a_ω += (B_kᵀ ρ_{k+1})_ω
     ρ_jump = (ρ_0 + a_ω ∂ω/∂x_+ᵀ, ν);   ρ_entry = J_y[:, x]ᵀ ρ_jump,x + E_y[:, x]ᵀ ν
 
-The selections of u into w are linear and add nothing. Each piece's Hessian is casadi's
+with G = [D_k; W_k; P] for substep k, [D_0; P] for ω, D_y for the jump. The selections of
+u into w and of p_d from v are linear and add nothing. Each piece's Hessian is casadi's
 SX Hessian of ρᵀ piece, so nothing here is a hand derivation: only the chain is.
 tests/symbolic/test_pulse_map_derivatives.py checks both against casadi's AD through Φ
-and against finite differences.
+and against finite differences, tests/symbolic/test_pulse_map_design_derivatives.py with
+designed entries of p.
 """
 
 from __future__ import annotations
@@ -49,6 +56,7 @@ __all__ = [
     "build_derivative_pieces",
     "build_pulse_map_derivatives",
     "chain_derivatives",
+    "check_design",
 ]
 
 _SX_OPTIONS = {"cse": True}
@@ -85,7 +93,7 @@ class DerivativePieces:
 
 @dataclass(frozen=True)
 class PulseMapDerivatives:
-    """Φ's derivatives with respect to v = (x, u) of one pulse.
+    """Φ's derivatives with respect to v = (x, u, p[design]) of one pulse.
 
     Attributes
     ----------
@@ -93,17 +101,21 @@ class PulseMapDerivatives:
         itself composed over the same pieces (compiled pieces: Φ at compiled speed).
     jacobian : casadi.Function ``pulse_map_jacobian(x, u, p, t) -> (x_next, engine,
         dx_next_dv, dengine_dv)``; the Jacobians are (STATE.size, nv) and (ENGINE.size, nv)
-        with nv = STATE.size + u's size, columns x first, then u.
+        with nv = STATE.size + u's size + len(design), columns x first, then u, then the
+        designed entries of p.
     hessian : casadi.Function ``pulse_map_hessian(x, u, p, t, lam_x, lam_e) -> hess_v_v``:
         the (nv, nv) Hessian of lam_xᵀ x_next + lam_eᵀ engine; None when the pieces were
         built without Hessians (Jacobians only: linearisation).
     pieces : the pieces' derivative Functions the chain calls.
+    design : sorted indices into PARAMETERS of the entries of p in v (the OCP's designed
+        entries, ocp/design.py); () for v = (x, u).
     """
 
     values: ca.Function
     jacobian: ca.Function
     hessian: ca.Function | None
     pieces: DerivativePieces
+    design: tuple[int, ...] = ()
 
     @cached_property
     def n_v(self) -> int:
@@ -111,15 +123,18 @@ class PulseMapDerivatives:
 
 
 def _piece_derivatives(
-    f: ca.Function, wrt: tuple[int, ...], hessian: bool = True
+    f: ca.Function, wrt: tuple[int, ...], hessian: bool = True, design: tuple[int, ...] = ()
 ) -> tuple[ca.Function, ca.Function | None]:
     """``<f>_jacobian(inputs of f...) -> jac`` and ``<f>_hessian(inputs..., adjoint) ->
     (jac, hess)``: the Jacobian of f's outputs (stacked) with respect to its inputs ``wrt``
-    (stacked), and the Hessian of adjointᵀ outputs with respect to them (None unless
-    ``hessian``: its symbolic construction is the slow part)."""
+    (stacked) and, after them, the entries ``design`` of its input ``p``; and the Hessian
+    of adjointᵀ outputs with respect to the same (None unless ``hessian``: its symbolic
+    construction is the slow part)."""
     args = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
     outs = ca.vertcat(*(ca.vec(o) for o in f.call(args)))
     z = ca.vertcat(*(args[i] for i in wrt))
+    if design:
+        z = ca.vertcat(z, args[f.index_in("p")][list(design)])
     rho = ca.SX.sym("adjoint", outs.numel())
     jac = ca.densify(ca.jacobian(outs, z))
     jacobian = ca.Function(f"{f.name()}_jacobian", args, [jac], f.name_in(), ["jac"], _SX_OPTIONS)
@@ -137,41 +152,74 @@ def _piece_derivatives(
     return jacobian, second
 
 
-def build_derivative_pieces(pieces: PulseMapPieces, *, hessians: bool = True) -> DerivativePieces:
-    """The derivative Functions of Φ's pieces (casadi's SX AD on each piece alone); the
-    Hessians only with ``hessians``."""
+def check_design(design: tuple[int, ...] | list[int]) -> tuple[int, ...]:
+    """``design`` as a tuple of ints: sorted, distinct indices into PARAMETERS
+    (ParameterError naming ``design`` otherwise)."""
+    out = tuple(int(i) for i in design)
+    if list(out) != sorted(set(out)) or any(not 0 <= i < PARAMETERS.size for i in out):
+        raise ParameterError(
+            "design",
+            f"must be sorted, distinct indices into PARAMETERS (0 .. {PARAMETERS.size - 1}), "
+            f"got {out}",
+        )
+    return out
+
+
+def build_derivative_pieces(
+    pieces: PulseMapPieces, *, hessians: bool = True, design: tuple[int, ...] = ()
+) -> DerivativePieces:
+    """The derivative Functions of Φ's pieces (casadi's SX AD on each piece alone), those
+    that take p also with respect to its entries ``design`` (sorted indices into
+    PARAMETERS); the Hessians only with ``hessians``."""
+    design = check_design(design)
     return DerivativePieces(
         *_piece_derivatives(pieces.normalise, (0,), hessians),
-        *_piece_derivatives(pieces.jump, (0, 1), hessians),
-        *_piece_derivatives(pieces.substep, (0, 1), hessians),
-        *_piece_derivatives(pieces.coning_rate, (0,), hessians),
+        *_piece_derivatives(pieces.jump, (0, 1), hessians, design),
+        *_piece_derivatives(pieces.substep, (0, 1), hessians, design),
+        *_piece_derivatives(pieces.coning_rate, (0,), hessians, design),
     )
 
 
-def build_pulse_map_derivatives(phi: PulseMap, *, hessians: bool = True) -> PulseMapDerivatives:
+def build_pulse_map_derivatives(
+    phi: PulseMap, *, hessians: bool = True, design: tuple[int, ...] = ()
+) -> PulseMapDerivatives:
     """The explicit-chain Jacobian and (with ``hessians``) Lagrangian Hessian of the
-    structured ``phi`` (:func:`~lightcraft_opt.symbolic.maps.pulse_map.build_pulse_map`),
-    interpreted."""
+    structured ``phi`` (:func:`~lightcraft_opt.symbolic.maps.pulse_map.build_pulse_map`)
+    in v = (x, u, p[design]) (``design``: sorted indices into PARAMETERS), interpreted."""
     if phi.pieces is None:
         raise ParameterError(
             "phi", "the explicit chain needs a Φ from build_pulse_map, with its pieces"
         )
-    return chain_derivatives(phi, build_derivative_pieces(phi.pieces, hessians=hessians))
+    pieces = build_derivative_pieces(phi.pieces, hessians=hessians, design=design)
+    return chain_derivatives(phi, pieces, design=design)
 
 
 def chain_derivatives(
-    phi: PulseMap, derivatives: DerivativePieces, pieces: PulseMapPieces | None = None
+    phi: PulseMap,
+    derivatives: DerivativePieces,
+    pieces: PulseMapPieces | None = None,
+    *,
+    design: tuple[int, ...] = (),
 ) -> PulseMapDerivatives:
-    """The chain (module docstring) over given piece Functions: ``derivatives`` and the
-    value ``pieces`` (default ``phi.pieces``), interpreted or compiled alike."""
+    """The chain (module docstring) over given piece Functions: ``derivatives`` (built with
+    the same ``design``, sorted indices into PARAMETERS) and the value ``pieces`` (default
+    ``phi.pieces``), interpreted or compiled alike."""
     pieces = pieces or phi.pieces
     opts, ulay = phi.options, phi.inputs
     if pieces is None or opts is None or ulay is None:
         raise ParameterError(
             "phi", "the explicit chain needs a Φ from build_pulse_map, with its pieces"
         )
+    design = check_design(design)
     nx, nu, ne, npulse = STATE.size, ulay.size, ENGINE.size, PULSE_INPUT.size
-    nv = nx + nu
+    nd = len(design)
+    nv = nx + nu + nd
+    if derivatives.jump_jacobian.size2_out(0) != nx + npulse + nd:
+        raise ParameterError(
+            "design",
+            f"{design} does not match the derivative pieces "
+            f"(built for {derivatives.jump_jacobian.size2_out(0) - nx - npulse} entries of p)",
+        )
     d = derivatives
     jN, hN, jJ, hJ = d.normalise_jacobian, d.normalise_hessian, d.jump_jacobian, d.jump_hessian
     jS, hS, jW, hW = (
@@ -194,18 +242,26 @@ def chain_derivatives(
     # ------------------------------------------------------------ forward sweep
     xn = pieces.normalise(x)
     Nx_in = jN(x)
-    D_n = ca.horzcat(Nx_in, ca.MX.zeros(nx, nu))
+    D_n = ca.horzcat(Nx_in, ca.MX.zeros(nx, nu + nd))
     pulse_select = np.zeros((npulse, nv))
     pulse_select[:, nx : nx + npulse] = np.eye(npulse)
-    D_y = ca.vertcat(D_n, ca.DM(pulse_select))
+    # p[design] in v: the pieces' Jacobians have its columns after their other inputs
+    design_select = np.zeros((nd, nv))
+    design_select[:, nx + nu :] = np.eye(nd)
+
+    def with_design(D: ca.MX) -> ca.MX:
+        """A piece's inputs' Jacobian in v: ``D`` (its other inputs') and p[design]'s."""
+        return ca.vertcat(D, ca.DM(design_select)) if nd else D
+
+    D_y = with_design(ca.vertcat(D_n, ca.DM(pulse_select)))
     x_plus, engine = pieces.jump(xn, u[:npulse], p)
     J_y = jJ(xn, u[:npulse], p)
     D_0 = ca.mtimes(J_y[:nx, :], D_y)
     D_e = ca.mtimes(J_y[nx:, :], D_y)
-    W_inputs, W_u = _substep_input_map(phi, pieces, u, p, t, x_plus)
+    W_inputs, W_u = _substep_input_map(phi, pieces, u, p, t, x_plus, nd)
     if phase_locked:
         omega_x = jW(x_plus, p)
-        d_omega = ca.mtimes(omega_x, D_0)  # (1, nv)
+        d_omega = ca.mtimes(omega_x, with_design(D_0))  # (1, nv)
     states, Gs = [x_plus], []
     s, D = x_plus, D_0
     for k in range(opts.substeps):
@@ -215,9 +271,11 @@ def chain_derivatives(
         if phase_locked:
             Dw = Dw + ca.mtimes(ca.DM(_unit(nw, i_omega)), d_omega)
         jac_k = jS(s, w_k, p, t_k)
-        A_k, B_k = jac_k[:, :nx], jac_k[:, nx:]
-        Gs.append(ca.vertcat(D, Dw))
+        A_k, B_k = jac_k[:, :nx], jac_k[:, nx : nx + nw]
+        Gs.append(with_design(ca.vertcat(D, Dw)))
         D = ca.mtimes(A_k, D) + ca.mtimes(B_k, Dw)
+        if nd:  # the substep's own dependence on p[design]
+            D = D + ca.horzcat(ca.MX.zeros(nx, nx + nu), jac_k[:, nx + nw :])
         s = pieces.substep(s, w_k, p, t_k)
         states.append(s)
     x_next = pieces.normalise(s)
@@ -239,7 +297,7 @@ def chain_derivatives(
     )
 
     if hN is None or hJ is None or hS is None or hW is None:
-        return PulseMapDerivatives(values, jacobian, None, derivatives)
+        return PulseMapDerivatives(values, jacobian, None, derivatives, design)
 
     # ------------------------------------------------------------ backward sweep
     _, H_out = hN(s, lam_x)
@@ -255,13 +313,14 @@ def chain_derivatives(
         rho = ca.mtimes(jac_k[:, :nx].T, rho)
     if phase_locked:
         omega_x, H_omega = hW(x_plus, p, a_omega)
-        rho = rho + a_omega * omega_x.T
-        H = H + ca.mtimes([D_0.T, H_omega, D_0])
+        rho = rho + a_omega * omega_x[:, :nx].T
+        G_omega = with_design(D_0)
+        H = H + ca.mtimes([G_omega.T, H_omega, G_omega])
     _, H_jump = hJ(xn, u[:npulse], p, ca.vertcat(rho, lam_e))
     H = H + ca.mtimes([D_y.T, H_jump, D_y])
     entry = ca.mtimes(J_y[:nx, :nx].T, rho) + ca.mtimes(J_y[nx:, :nx].T, lam_e)
     _, H_in = hN(x, entry)
-    H = H + ca.diagcat(H_in, ca.MX.zeros(nu, nu))
+    H = H + ca.diagcat(H_in, ca.MX.zeros(nu + nd, nu + nd))
     hessian = ca.Function(
         "pulse_map_hessian",
         [x, u, p, t, lam_x, lam_e],
@@ -269,7 +328,7 @@ def chain_derivatives(
         ["x", "u", "p", "t", "lam_x", "lam_e"],
         ["hess_v_v"],
     )
-    return PulseMapDerivatives(values, jacobian, hessian, derivatives)
+    return PulseMapDerivatives(values, jacobian, hessian, derivatives, design)
 
 
 def _unit(n: int, i: int) -> np.ndarray:
@@ -279,11 +338,18 @@ def _unit(n: int, i: int) -> np.ndarray:
 
 
 def _substep_input_map(
-    phi: PulseMap, pieces: PulseMapPieces, u: ca.MX, p: ca.MX, t: ca.MX, x_plus: ca.MX
+    phi: PulseMap,
+    pieces: PulseMapPieces,
+    u: ca.MX,
+    p: ca.MX,
+    t: ca.MX,
+    x_plus: ca.MX,
+    nd: int = 0,
 ) -> tuple[ca.MX, list[np.ndarray]]:
     """The substeps' inputs (w size, substeps) as Φ builds them (with ``pieces``), and for
-    each substep the constant part of ∂w_k/∂v (w size, nv): the selection of u's entries
-    (the coning rate's dependence on x_+ is added by the caller)."""
+    each substep the constant part of ∂w_k/∂v (w size, nv), v = (x, u, p[design]) with
+    ``nd`` designed entries: the selection of u's entries (the coning rate's dependence on
+    x_+ and p[design], the only way p enters w, is added by the caller)."""
     ulay, opts, own = phi.inputs, phi.options, phi.pieces
     assert ulay is not None and opts is not None and own is not None
     W = substep_inputs(pieces, opts, ulay, u, t, x_plus, p)
@@ -298,5 +364,5 @@ def _substep_input_map(
     out = []
     for k in range(own.substeps):
         rows = S[k * nw : (k + 1) * nw, :]
-        out.append(np.hstack([np.zeros((nw, STATE.size)), rows]))
+        out.append(np.hstack([np.zeros((nw, STATE.size)), rows, np.zeros((nw, nd))]))
     return W, out
