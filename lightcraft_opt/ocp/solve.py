@@ -69,6 +69,7 @@ from lightcraft_opt.ocp.start import (
     StartKind,
     director_applies,
     director_start,
+    guessed_nodes,
     nominal_start,
     rollout,
     wind_scaled,
@@ -228,6 +229,8 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
+        self._held: CompiledOcp | None = None  # the problem with its design held
+        self._given_map = pulse_map
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
@@ -424,7 +427,7 @@ class CompiledOcp:
         if phase:  # a first phase ran: its iterations count too
             iterations += done
             message += phase
-        if cold is not None and cold.flown:
+        if cold is not None and (cold.flown or cold.kind is StartKind.HELD_DESIGN):
             message += f"; {cold.describe()}"
         return self._result(
             w, lam_x, lam_g, P, g, violation, status, message, iterations, solve_time, t0
@@ -545,19 +548,38 @@ class CompiledOcp:
         """The cold start (ocp/start.py): the caller's guess, else with ``OcpOptions.start``
         "flown" the director's flight where it applies, else the nominal rollout (in calm
         air if the problem's wind blows it out of the beam); with "rollout" the nominal
-        rollout in the problem's wind."""
-        if (
-            guess is None
-            and self.options.start is OcpStart.FLOWN
-            and director_applies(self.problem)
-        ):
+        rollout in the problem's wind; with "held_design" the problem solved with its design
+        held."""
+        start = self.options.start
+        design_held = guess is None and start is OcpStart.HELD_DESIGN and self.problem.design
+        if design_held and (held := self._held_design_start(x0, p, t0)) is not None:
+            return held
+        flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN)
+        if guess is None and flown and director_applies(self.problem):
             return director_start(self.problem, self._flight_map(), x0, p, t0)
-        if guess is None and self.options.start is OcpStart.FLOWN:
+        if guess is None and flown:
             return nominal_start(self.problem, self.pulse_map, x0, p, t0)
         began = time.perf_counter()
-        X, U = self._guess(x0, p, t0, guess)
+        X, U = guessed_nodes(self.problem, self.pulse_map, x0, p, t0, guess)
         kind = StartKind.ROLLOUT if guess is None else StartKind.GIVEN
         return Start(kind, X, U, time.perf_counter() - began)
+
+    def _held_design_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
+        """The problem with its design held at its start values (the model's), solved from
+        its own flown start: the design problem's start (docs/design.md#how-a-design-is-solved);
+        None when that solve does not succeed (a design may be what makes the problem
+        feasible)."""
+        began = time.perf_counter()
+        if self._held is None:
+            held_options = dataclasses.replace(
+                self.options, sensitivities=False, replay=False, start=OcpStart.FLOWN
+            )
+            held_problem = dataclasses.replace(self.problem, design=())
+            self._held = CompiledOcp(held_problem, held_options, pulse_map=self._given_map)
+        held = self._held.solve(x0=x0, p=p, t0=t0)
+        if not held.success:
+            return None
+        return Start(StartKind.HELD_DESIGN, held.x, held.u, time.perf_counter() - began)
 
     def _flight_map(self) -> PulseMap:
         """Φ to fly a start with: the prediction map compiled where this CompiledOcp built
@@ -565,30 +587,6 @@ class CompiledOcp:
         if self._map_options is None:
             return self.pulse_map
         return pulse_map_for(self.problem.model, self._map_options)
-
-    def _guess(
-        self,
-        x0: np.ndarray,
-        p: np.ndarray,
-        t0: float,
-        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        pr = self.problem
-        N, nu = pr.horizon, pr.inputs.size
-        X: np.ndarray | None = None
-        U: np.ndarray | None = None
-        if isinstance(guess, tuple):
-            X = np.asarray(guess[0], dtype=float)
-            U = np.asarray(guess[1], dtype=float)
-            if X.shape != (N + 1, STATE.size) or not np.all(np.isfinite(X)):
-                raise ParameterError("initial_guess", f"states need shape {(N + 1, STATE.size)}")
-        elif guess is not None:
-            U = np.asarray(guess, dtype=float)
-        if U is not None and (U.shape != (N, nu) or not np.all(np.isfinite(U))):
-            raise ParameterError("initial_guess", f"inputs need finite shape {(N, nu)}")
-        if X is None or U is None:
-            return rollout(pr, self.pulse_map, U, x0=x0, p=p, t0=t0)
-        return X, U
 
     def _result(
         self,

@@ -43,6 +43,7 @@ import numpy as np
 
 from lightcraft_opt.control.director import DirectorController
 from lightcraft_opt.control.options import DirectorOptions, DirectorRcs
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import ENGINE, PARAMETERS, STATE
 from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.ocp.problem import OcpProblem
@@ -53,6 +54,7 @@ __all__ = [
     "StartKind",
     "director_applies",
     "director_start",
+    "guessed_nodes",
     "nominal_start",
     "rollout",
     "wind_scaled",
@@ -67,6 +69,7 @@ class StartKind(Enum):
     ROLLOUT = "rollout"  # the nominal policy rolled through Φ
     CALM = "calm"  # the nominal policy rolled through Φ in calm air
     GIVEN = "given"  # the caller's initial guess
+    HELD_DESIGN = "held_design"  # the design problem solved with its design held
 
 
 @dataclass(frozen=True)
@@ -91,7 +94,11 @@ class Start:
         """Whether the nodes are a flight that stayed in the beam under inputs the problem
         allows, near-feasible: the director's, or the nominal one in calm air (module
         docstring)."""
-        return self.kind in (StartKind.DIRECTOR, StartKind.DIRECTOR_CALM, StartKind.CALM)
+        return self.kind in (
+            StartKind.DIRECTOR,
+            StartKind.DIRECTOR_CALM,
+            StartKind.CALM,
+        )
 
     def describe(self) -> str:
         """One line: how it was made and how it flew (altitude, drift from the pad)."""
@@ -109,6 +116,7 @@ _FLIGHT_NAMES = {
     StartKind.ROLLOUT: "the nominal rollout",
     StartKind.CALM: "the nominal flight in calm air",
     StartKind.GIVEN: "the given guess",
+    StartKind.HELD_DESIGN: "the problem solved with its design held",
 }
 
 
@@ -315,3 +323,32 @@ def wind_scaled(p: np.ndarray, factor: float) -> np.ndarray:
     for name in _WIND_SPEEDS:
         out[PARAMETERS.index(name)] *= factor
     return out
+
+
+def guessed_nodes(
+    problem: OcpProblem,
+    pulse_map: PulseMap,
+    x0: np.ndarray,
+    p: np.ndarray,
+    t0: float,
+    guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes (X (N + 1, STATE.size), U (N, map-input size)) of a caller's guess: a
+    pair used as is, inputs alone rolled out from x0 (frame per docs/frames.md) through
+    ``pulse_map``, or, with none, the nominal rollout. Bad shapes raise a ParameterError
+    naming ``initial_guess``."""
+    N, nu = problem.horizon, problem.inputs.size
+    X: np.ndarray | None = None
+    U: np.ndarray | None = None
+    if isinstance(guess, tuple):
+        X = np.asarray(guess[0], dtype=float)
+        U = np.asarray(guess[1], dtype=float)
+        if X.shape != (N + 1, STATE.size) or not np.all(np.isfinite(X)):
+            raise ParameterError("initial_guess", f"states need shape {(N + 1, STATE.size)}")
+    elif guess is not None:
+        U = np.asarray(guess, dtype=float)
+    if U is not None and (U.shape != (N, nu) or not np.all(np.isfinite(U))):
+        raise ParameterError("initial_guess", f"inputs need finite shape {(N, nu)}")
+    if X is None or U is None:
+        return rollout(problem, pulse_map, U, x0=x0, p=p, t0=t0)
+    return X, U

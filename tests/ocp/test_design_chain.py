@@ -31,7 +31,7 @@ from support.nlp_points import parameters
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.ocp.chain import chain_nlp
-from lightcraft_opt.ocp.options import OcpOptions
+from lightcraft_opt.ocp.options import OcpOptions, OcpStart
 from lightcraft_opt.ocp.problem import DesignVariable
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
@@ -136,3 +136,21 @@ def test_ipopt_reaches_the_same_design_with_chain_or_ad_derivatives(designed):
     assert abs(with_chain.iterations - with_ad.iterations) <= 2
     spin = with_chain.design["launch_spin"]  # an interior optimum in x0's designed entry
     assert 6500 * RPM < spin < 11500 * RPM
+
+
+def test_a_design_started_from_its_held_optimum_only_improves_on_it(designed):
+    """``start = HELD_DESIGN``: the problem is solved first with its design held at the
+    model's values; that optimum is feasible for the design problem, which starts there
+    and ends no worse (the held cost less the design's gain, never more). The rollout
+    start finds another local optimum of this non-convex problem: the start decides."""
+    problem, phi = designed
+    options = OcpOptions(pulse_map=CHEAP_MAP, tol=TOL, replay=False)
+    held_alone = CompiledOcp(replace(problem, design=()), options, pulse_map=phi).solve()
+    assert held_alone.status is OcpStatus.SOLVED, held_alone.message
+    start = replace(options, start=OcpStart.HELD_DESIGN)
+    designed_result = CompiledOcp(problem, start, pulse_map=phi).solve()
+    assert designed_result.status is OcpStatus.SOLVED, designed_result.message
+    assert "started from the problem solved with its design held" in designed_result.message
+    assert designed_result.cost <= held_alone.cost * (1 + 1e-9)
+    for v in problem.design:
+        assert v.lower <= designed_result.design[v.label] <= v.upper, v.label
