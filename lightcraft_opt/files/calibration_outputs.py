@@ -19,7 +19,6 @@ the unit in every key; a standard deviation that is infinite (not identifiable) 
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -27,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.calibration.result import CalibrationResult
-from lightcraft_opt.files.model_edits import Edit, put_value, read_model_data, write_edited
+from lightcraft_opt.files.model_edits import EditedModel, read_model_data
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import finite_or_none, model_hash
 from lightcraft_opt.layout import PARAMETERS
@@ -68,13 +67,7 @@ def write_fitted_model(
     ``model_file`` the fit started from; ``track_file`` (the tracked flight fitted) is
     named in the fitted values' comments. Returns ``path``."""
     source = Path(model_file)
-    data = read_model_data(source)
-    text = source.read_text(encoding="utf-8")
-    out_dir = path.parent
-    laser_path = source.parent / data["laser"]
-    laser: dict[str, Any] | None = None
-    laser_edits: list[Edit] = []
-    edits: list[Edit] = []
+    model = EditedModel(source, read_model_data(source))
     track = f", {Path(track_file).name}" if track_file is not None else ""
     header = [
         f"# Fitted by lightcraft calibrate from {source.name}{track}: {', '.join(result.names)}",
@@ -90,23 +83,8 @@ def write_fitted_model(
         sd = factor * result.std[i]
         std = "not identifiable" if not np.isfinite(sd) else f"± {sd:.3g}"
         note = f"fitted: {name} = {factor * result.values[i]:.6g} {std} {unit} (calibrate{track})"
-        if file == "laser":
-            laser = laser if laser is not None else read_model_data(laser_path)
-            put_value(laser, where, table, field, value)
-            laser_edits.append((where, table, field, value, note))
-        else:
-            put_value(data, where, table, field, value)
-            edits.append((where, table, field, value, note))
-    if laser is not None:
-        fitted_laser = out_dir / f"{laser_path.stem}-fitted.toml"
-        laser_text = laser_path.read_text(encoding="utf-8")
-        write_edited(fitted_laser, header, laser_text, laser_edits, {}, laser)
-        laser_path = fitted_laser
-    data["site"] = Path(os.path.relpath(source.parent / data["site"], out_dir)).as_posix()
-    data["laser"] = Path(os.path.relpath(laser_path, out_dir)).as_posix()
-    paths = {"site": data["site"], "laser": data["laser"]}
-    write_edited(path, header, text, edits, paths, data)
-    return path
+        model.put(file, where, table, field, value, note)
+    return model.write(path, header, "fitted")
 
 
 def write_calibration_report(

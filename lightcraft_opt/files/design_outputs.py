@@ -11,7 +11,6 @@ beside it. The designed model passes the model's own checks before anything is w
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -19,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from lightcraft_opt.files.design_tables import DESIGN_QUANTITY
-from lightcraft_opt.files.model_edits import Edit, put_value, read_model_data, write_edited
+from lightcraft_opt.files.model_edits import EditedModel
 from lightcraft_opt.files.problem import ProblemFile
 from lightcraft_opt.files.schema import QUANTITIES
 from lightcraft_opt.layout.designed import LAUNCH_SPIN, model_with_parameters
@@ -98,10 +97,7 @@ def write_designed_model(problem_file: ProblemFile, result: OcpResult, path: Pat
         raise ValueError("the problem was not read from a file: no model file to start from")
     model = designed_model(problem_file, result)
     source = problem_file.model_file
-    data = problem_file.model_tables()
-    text = source.read_text(encoding="utf-8")
-    out_dir = path.parent
-    laser_path = source.parent / data["laser"]
+    edited = EditedModel(source, problem_file.model_tables())
     names = {v.name for v in problem_file.problem.design}
     shown = ", ".join(f"{k} = {v:.6g} {result.design_units[k]}" for k, v in result.design.items())
     header = [
@@ -110,32 +106,11 @@ def write_designed_model(problem_file: ProblemFile, result: OcpResult, path: Pat
         f"# The model: {source.name} with the problem's model_overrides and the design.",
         "",
     ]
-    edits: list[Edit] = []
-    laser_edits: list[Edit] = []
-    laser: dict[str, Any] | None = None
     for name in sorted(names, key=list(_WRITTEN).index):
         file, where, table, field = _WRITTEN[name]
-        value = _value(model, name)
-        note = "designed (lightcraft optimize)"
-        if file == "laser":
-            laser = laser if laser is not None else read_model_data(laser_path)
-            put_value(laser, where, table, field, value)
-            laser_edits.append((where, table, field, value, note))
-        else:
-            put_value(data, where, table, field, value)
-            edits.append((where, table, field, value, note))
+        edited.put(file, where, table, field, _value(model, name), "designed (lightcraft optimize)")
     if "impulse_per_pulse" in names and model.craft.engine.spent_coupling is not None:
         spent = model.craft.engine.spent_coupling
         where = ("craft", "engine")
-        put_value(data, where, "engine", "spent_coupling", spent)
-        edits.append((where, "engine", "spent_coupling", spent, "held at the flight's"))
-    if laser is not None:
-        designed_laser = out_dir / f"{laser_path.stem}-designed.toml"
-        laser_text = laser_path.read_text(encoding="utf-8")
-        write_edited(designed_laser, header, laser_text, laser_edits, {}, laser)
-        laser_path = designed_laser
-    data["site"] = Path(os.path.relpath(source.parent / data["site"], out_dir)).as_posix()
-    data["laser"] = Path(os.path.relpath(laser_path, out_dir)).as_posix()
-    paths = {"site": data["site"], "laser": data["laser"]}
-    write_edited(path, header, text, edits, paths, data)
-    return path
+        edited.put("model", where, "engine", "spent_coupling", spent, "held at the flight's")
+    return edited.write(path, header, "designed")

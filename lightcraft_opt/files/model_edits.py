@@ -13,9 +13,12 @@ written from the tables instead, without the comments.
 from __future__ import annotations
 
 import json
+import os
 import re
 import tomllib
 from collections.abc import Mapping
+from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +27,7 @@ import numpy as np
 from lightcraft_opt.errors import ModelFileError
 from lightcraft_opt.files.model import QUANTITIES, SCHEMA
 
-__all__ = ["Edit", "put_value", "read_model_data", "write_edited"]
+__all__ = ["Edit", "EditedModel", "put_value", "read_model_data", "write_edited"]
 
 #: One value to write: (table path, SCHEMA table, field, SI value (a number, or a list of
 #: numbers for a vector field), note).
@@ -127,6 +130,61 @@ def _edited(
     for key, where_to in paths.items():
         _set_line(lines, (), lambda k, key=key: k == key, key, json.dumps(where_to), "")
     return "\n".join(lines) + "\n"
+
+
+@dataclass
+class EditedModel:
+    """A model file and the laser file it names, with values put in: what the calibration's
+    fitted model and a design's model write (module docstring).
+
+    Attributes
+    ----------
+    source : the model file edited.
+    data : its tables (with any overrides already in), edited in place.
+    edits, laser_edits : the values put in the model file and in its laser file.
+    laser : the laser file's tables, read on the first laser edit; None without one.
+    """
+
+    source: Path
+    data: dict[str, Any]
+    edits: list[Edit] = dataclass_field(default_factory=list)
+    laser_edits: list[Edit] = dataclass_field(default_factory=list)
+    laser: dict[str, Any] | None = None
+
+    @property
+    def laser_path(self) -> Path:
+        return self.source.parent / self.data["laser"]
+
+    def put(
+        self, file: str, where: tuple[str, ...], table: str, name: str, value: Any, note: str
+    ) -> None:
+        """Put SI ``value`` at ``where`` (SCHEMA ``table``, field ``name``) of the model file
+        (``file`` "model") or of its laser file ("laser"), with an end-of-line ``note``."""
+        if file == "laser":
+            self.laser = self.laser if self.laser is not None else read_model_data(self.laser_path)
+            put_value(self.laser, where, table, name, value)
+            self.laser_edits.append((where, table, name, value, note))
+        else:
+            put_value(self.data, where, table, name, value)
+            self.edits.append((where, table, name, value, note))
+
+    def write(self, path: Path, header: list[str], suffix: str) -> Path:
+        """Write the edited model file ``path`` under ``header`` and, after a laser edit,
+        the edited laser file beside it as ``<laser>-<suffix>.toml``; the site and laser
+        paths are made relative to ``path``'s folder. Returns ``path``."""
+        out_dir, laser_path = path.parent, self.laser_path
+        if self.laser is not None:
+            edited_laser = out_dir / f"{laser_path.stem}-{suffix}.toml"
+            laser_text = laser_path.read_text(encoding="utf-8")
+            write_edited(edited_laser, header, laser_text, self.laser_edits, {}, self.laser)
+            laser_path = edited_laser
+        site = self.source.parent / self.data["site"]
+        self.data["site"] = Path(os.path.relpath(site, out_dir)).as_posix()
+        self.data["laser"] = Path(os.path.relpath(laser_path, out_dir)).as_posix()
+        paths = {"site": self.data["site"], "laser": self.data["laser"]}
+        text = self.source.read_text(encoding="utf-8")
+        write_edited(path, header, text, self.edits, paths, self.data)
+        return path
 
 
 def write_edited(
