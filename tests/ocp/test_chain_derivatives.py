@@ -24,12 +24,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import casadi as ca
 import numpy as np
 import pytest
 from ocp.test_ocp import CHEAP_MAP, QUADRATURE, TOL, lateral_problem
 from support.models import table1_flight5
-from support.nlp_points import off_optimum
+from support.nlp_points import ad_derivatives, off_optimum
 from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
@@ -113,21 +112,7 @@ def _rel(a, b):
 
 def test_chain_gradient_jacobian_and_hessian_equal_casadi_ad(nlp):
     tr, w, P, lam_f, lam_g = nlp
-    W, Ps = tr.nlp["x"], tr.nlp["p"]
-    lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
-    lagrangian = lf * tr.nlp["f"] + ca.dot(lg, tr.nlp["g"])
-    ad = ca.Function(
-        "ad",
-        [W, Ps, lf, lg],
-        [
-            tr.nlp["f"],
-            ca.gradient(tr.nlp["f"], W),
-            tr.nlp["g"],
-            ca.jacobian(tr.nlp["g"], W),
-            ca.triu(ca.hessian(lagrangian, W)[0]),
-        ],
-    )
-    f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
+    f, grad, g, jac, hess = ad_derivatives(tr, w, P, lam_f, lam_g)
     chain = chain_nlp(tr, upper=True)
     f_n, g_n = chain.nlp(w, P)
     assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL

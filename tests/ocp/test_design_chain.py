@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 from ocp.test_ocp import CHEAP_MAP, TOL, lateral_problem
 from support.models import COARSE_OPTIC, table1_flight5
-from support.nlp_points import parameters
+from support.nlp_points import ad_derivatives, parameters
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.ocp.chain import chain_nlp
@@ -75,21 +75,7 @@ def test_design_chain_gradient_jacobian_and_hessian_equal_casadi_ad(designed):
     design = d.lower + (0.3 + 0.4 * rng.random(d.size)) * (d.upper - d.lower)  # inside
     w = tr.pack(X, U, problem.u_previous, design) * (1 + 1e-3 * rng.normal(size=tr.n_w))
     P, lam_f, lam_g = parameters(tr, problem), 0.7, rng.normal(size=tr.lbg.size)
-    W, Ps = tr.nlp["x"], tr.nlp["p"]
-    lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
-    lagrangian = lf * tr.nlp["f"] + ca.dot(lg, tr.nlp["g"])
-    ad = ca.Function(
-        "ad",
-        [W, Ps, lf, lg],
-        [
-            tr.nlp["f"],
-            ca.gradient(tr.nlp["f"], W),
-            tr.nlp["g"],
-            ca.jacobian(tr.nlp["g"], W),
-            ca.triu(ca.hessian(lagrangian, W)[0]),
-        ],
-    )
-    f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
+    f, grad, g, jac, hess = ad_derivatives(tr, w, P, lam_f, lam_g)
     chain = chain_nlp(tr, upper=True)
     f_n, g_n = chain.nlp(w, P)
     assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
 from lightcraft_opt.ocp.problem import OcpProblem
@@ -35,3 +36,26 @@ def cost_of(tr: MultipleShooting, problem: OcpProblem, X: np.ndarray, U: np.ndar
     """The objective at states X (N + 1, STATE.size) and inputs U (N, map-input size)."""
     w = tr.pack(X, U, problem.u_previous)
     return float(np.sum(np.asarray(tr.cost_terms(w, parameters(tr, problem)))))
+
+
+def ad_derivatives(
+    tr: MultipleShooting, w: np.ndarray, P: np.ndarray, lam_f: float, lam_g: np.ndarray
+) -> tuple[ca.DM, ...]:
+    """(f, ∇f, g, ∂g/∂w, upper triangle of ∇²(lam_f f + lam_gᵀ g)) of ``tr``'s NLP at
+    (``w``, ``P``) by casadi's AD through its own expressions: the reference the chain's
+    NLP derivatives are checked against."""
+    W, Ps = tr.nlp["x"], tr.nlp["p"]
+    lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
+    lagrangian = lf * tr.nlp["f"] + ca.dot(lg, tr.nlp["g"])
+    ad = ca.Function(
+        "ad",
+        [W, Ps, lf, lg],
+        [
+            tr.nlp["f"],
+            ca.gradient(tr.nlp["f"], W),
+            tr.nlp["g"],
+            ca.jacobian(tr.nlp["g"], W),
+            ca.triu(ca.hessian(lagrangian, W)[0]),
+        ],
+    )
+    return tuple(ad(w, P, lam_f, lam_g))
