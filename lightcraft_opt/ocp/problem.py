@@ -54,6 +54,7 @@ from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.model.checks import checked_vector, number, numbers, set_frozen
 from lightcraft_opt.ocp.design import DesignLayout, DesignVariable
 from lightcraft_opt.ocp.hardware import HardwareLimits, hardware_limits
+from lightcraft_opt.ocp.scenarios import Scenarios
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
@@ -418,6 +419,10 @@ class OcpProblem:
     design : entries of p (and the launch spin) the optimiser chooses with the inputs
         (:class:`~lightcraft_opt.ocp.design.DesignVariable`, docs/design.md); their values
         in ``parameters``/``x0`` are where the design starts.
+    scenarios : S cases of the flight sharing the design, each with its own inputs (or
+        the first ``shared_pulses`` shared), and an expected or worst-case objective
+        (:class:`~lightcraft_opt.ocp.scenarios.Scenarios`, docs/design.md#robust-design);
+        None: the problem's own case alone.
 
     Derived (read-only): ``p`` (PARAMETERS.size,) parameter vector; ``inputs`` the
     map-input layout; ``lower``, ``upper``, ``slew`` (size of the map input,) bounds [unit]
@@ -440,6 +445,7 @@ class OcpProblem:
     rcs_profile: RcsProfile = RcsProfile.HOLD
     rcs_subintervals: int = 1
     design: tuple[DesignVariable, ...] = ()
+    scenarios: Scenarios | None = None
     p: np.ndarray = field(init=False, repr=False)
     inputs: VectorLayout = field(init=False, repr=False)
     lower: np.ndarray = field(init=False, repr=False)
@@ -476,6 +482,15 @@ class OcpProblem:
         set_frozen(self, "design_layout", DesignLayout(self.model, self.design))
         self._set_bounds()
         self._check_envelope()
+        if self.scenarios is not None:
+            if not isinstance(self.scenarios, Scenarios):
+                raise ParameterError(
+                    "scenarios", f"must be a Scenarios, got {type(self.scenarios).__name__}"
+                )
+            energy = self.inputs.index("energy")
+            self.scenarios.check(
+                self.horizon, self.design_layout.p_index, bool(np.any(self.free[energy]))
+            )
         for name in ("x0", "p", "lower", "upper", "slew"):
             getattr(self, name).setflags(write=False)
 

@@ -61,7 +61,8 @@ from lightcraft_opt.ocp.options import (
 )
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
-from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus, ScenarioOutcome
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
 from lightcraft_opt.ocp.start import (
     Start,
     StartKind,
@@ -177,9 +178,19 @@ class CompiledOcp:
                 if compile_by_default()
                 else build_pulse_map_derivatives(self.pulse_map)
             )
-        self.transcription = tr = MultipleShooting(
+        single = MultipleShooting(
             problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives
         )
+        # a robust problem: its scenarios over the one transcription (ocp/scenario_shooting.py)
+        self.transcription: MultipleShooting | ScenarioShooting = single
+        if problem.scenarios is not None:
+            if opts.solver is OcpSolver.FATROP:
+                raise OptionError(
+                    "OcpOptions.solver 'fatrop' takes one stage structure; a problem with "
+                    "scenarios couples them through the design: use 'ipopt'"
+                )
+            self.transcription = ScenarioShooting(single, problem.scenarios)
+        tr = self.transcription
         # the iteration callback of IPOPT and sqpmethod: the deadline (fatrop's solves are
         # forked instead), the stall rule and the progress hook (if any)
         self._deadline = (
@@ -293,6 +304,8 @@ class CompiledOcp:
             result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
         if not self.options.replay:
             return result
+        if isinstance(self.transcription, ScenarioShooting):  # the first scenario's plan
+            pv = self.transcription.scenario_p(pv, 0)
         return self.replayer.attach(result, self.designed_parameters(pv, result))
 
     def designed_parameters(self, p: np.ndarray, result: OcpResult) -> np.ndarray:
@@ -331,7 +344,7 @@ class CompiledOcp:
             cold = None
         else:
             cold = self._start(x0, p, t0, initial_guess)
-            w0 = tr.pack(cold.X, cold.U, u_previous)
+            w0 = self._packed(cold, x0, p, t0, u_previous, initial_guess, P)
         lbx, ubx = self._bounds
         # a start that flew is near-feasible: IPOPT starts it as it starts a warm start
         # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet
@@ -389,6 +402,35 @@ class CompiledOcp:
         return self._result(
             w, lam_x, lam_g, P, g, violation, status, message, iterations, solve_time, t0
         )
+
+    def _packed(
+        self,
+        cold: Start,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        u_previous: np.ndarray | None,
+        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+        P: np.ndarray,
+    ) -> np.ndarray:
+        """The scaled start of the NLP from the cold start ``cold``; with scenarios, each
+        scenario's own start from its launch state and parameters, its drop-outs' energy
+        0 and flown again."""
+        tr = self.transcription
+        if not isinstance(tr, ScenarioShooting):
+            return tr.pack(cold.X, cold.U, u_previous)
+        energy = self.problem.inputs.index("energy")
+        Xs, Us = [], []
+        for s, case in enumerate(tr.scenarios.cases):
+            x0s, ps = tr.scenario_x0(x0, s), tr.scenario_p(p, s)
+            start = cold if s == 0 else self._start(x0s, ps, t0, guess)
+            X, U = start.X, np.array(start.U, dtype=float)
+            if case.dropouts or s == 0:
+                U[list(case.dropouts), energy] = 0.0
+                X, U = rollout(self.problem, self.pulse_map, U, x0=x0s, p=ps, t0=t0)
+            Xs.append(X)
+            Us.append(U)
+        return tr.pack(Xs, Us, u_previous, None, P)
 
     def _violation(self, w: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, float]:
         """(n_g,) the constraints at ``w`` and the largest violation of any of them or of
@@ -567,7 +609,12 @@ class CompiledOcp:
         """The result of iterate ``w`` (constraints ``g``, largest violation ``viol``)."""
         tr, pr, tol = self.transcription, self.problem, self.options.tol
         X, U, eng = (np.asarray(v, dtype=float) for v in tr.trajectory(w, P))
-        terms = np.asarray(tr.cost_terms(w, P), dtype=float).ravel()
+        outcomes: tuple[ScenarioOutcome, ...] = ()
+        if isinstance(tr, ScenarioShooting):
+            terms, costs = tr.combined_terms(w, P)
+            outcomes = self._outcomes(w, P, costs)
+        else:
+            terms = np.asarray(tr.cost_terms(w, P), dtype=float).ravel()
         rows = tr.constraint_rows
         gap = dynamics_gap(rows, g, tr.lbg, tr.ubg)
         if status is OcpStatus.INFEASIBLE:
@@ -605,6 +652,29 @@ class CompiledOcp:
             lam_g=lam_g,
             design=dict(zip(tr.design.labels, tr.design_of(w).tolist(), strict=True)),
             design_units={v.label: v.unit for v in tr.design.variables},
+            scenarios=outcomes,
+        )
+
+    def _outcomes(
+        self, w: np.ndarray, P: np.ndarray, costs: np.ndarray
+    ) -> tuple[ScenarioOutcome, ...]:
+        """Each scenario's plan and cost at ``w`` (a robust problem)."""
+        tr = self.transcription
+        assert isinstance(tr, ScenarioShooting)
+        N, sc = self.problem.horizon, tr.scenarios
+        X, U, E = (np.asarray(v, dtype=float) for v in tr.scenario_trajectory(w, P))
+        terms = np.asarray(tr.scenario_terms(w, P), dtype=float).reshape(-1, sc.size)
+        return tuple(
+            ScenarioOutcome(
+                name=case.name,
+                weight=float(sc.weights[s]),
+                cost=float(costs[s]),
+                cost_terms=terms[:, s],
+                x=X[:, s * (N + 1) : (s + 1) * (N + 1)].T,
+                u=U[:, s * N : (s + 1) * N].T,
+                engine=E[:, s * N : (s + 1) * N].T,
+            )
+            for s, case in enumerate(sc.cases)
         )
 
 
