@@ -272,7 +272,8 @@ class ScenarioShooting:
             w[self.stage_index[s]] = ws[: self.n_s]
             w[self.d_index] = ws[self.n_s :]
         if self.tau_index.size and P is not None:
-            w[self.tau_index] = float(np.max(np.sum(self.scenario_terms(w, P), axis=0)))
+            terms = np.asarray(self.scenario_terms(w, P), dtype=float)
+            w[self.tau_index] = float(np.max(np.sum(terms, axis=0)))
         return w
 
     def combined_terms(self, w: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
