@@ -18,12 +18,16 @@ References:
 from __future__ import annotations
 
 import math
+import re
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
 from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
 
-from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.errors import ParameterError, ProblemFileError
+from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import (
@@ -246,3 +250,109 @@ def test_scenarios_that_do_not_fit_the_problem_name_the_field(vertical):
     assert err.value.field == "scenarios[a].scales.rotor_mass_dry"
     with pytest.raises(ParameterError, match="beyond the horizon"):
         _tracking(model, phi.period, Scenarios((Scenario("a"),), shared_pulses=N + 1))
+
+
+# --------------------------------------------------------------------------- problem files
+REPO = Path(__file__).resolve().parents[2]
+FILE_HEAD = """
+model = "../models/flight5.toml"
+horizon_pulses = 6
+
+[[objective]]
+term = "final_altitude"
+
+[[design]]
+parameter = "rotor_mass_dry"
+lower_g = 25.0
+upper_g = 35.0
+"""
+
+
+def _load(tmp_path: Path, scenarios: str):
+    if not (tmp_path / "models").exists():
+        shutil.copytree(REPO / "models", tmp_path / "models")
+        (tmp_path / "problems").mkdir()
+    source = tmp_path / "problems" / "robust.toml"
+    source.write_text(FILE_HEAD + scenarios)
+    return load_problem(source).problem
+
+
+def test_a_problem_files_drawn_scenarios_are_draw_scenarios_in_si(tmp_path: Path):
+    """count, seed and spreads in mm, degrees and m/s: the cases draw_scenarios draws
+    with the SI spreads, to the last bit."""
+    problem = _load(
+        tmp_path,
+        '[scenarios]\nobjective = "worst"\nshared_pulses = 2\ncount = 4\nseed = 7\n'
+        "offset_spread_mm = 5.0\ntilt_spread_deg = 1.0\nwind_speed_spread_mps = 0.5\n"
+        "impulse_spread = 0.05\ndropout_probability = 0.2\n",
+    )
+    sc = problem.scenarios
+    assert sc is not None and sc.objective is ScenarioObjective.WORST and sc.shared_pulses == 2
+    draws = ScenarioDraws(
+        4,
+        7,
+        wind_speed=0.5,
+        offset=0.005,
+        tilt=math.radians(1.0),
+        impulse=0.05,
+        dropout_probability=0.2,
+    )
+    expected = draw_scenarios(draws, problem.p, 6, objective=ScenarioObjective.WORST)
+    for got, want in zip(sc.cases, expected.cases, strict=True):
+        assert got.name == want.name and got.offset_L == want.offset_L
+        assert got.tilt == want.tilt and got.scales == want.scales
+        assert got.parameters == want.parameters and got.dropouts == want.dropouts
+
+
+def test_a_problem_files_named_cases_are_read_in_si(tmp_path: Path):
+    problem = _load(
+        tmp_path,
+        "[scenarios]\nshared_pulses = 1\n"
+        '[[scenarios.case]]\nname = "calm"\n'
+        '[[scenarios.case]]\nname = "gust"\nweight = 3.0\nwind_speed_kmh = 18.0\n'
+        "wind_direction_from_deg = 90.0\noffset_L_mm = [5.0, -2.0]\ntilt_deg = 2.0\n"
+        "impulse_scale = 0.9\ndropouts = [1, 4]\n",
+    )
+    sc = problem.scenarios
+    assert sc is not None and sc.names == ("calm", "gust")
+    gust = sc.cases[1]
+    assert gust.parameters["wind_speed_ref"] == pytest.approx((5.0,), rel=1e-15)
+    assert gust.parameters["wind_direction_from"] == pytest.approx((math.pi / 2,), rel=1e-15)
+    assert gust.offset_L == pytest.approx((0.005, -0.002), rel=1e-15)
+    assert gust.tilt == pytest.approx(math.radians(2.0), rel=1e-15)
+    assert gust.scales == {"impulse_per_pulse": 0.9} and gust.dropouts == (1, 4)
+    np.testing.assert_allclose(sc.weights, [0.25, 0.75], rtol=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("table", "key", "match"),
+    [
+        ("[scenarios]\nseed = 1\n", "scenarios.count", "missing"),
+        ('[scenarios]\ncount = 2\n[[scenarios.case]]\nname = "a"\n', "scenarios.count", "either"),
+        ("[scenarios]\ncount = 0\n", "scenarios.count", "1..64"),
+        (
+            "[scenarios]\ncount = 2\ndropout_probability = 1.5\n",
+            "scenarios.dropout_probability",
+            "[0, 1)",
+        ),
+        ("[scenarios]\ncount = 2\nshared_pulses = 9\n", "scenarios.shared_pulses", "beyond"),
+        ("[scenarios]\ncount = 2\nspread_mm = 1.0\n", "scenarios.spread_mm", "unknown key"),
+        ('[[scenarios.case]]\nname = "a"\nweight = 0.0\n', "scenarios.case[0].weight", "positive"),
+        ('[[scenarios.case]]\nname = "a"\ntilt_deg = 95.0\n', "scenarios.case[0].tilt_deg", "pi/2"),
+        (
+            '[[scenarios.case]]\nname = "a"\n[[scenarios.case]]\nname = "a"\n',
+            "scenarios.case",
+            "repeat",
+        ),
+        ("[[scenarios.case]]\nweight = 1.0\n", "scenarios.case[0].name", "missing"),
+        (
+            '[[scenarios.case]]\nname = "a"\ndropouts = [2, 6]\n',
+            "scenarios.case[0].dropouts",
+            "beyond the horizon",
+        ),
+    ],
+)
+def test_bad_scenario_tables_name_the_key(tmp_path: Path, table: str, key: str, match: str):
+    with pytest.raises(ProblemFileError, match=re.escape(match)) as err:
+        _load(tmp_path, table)
+    assert f": {key}" in str(err.value), str(err.value)
