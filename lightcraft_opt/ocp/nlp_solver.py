@@ -89,8 +89,12 @@ def solver_setup(
         common["hess_lag"] = tr.gauss_newton_hessian(upper=opts.solver is OcpSolver.IPOPT)
     nlp: dict[str, ca.MX] | ca.Function = tr.nlp
     chain = None
-    if uses_chain(opts) and isinstance(tr, MultipleShooting) and tr.derivatives is not None:
-        chain = chain_nlp(tr, upper=True, report=report)
+    if uses_chain(opts) and tr.derivatives is not None:
+        chain = (
+            tr.chain_nlp(upper=True, report=report)
+            if isinstance(tr, ScenarioShooting)
+            else chain_nlp(tr, upper=True, report=report)
+        )
         nlp = chain.nlp
         convex = opts.hessian is HessianApproximation.CONVEX
         # the NLP's Function is not differentiable (Φ's chain gives its derivatives):

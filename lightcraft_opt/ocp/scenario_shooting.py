@@ -25,6 +25,8 @@ import dataclasses
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.compiled.cache import BuildReport
+from lightcraft_opt.ocp.chain import ChainNlp, chain_nlp
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.scenarios import ScenarioObjective, Scenarios
 from lightcraft_opt.ocp.transcription import MultipleShooting
@@ -63,7 +65,7 @@ class ScenarioShooting:
         self.problem, self.period, self.phi = base.problem, base.period, base.phi
         self.parameters, self.P = base.parameters, base.P
         self.design, self.d_scale = base.design, base.d_scale
-        self.derivatives = None  # casadi's AD through the S calls of Φ's map
+        self.derivatives = base.derivatives  # Φ's chain: chain_nlp; None: casadi's AD
         S, n_d = scenarios.size, base.design.size
         self.n_s = n_s = base.n_w - n_d
         worst = scenarios.objective is ScenarioObjective.WORST
@@ -80,15 +82,12 @@ class ScenarioShooting:
         nlp = ca.Function("ocp_scenario_nlp", [base.nlp["x"], P], [base.nlp["f"], base.nlp["g"]])
         self._P_of = [self._scenario_parameters(s) for s in range(S)]
         w_of = [ca.vertcat(ws[s], d) for s in range(S)]
-        fs, gs = [], []
-        for s in range(S):
-            f_s, g_s = nlp.call([w_of[s], self._P_of[s]], True, False)
-            fs.append(f_s)
-            gs.append(g_s)
-        J = ca.vertcat(*fs)
+        self._symbols = (ws, d, tau)
+        self._tie, tie_rows = self._non_anticipativity(ws)
+        calls = [nlp.call([w_of[s], self._P_of[s]], True, False) for s in range(S)]
+        f, g = self._assembled([c[0] for c in calls], [c[1] for c in calls])
         weights = ca.DM(scenarios.weights)
-
-        g, lbg, ubg, rows = list(gs), [], [], []
+        lbg, ubg, rows = [], [], []
         for name in scenarios.names:
             lbg.append(base.lbg)
             ubg.append(base.ubg)
@@ -96,22 +95,17 @@ class ScenarioShooting:
                 dataclasses.replace(r, at=f"{r.at} of scenario {name!r}")
                 for r in base.constraint_rows
             ]
-        tie, tie_rows = self._non_anticipativity(ws)
-        g.append(tie)
-        lbg.append(np.zeros(tie.numel()))
-        ubg.append(np.zeros(tie.numel()))
+        lbg.append(np.zeros(self._tie.numel()))
+        ubg.append(np.zeros(self._tie.numel()))
         rows += tie_rows
         if worst:
-            g.append(J - tau)
             lbg.append(np.full(S, -np.inf))
             ubg.append(np.zeros(S))
             rows += [
                 ConstraintRow("worst_case", f"scenario {n!r}", "J_s - tau") for n in scenarios.names
             ]
-            f = tau
-        else:
-            f = ca.dot(weights, J)
-        self.nlp = {"x": w, "f": f, "g": ca.vertcat(*g), "p": P}
+        self.nlp = {"x": w, "f": f, "g": g, "p": P}
+        self.chains: list[ChainNlp] = []  # the scenarios' chains, once chain_nlp built them
         self.lbg = np.concatenate(lbg).astype(float)
         self.ubg = np.concatenate(ubg).astype(float)
         self.equality = [bool(v) for v in self.lbg == self.ubg]
@@ -149,6 +143,83 @@ class ScenarioShooting:
         )
 
     # ----------------------------------------------------------------- symbols
+    def _assembled(self, fs: list[ca.MX], gs: list[ca.MX]) -> tuple[ca.MX, ca.MX]:
+        """(f, g) of the NLP from the scenarios' costs ``fs`` and constraints ``gs``
+        (module docstring)."""
+        _, _, tau = self._symbols
+        J = ca.vertcat(*fs)
+        g = [*gs, self._tie]
+        if self.scenarios.objective is ScenarioObjective.WORST:
+            return tau, ca.vertcat(*g, J - tau)
+        return ca.dot(ca.DM(self.scenarios.weights), J), ca.vertcat(*g)
+
+    def _selection(self, s: int) -> ca.DM:
+        """(base n_w, n_w) sparse: w_s = E_s w, scenario ``s``'s (w_s, d) in w."""
+        rows = np.arange(self.base.n_w)
+        cols = np.concatenate([self.stage_index[s], self.d_index])
+        return ca.DM(
+            ca.Sparsity.triplet(self.base.n_w, self.n_w, rows.tolist(), cols.tolist()),
+            1.0,
+        )
+
+    def chain_nlp(self, *, upper: bool = True, report: BuildReport | None = None) -> ChainNlp:
+        """The NLP and its derivatives from Φ's chain (ocp/chain.py): each scenario's
+        chain NLP of the one transcription (its own shared evaluations of Φ), called at
+        its (w_s, d) and P_s and put together: ∇f = Σ_s w_s E_sᵀ ∇f_s (EXPECTED) or e_τ
+        (WORST), ∂g/∂w the scenarios' ∂g_s/∂w_s E_s with the linear rows below, and the
+        Lagrangian's Hessian Σ_s E_sᵀ H_s(λ_f w_s or μ_s, λ_g,s) E_s (the upper triangle
+        stays upper: E_s keeps the order of w)."""
+        base, sc, S = self.base, self.scenarios, self.scenarios.size
+        self.chains = chains = [chain_nlp(base, upper=upper, report=report) for _ in range(S)]
+        w, P = self.nlp["x"], self.P
+        E = [self._selection(s) for s in range(S)]
+        w_of = [ca.mtimes(E[s], w) for s in range(S)]
+        ng = base.lbg.size
+        worst = sc.objective is ScenarioObjective.WORST
+        values = [chains[s].nlp(w_of[s], self._P_of[s]) for s in range(S)]
+        f, g = self._assembled([v[0] for v in values], [v[1] for v in values])
+        grads = [chains[s].grad_f(w_of[s], self._P_of[s]) for s in range(S)]
+        e_tau = ca.DM.zeros(self.n_w, 1)
+        if worst:
+            e_tau[int(self.tau_index[0])] = 1.0
+            grad = ca.MX(e_tau)
+        else:
+            grad = ca.MX(self.n_w, 1)
+            for s in range(S):
+                grad += sc.weights[s] * ca.mtimes(E[s].T, grads[s][1])
+        jacs = [chains[s].jac_g(w_of[s], self._P_of[s]) for s in range(S)]
+        J = [ca.mtimes(jacs[s][1], E[s]) for s in range(S)]
+        J.append(ca.jacobian(self._tie, w))
+        if worst:
+            J += [ca.mtimes(grads[s][1].T, E[s]) - e_tau.T for s in range(S)]
+        jac = ca.vertcat(*J)
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", self.lbg.size)
+        n_tie = self._tie.numel()
+
+        def hessian(convex: bool) -> ca.MX:
+            H = ca.MX(self.n_w, self.n_w)
+            for s in range(S):
+                lam_s = lam_g[s * ng : (s + 1) * ng]
+                lf = lam_g[S * ng + n_tie + s] if worst else sc.weights[s] * lam_f
+                h = chains[s].hess_lag_convex if convex else chains[s].hess_lag
+                H += ca.mtimes(E[s].T, ca.mtimes(h(w_of[s], self._P_of[s], lf, lam_s), E[s]))
+            return H
+
+        io = (["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"])
+        first = chains[0]
+        return ChainNlp(
+            nlp=ca.Function("ocp_nlp", [w, P], [f, g], ["x", "p"], ["f", "g"]),
+            grad_f=ca.Function("nlp_grad_f", [w, P], [f, grad], ["x", "p"], ["f", "grad_f_x"]),
+            jac_g=ca.Function("nlp_jac_g", [w, P], [g, jac], ["x", "p"], ["g", "jac_g_x"]),
+            hess_lag=ca.Function("nlp_hess_l", [w, P, lam_f, lam_g], [hessian(False)], *io),
+            hess_lag_convex=ca.Function(
+                "nlp_hess_l_convex", [w, P, lam_f, lam_g], [hessian(True)], *io
+            ),
+            shared=first.shared,
+            convex_blocks=first.convex_blocks,
+            kept_blocks=first.kept_blocks,
+        )
+
     def _scenario_parameters(self, s: int) -> ca.MX:
         """The NLP parameters of scenario ``s`` from the problem's P: x0 and p moved by
         the scenario's affine maps, the rest as they are."""

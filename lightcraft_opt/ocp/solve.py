@@ -509,7 +509,10 @@ class CompiledOcp:
         keep = (
             warm and self.options.warm_hessian is WarmHessian.KEPT and chain.kept_blocks.has_blocks
         )
-        chain.kept_blocks.frozen = keep
+        tr = self.transcription
+        chains = tr.chains if isinstance(tr, ScenarioShooting) else [chain]
+        for each in chains:  # a robust problem: every scenario's blocks
+            each.kept_blocks.frozen = keep
         return keep
 
     def _resolver(self) -> ca.Function:

@@ -22,8 +22,11 @@ import re
 import shutil
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
+from ocp.test_chain_derivatives import RTOL, _lateral, _rel
+from support.nlp_points import off_optimum
 from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
 
 from lightcraft_opt.errors import ParameterError, ProblemFileError
@@ -39,6 +42,7 @@ from lightcraft_opt.ocp.problem import (
     TrackReference,
 )
 from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
 from lightcraft_opt.ocp.scenarios import (
     Scenario,
     ScenarioDraws,
@@ -356,3 +360,57 @@ def test_bad_scenario_tables_name_the_key(tmp_path: Path, table: str, key: str, 
     with pytest.raises(ProblemFileError, match=re.escape(match)) as err:
         _load(tmp_path, table)
     assert f": {key}" in str(err.value), str(err.value)
+
+
+# --------------------------------------------------------------------------- Φ's chain
+@pytest.mark.parametrize("objective", list(ScenarioObjective))
+def test_the_scenarios_chain_derivatives_equal_casadi_ad(objective):
+    """ScenarioShooting.chain_nlp against casadi's AD of the same NLP, at a point off the
+    optimum with random multipliers: the lateral problem of test_ocp.py (slew limits, so
+    the previous-input memory) over three scenarios moved in wind, launch offset and lean
+    and coupling, two pulses shared; equal to rounding (1e-12 of the largest entry)."""
+    problem, options = _lateral()
+    phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
+    base, w1, P, rng = off_optimum(problem, phi)
+    scenarios = Scenarios(
+        (
+            Scenario("nominal"),
+            Scenario("gust", parameters={"wind_speed_ref": 5.0}, offset_L=(0.003, -0.002)),
+            Scenario("leaned", 2.0, scales={"impulse_per_pulse": 0.9}, tilt=0.02),
+        ),
+        objective,
+        shared_pulses=2,
+    )
+    tr = ScenarioShooting(base, scenarios)
+    w = np.concatenate(
+        [
+            *(w1[: tr.n_s] * (1 + 1e-3 * rng.normal(size=tr.n_s)) for _ in range(3)),
+            w1[tr.n_s :],
+            np.full(tr.tau_index.size, 0.3),
+        ]
+    )
+    lam_f, lam_g = 0.7, rng.normal(size=tr.lbg.size)
+    W, Ps = tr.nlp["x"], tr.nlp["p"]
+    lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
+    lagrangian = lf * tr.nlp["f"] + ca.dot(lg, tr.nlp["g"])
+    ad = ca.Function(
+        "ad",
+        [W, Ps, lf, lg],
+        [
+            tr.nlp["f"],
+            ca.gradient(tr.nlp["f"], W),
+            tr.nlp["g"],
+            ca.jacobian(tr.nlp["g"], W),
+            ca.triu(ca.hessian(lagrangian, W)[0]),
+        ],
+    )
+    f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
+    chain = tr.chain_nlp(upper=True)
+    f_n, g_n = chain.nlp(w, P)
+    assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL
+    f_c, grad_c = chain.grad_f(w, P)
+    g_c, jac_c = chain.jac_g(w, P)
+    assert _rel(f_c, f) < RTOL and _rel(g_c, g) < RTOL
+    assert _rel(grad_c, grad) < RTOL
+    assert _rel(jac_c, jac) < RTOL
+    assert _rel(chain.hess_lag(w, P, lam_f, lam_g), hess) < RTOL
