@@ -35,6 +35,12 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--worst", action="store_true", help="worst-case cost")
     parser.add_argument("--max-iter", type=int, default=300)
+    parser.add_argument(
+        "--no-design",
+        action="store_true",
+        help="no design (the scenarios coupled by --shared only): Φ's chain gives the "
+        "derivatives, where a design today takes casadi's AD through Φ",
+    )
     args = parser.parse_args()
     pf = load_problem(ROOT / "problems" / "beam_tracking_focus.toml", horizon=args.horizon)
     base = pf.problem
@@ -56,7 +62,10 @@ def main() -> None:
             draws, base.p, base.horizon, objective=objective, shared_pulses=args.shared
         )
         problem = dataclasses.replace(
-            base, constraints=constraints, design=design, scenarios=scenarios
+            base,
+            constraints=constraints,
+            design=() if args.no_design else design,
+            scenarios=scenarios,
         )
         began = time.perf_counter()
         compiled = CompiledOcp(problem, options)

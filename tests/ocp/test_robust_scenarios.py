@@ -17,6 +17,7 @@ References:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import shutil
@@ -30,7 +31,9 @@ from support.nlp_points import off_optimum
 from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
 
 from lightcraft_opt.errors import ParameterError, ProblemFileError
+from lightcraft_opt.files.ocp_outputs import write_ocp_summary
 from lightcraft_opt.files.problem import load_problem
+from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
 from lightcraft_opt.ocp.options import OcpOptions
 from lightcraft_opt.ocp.problem import (
@@ -414,3 +417,42 @@ def test_the_scenarios_chain_derivatives_equal_casadi_ad(objective):
     assert _rel(grad_c, grad) < RTOL
     assert _rel(jac_c, jac) < RTOL
     assert _rel(chain.hess_lag(w, P, lam_f, lam_g), hess) < RTOL
+
+
+def test_a_robust_problem_file_solves_on_the_chain_and_writes_its_cases(tmp_path: Path):
+    """Flight 5 (full physics, a coarse optic) from a file with two named cases (calm, and
+    a gust with an offset launch) and one shared pulse, no design, so IPOPT runs on the
+    scenarios' chain derivatives (checked against AD above): it converges, the shared
+    pulse is one plan, the cost is the mean of the cases'; summary.json names each case
+    with its cost, and the archive reads back to the bit."""
+    head = FILE_HEAD.split("[[design]]")[0].replace("horizon_pulses = 6", "horizon_pulses = 3")
+    source = tmp_path / "problems" / "robust.toml"
+    shutil.copytree(REPO / "models", tmp_path / "models")
+    source.parent.mkdir()
+    source.write_text(
+        head
+        + "[model_overrides.craft.engine]\nquadrature_radial = 2\nquadrature_azimuthal = 8\n"
+        + '[[objective]]\nterm = "lateral_offset"\nweight = 100.0\n'
+        + '[[objective]]\nterm = "laser_energy"\nweight = 1e-4\n'
+        + '[[control]]\ninput = "energy"\nlower_j = 210.0\nupper_j = 420.0\n'
+        + "[scenarios]\nshared_pulses = 1\n"
+        + '[[scenarios.case]]\nname = "calm"\n'
+        + '[[scenarios.case]]\nname = "gust"\nwind_speed_mps = 2.0\noffset_L_mm = [1.0, 0.0]\n'
+        + '[solver]\ntol = 1e-8\n[pulse_map]\nscheme = "split"\nsubsteps = 1\ndense = 1\n'
+    )
+    pf = load_problem(source)
+    compiled = CompiledOcp(pf.problem, dataclasses.replace(pf.options, replay=False))
+    assert compiled.chain is not None
+    result = compiled.solve()
+    assert result.status is OcpStatus.SOLVED, result.message
+    calm, gust = result.scenarios
+    np.testing.assert_allclose(calm.u[0], gust.u[0], rtol=1e-9)  # the shared pulse
+    assert np.max(np.abs(calm.u[1:, :2] - gust.u[1:, :2])) > 1e-5  # pointing [m], apart after
+    assert result.cost == pytest.approx(0.5 * (calm.cost + gust.cost), rel=1e-12)
+    summary = write_ocp_summary(result, pf, tmp_path / "summary.json")
+    assert set(summary["scenarios"]) == {"calm", "gust"}
+    assert summary["scenarios"]["gust"]["cost"] == gust.cost
+    write_archive(result, tmp_path)
+    back = read_archive(tmp_path)
+    assert back.scenarios[1].name == "gust"
+    np.testing.assert_array_equal(back.scenarios[1].x, gust.x)
