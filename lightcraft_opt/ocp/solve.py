@@ -63,6 +63,7 @@ from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus, ScenarioOutcome
 from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
+from lightcraft_opt.ocp.scenarios import ScenarioObjective
 from lightcraft_opt.ocp.start import (
     Start,
     StartKind,
@@ -184,6 +185,12 @@ class CompiledOcp:
         # a robust problem: its scenarios over the one transcription (ocp/scenario_shooting.py)
         self.transcription: MultipleShooting | ScenarioShooting = single
         if problem.scenarios is not None:
+            worst = problem.scenarios.objective is ScenarioObjective.WORST
+            if worst and opts.hessian is HessianApproximation.GAUSS_NEWTON:
+                raise OptionError(
+                    "OcpOptions.hessian 'gauss_newton' has no curvature of a worst-case "
+                    "objective (its costs are constraints J_s <= tau): use 'exact'"
+                )
             if opts.solver is OcpSolver.FATROP:
                 raise OptionError(
                     "OcpOptions.solver 'fatrop' takes one stage structure; a problem with "

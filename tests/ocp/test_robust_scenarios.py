@@ -30,12 +30,12 @@ from ocp.test_chain_derivatives import RTOL, _lateral, _rel
 from support.nlp_points import off_optimum
 from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
 
-from lightcraft_opt.errors import ParameterError, ProblemFileError
+from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files.ocp_outputs import write_ocp_summary
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.files.result_archive import read_archive, write_archive
 from lightcraft_opt.layout import PARAMETERS, STATE, initial_state, parameter_values
-from lightcraft_opt.ocp.options import OcpOptions
+from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.problem import (
     ControlBound,
     ControlEffort,
@@ -456,3 +456,16 @@ def test_a_robust_problem_file_solves_on_the_chain_and_writes_its_cases(tmp_path
     back = read_archive(tmp_path)
     assert back.scenarios[1].name == "gust"
     np.testing.assert_array_equal(back.scenarios[1].x, gust.x)
+
+
+def test_solvers_that_cannot_take_scenarios_are_refused(vertical):
+    """fatrop needs one stage structure (the design couples the scenarios), and the
+    Gauss-Newton Hessian has no curvature of the worst case's rows J_s <= tau."""
+    model, phi = vertical
+    problem, _ = _tracking(model, phi.period, _two(ScenarioObjective.WORST))
+    for options, match in (
+        (OcpOptions(solver=OcpSolver.FATROP), "fatrop"),
+        (OcpOptions(hessian=HessianApproximation.GAUSS_NEWTON), "gauss_newton"),
+    ):
+        with pytest.raises(OptionError, match=match):
+            CompiledOcp(problem, options, pulse_map=phi)
