@@ -139,10 +139,12 @@ def test_identical_scenarios_give_the_nominal_solution(vertical):
 def test_expected_cost_design_is_the_closed_form(vertical):
     """Two impulse scales 0.9 and 1.2, weighted 1:3: the mass is m0 / y*,
     y* = RHO Σ w α / Σ w α^2 (module docstring), met to 1e-7 relative; each scenario's
-    height at node N is zf_N + α_s y* A_N."""
+    height at node N is zf_N + α_s y* A_N; a warm re-solve stays at the optimum."""
     model, phi = vertical
     problem, m0 = _tracking(model, phi.period, _two())
-    result = _solve(problem, phi)
+    compiled = CompiledOcp(problem, OcpOptions(tol=TOL, replay=False), pulse_map=phi)
+    result = compiled.solve()
+    assert result.status is OcpStatus.SOLVED, result.message
     w, a = np.array(WEIGHTS) / sum(WEIGHTS), np.array(ALPHA)
     y = RHO * np.sum(w * a) / np.sum(w * a**2)
     assert result.design["rotor_mass_dry"] == pytest.approx(m0 / y, rel=1e-7)
@@ -151,6 +153,10 @@ def test_expected_cost_design_is_the_closed_form(vertical):
         assert outcome.state("r_L")[-1, 2] == pytest.approx(zf[-1] + alpha * y * A[-1], rel=1e-7)
     costs = np.array([o.cost for o in result.scenarios])
     assert result.cost == pytest.approx(float(w @ costs), rel=1e-12)
+    # a warm re-solve from the optimum stays there
+    again = compiled.solve(warm_start=result)
+    assert again.status is OcpStatus.SOLVED and again.iterations <= 5
+    assert again.design["rotor_mass_dry"] == pytest.approx(m0 / y, rel=1e-7)
 
 
 def test_worst_case_design_is_the_crossing_and_costs_more(vertical):
