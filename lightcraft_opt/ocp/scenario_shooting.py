@@ -114,7 +114,8 @@ class ScenarioShooting:
         res = ca.Function("ocp_scenario_residuals", [base.nlp["x"], P], [base.residuals])
         self.residuals = ca.vertcat(
             *(
-                np.sqrt(scenarios.weights[s]) * res.call([w_of[s], self._P_of[s]], True, False)[0]
+                float(np.sqrt(scenarios.weights[s]))
+                * res.call([w_of[s], self._P_of[s]], True, False)[0]
                 for s in range(S)
             )
         )
@@ -186,7 +187,7 @@ class ScenarioShooting:
         else:
             grad = ca.MX(self.n_w, 1)
             for s in range(S):
-                grad += sc.weights[s] * ca.mtimes(E[s].T, grads[s][1])
+                grad += float(sc.weights[s]) * ca.mtimes(E[s].T, grads[s][1])
         jacs = [chains[s].jac_g(w_of[s], self._P_of[s]) for s in range(S)]
         J = [ca.mtimes(jacs[s][1], E[s]) for s in range(S)]
         J.append(ca.jacobian(self._tie, w))
@@ -200,7 +201,7 @@ class ScenarioShooting:
             H = ca.MX(self.n_w, self.n_w)
             for s in range(S):
                 lam_s = lam_g[s * ng : (s + 1) * ng]
-                lf = lam_g[S * ng + n_tie + s] if worst else sc.weights[s] * lam_f
+                lf = lam_g[S * ng + n_tie + s] if worst else float(sc.weights[s]) * lam_f
                 h = chains[s].hess_lag_convex if convex else chains[s].hess_lag
                 H += ca.mtimes(E[s].T, ca.mtimes(h(w_of[s], self._P_of[s], lf, lam_s), E[s]))
             return H
