@@ -371,6 +371,18 @@ def write_ocp_summary(result: OcpResult, problem_file: ProblemFile, path: Path) 
         "constraint_violation": finite_or_none(result.constraint_violation),
         **replay_summary(result),
     }
+    if result.scenarios:  # a robust problem: each scenario's cost and what it achieved
+        energy = problem.inputs.index("energy")
+        summary["scenarios"] = {
+            o.name: {
+                "weight": o.weight,
+                "cost": o.cost,
+                "laser_energy_j": float(np.sum(o.u[:, energy])),
+                "final_altitude_m": float(o.state("r_L")[-1, 2]),
+                "max_drift_m": float(np.max(np.hypot(*o.state("r_L")[:, :2].T))),
+            }
+            for o in result.scenarios
+        }
     path.write_text(json.dumps(summary, indent=2) + "\n")
     write_archive(result, path.parent)
     return summary

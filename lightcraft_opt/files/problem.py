@@ -47,8 +47,9 @@ from lightcraft_opt.files.problem_tables import (
     si_note,
     slot_spec,
 )
+from lightcraft_opt.files.scenario_tables import read_scenarios, scenario_key
 from lightcraft_opt.files.schema import INTEGER, NUMBER, SWITCH, TEXT, Spec, choice, quantity
-from lightcraft_opt.layout import RcsProfile, initial_state
+from lightcraft_opt.layout import RcsProfile, initial_state, parameter_values
 from lightcraft_opt.model import Model
 from lightcraft_opt.ocp.design import DesignLayout
 from lightcraft_opt.ocp.options import (
@@ -85,6 +86,7 @@ _TABLES = (
     "constraint",
     "control",
     "design",
+    "scenarios",
     "solver",
     "pulse_map",
 )
@@ -296,6 +298,7 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
     except ParameterError as err:
         i = next((i for i, v in enumerate(design) if err.field in (v.name, f"design[{i}]")), 0)
         raise ProblemFileError(src, f"{design_tables[i]}.parameter", err.reason) from err
+    scenarios = read_scenarios(src, data.get("scenarios"), parameter_values(model), horizon)
     try:
         problem = OcpProblem(
             model,
@@ -308,6 +311,7 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
             rcs_profile=top.values.get("rcs_profile", RcsProfile.HOLD),
             rcs_subintervals=top.values.get("rcs_subintervals", 1),
             design=design,
+            scenarios=scenarios,
         )
     except HardwareLimitError as err:
         key = _problem_key(err.field, top, items)
@@ -316,7 +320,7 @@ def _problem_file(src: str, file: Path, data: dict[str, Any]) -> ProblemFile:
         shown = err.message(float(factor), schema.unit_symbol(unit)) if factor else err.reason
         raise ProblemFileError(src, key, shown) from err
     except ParameterError as err:
-        key = _problem_key(err.field, top, items)
+        key = _problem_key(scenario_key(err.field, scenarios), top, items)
         raise ProblemFileError(src, key, si_note(key, err.reason)) from err
     options = _options(src, data, problem.horizon)
     title = top.values.get("title", file.stem)

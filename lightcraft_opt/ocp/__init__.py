@@ -4,7 +4,9 @@ transcription, solve) and what came out (result).
 - :mod:`.problem`: :class:`OcpProblem`, its objective terms and constraints (numpy only);
 - :mod:`.options`: :class:`OcpOptions` (solver, Hessian, prediction map, move blocking,
   wall-clock limit, stall rule);
+- :mod:`.scenarios`: :class:`Scenarios` of a robust design (numpy only);
 - :mod:`.transcription`: :class:`MultipleShooting`, Φ as the dynamics of an NLP;
+- :mod:`.scenario_shooting`: :class:`ScenarioShooting`, S scenarios sharing one design;
 - :mod:`.solve`: :class:`CompiledOcp` (built once, solved warm), :func:`solve`, :func:`rollout`;
 - :mod:`.start`: the cold start, the director's flight where it applies (:class:`Start`);
 - :mod:`.evaluation`: Φ over the horizon once per point, shared by the NLP's functions;
@@ -51,7 +53,15 @@ from lightcraft_opt.ocp.problem import (
     TrackReference,
 )
 from lightcraft_opt.ocp.replay import PLAN_GAP_LIMIT, PlanWarning, replay_plan
-from lightcraft_opt.ocp.result import OcpResult, OcpStatus, PlanReplay
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus, PlanReplay, ScenarioOutcome
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
+from lightcraft_opt.ocp.scenarios import (
+    Scenario,
+    ScenarioDraws,
+    ScenarioObjective,
+    Scenarios,
+    draw_scenarios,
+)
 from lightcraft_opt.ocp.sensitivity import Sensitivities, Sensitivity
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout, solve
 from lightcraft_opt.ocp.start import Start, director_start
@@ -87,6 +97,12 @@ __all__ = [
     "PlanWarning",
     "PredictionMap",
     "RcsEnvelope",
+    "Scenario",
+    "ScenarioDraws",
+    "ScenarioObjective",
+    "ScenarioOutcome",
+    "ScenarioShooting",
+    "Scenarios",
     "Sensitivities",
     "Sensitivity",
     "Start",
@@ -95,6 +111,7 @@ __all__ = [
     "TiltLimit",
     "TrackReference",
     "director_start",
+    "draw_scenarios",
     "replay_plan",
     "rollout",
     "solve",

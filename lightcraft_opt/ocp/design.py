@@ -127,6 +127,13 @@ class DesignLayout:
         out[~self.in_p] = np.asarray(x0, dtype=float)[self.x_index]
         return out
 
+    def parameters_with(self, p: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """(PARAMETERS.size,) ``p`` with the design values ``d`` (size,) put in at their
+        entries (the launch spin, an entry of x0, left out): the parameters a design flies."""
+        out = np.array(p, dtype=float)
+        out[self.p_index] = np.asarray(d, dtype=float)[self.in_p]
+        return out
+
     def dict_of(self, d: np.ndarray) -> dict[str, float | np.ndarray]:
         """{slot or ``launch_spin``: SI value} of a design for
         :func:`~lightcraft_opt.layout.designed.model_with_parameters` (a vector slot whole:

@@ -11,6 +11,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.ocp.result import OcpResult
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
 from lightcraft_opt.ocp.sensitivity import Sensitivities, parameter_sensitivities
 from lightcraft_opt.ocp.transcription import MultipleShooting
 
@@ -25,7 +26,7 @@ class EnvelopeGradient:
     transcription : the NLP the results solve.
     """
 
-    def __init__(self, transcription: MultipleShooting) -> None:
+    def __init__(self, transcription: MultipleShooting | ScenarioShooting) -> None:
         self.transcription = transcription
         #: the Lagrangian's gradient in P and the entries of P it reads
         self._built: tuple[ca.Function, np.ndarray] | None = None

@@ -18,6 +18,7 @@ from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.ocp.chain import ChainNlp, chain_nlp
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.result import OcpStatus
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
 from lightcraft_opt.ocp.time_limit import Deadline, SolverCall
 from lightcraft_opt.ocp.transcription import MultipleShooting
 
@@ -66,7 +67,7 @@ class NlpSetup:
 
 def solver_setup(
     opts: OcpOptions,
-    tr: MultipleShooting,
+    tr: MultipleShooting | ScenarioShooting,
     deadline: Deadline | None,
     report: BuildReport | None = None,
 ) -> NlpSetup:
@@ -89,7 +90,11 @@ def solver_setup(
     nlp: dict[str, ca.MX] | ca.Function = tr.nlp
     chain = None
     if uses_chain(opts) and tr.derivatives is not None:
-        chain = chain_nlp(tr, upper=True, report=report)
+        chain = (
+            tr.chain_nlp(upper=True, report=report)
+            if isinstance(tr, ScenarioShooting)
+            else chain_nlp(tr, upper=True, report=report)
+        )
         nlp = chain.nlp
         convex = opts.hessian is HessianApproximation.CONVEX
         # the NLP's Function is not differentiable (Φ's chain gives its derivatives):

@@ -54,6 +54,8 @@ from lightcraft_opt.model import BeamSizeModel, Model
 from lightcraft_opt.model.checks import checked_vector, number, numbers, set_frozen
 from lightcraft_opt.ocp.design import DesignLayout, DesignVariable
 from lightcraft_opt.ocp.hardware import HardwareLimits, hardware_limits
+from lightcraft_opt.ocp.horizon import MAX_HORIZON, check_horizon
+from lightcraft_opt.ocp.scenarios import Scenarios, check_scenarios
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
@@ -378,21 +380,6 @@ CONSTRAINT_KINDS = (
 
 
 # --------------------------------------------------------------------------- the problem
-#: Longest horizon [pulses]: 200 s at 26 Hz, ten times the longest lightcraft flight.
-MAX_HORIZON = 5200
-
-
-def check_horizon(name: str, pulses: int) -> None:
-    """Raise a ParameterError naming ``name`` when ``pulses`` exceeds :data:`MAX_HORIZON`
-    (the transcription's variables, memory and build time grow linearly with it)."""
-    if pulses > MAX_HORIZON:
-        raise ParameterError(
-            name,
-            f"{pulses} pulses is above {MAX_HORIZON} (200 s at 26 Hz, ten times the longest "
-            "lightcraft flight); the transcription grows linearly with the horizon",
-        )
-
-
 @dataclass(frozen=True, eq=False)
 class OcpProblem:
     """An optimal control problem over ``horizon`` pulses of ``model`` (module docstring).
@@ -418,6 +405,10 @@ class OcpProblem:
     design : entries of p (and the launch spin) the optimiser chooses with the inputs
         (:class:`~lightcraft_opt.ocp.design.DesignVariable`, docs/design.md); their values
         in ``parameters``/``x0`` are where the design starts.
+    scenarios : S cases of the flight sharing the design, each with its own inputs (or
+        the first ``shared_pulses`` shared), and an expected or worst-case objective
+        (:class:`~lightcraft_opt.ocp.scenarios.Scenarios`, docs/design.md#robust-design);
+        None: the problem's own case alone.
 
     Derived (read-only): ``p`` (PARAMETERS.size,) parameter vector; ``inputs`` the
     map-input layout; ``lower``, ``upper``, ``slew`` (size of the map input,) bounds [unit]
@@ -440,6 +431,7 @@ class OcpProblem:
     rcs_profile: RcsProfile = RcsProfile.HOLD
     rcs_subintervals: int = 1
     design: tuple[DesignVariable, ...] = ()
+    scenarios: Scenarios | None = None
     p: np.ndarray = field(init=False, repr=False)
     inputs: VectorLayout = field(init=False, repr=False)
     lower: np.ndarray = field(init=False, repr=False)
@@ -476,6 +468,9 @@ class OcpProblem:
         set_frozen(self, "design_layout", DesignLayout(self.model, self.design))
         self._set_bounds()
         self._check_envelope()
+        if self.scenarios is not None:
+            energy_free = bool(np.any(self.free[self.inputs.index("energy")]))
+            check_scenarios(self.scenarios, self.horizon, self.design_layout.p_index, energy_free)
         for name in ("x0", "p", "lower", "upper", "slew"):
             getattr(self, name).setflags(write=False)
 

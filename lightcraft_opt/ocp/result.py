@@ -20,7 +20,7 @@ from lightcraft_opt.presenters import Presentable
 from lightcraft_opt.simulation.result import SimulationStatus
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
-__all__ = ["OcpResult", "OcpStatus", "PlanReplay"]
+__all__ = ["OcpResult", "OcpStatus", "PlanReplay", "ScenarioOutcome"]
 
 
 class OcpStatus(Enum):
@@ -103,6 +103,34 @@ class PlanReplay:
 
 
 @dataclass(frozen=True, eq=False)
+class ScenarioOutcome:
+    """One scenario of a robust solve (ocp/scenarios.py): its plan and what it cost.
+
+    Attributes
+    ----------
+    name, weight : the scenario's, the weight normalised (the weights sum to 1).
+    cost : J_s, the sum of its objective terms ``cost_terms`` (n_terms,).
+    x : (N + 1, STATE.size) its predicted states, x[0] its launch state.
+    u : (N, map-input size) its map inputs (a drop-out's energy 0).
+    engine : (N, 11) Φ's engine outputs per pulse.
+    """
+
+    name: str
+    weight: float
+    cost: float
+    cost_terms: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    engine: np.ndarray
+
+    def state(self, name: str) -> np.ndarray:
+        """State slot ``name`` at the nodes: (N + 1,) or (N + 1, size)."""
+        s = STATE.slot(name)
+        col = self.x[:, s.start : s.stop]
+        return col[:, 0] if s.size == 1 else col
+
+
+@dataclass(frozen=True, eq=False)
 class OcpResult(Presentable):
     """An optimal control solve: optimal inputs, predicted trajectory, how it went.
 
@@ -139,6 +167,9 @@ class OcpResult(Presentable):
     sensitivities : the optimal cost's derivative with respect to each held parameter
         (ocp/sensitivity.py; ``OcpOptions.sensitivities`` or
         :meth:`~lightcraft_opt.ocp.solve.CompiledOcp.sensitivities`); None when not asked.
+    scenarios : one :class:`ScenarioOutcome` per scenario of a robust problem (empty
+        otherwise); ``x``, ``u``, ``engine`` are then the first scenario's, ``cost`` and
+        ``cost_terms`` the objective's (the weighted mean, or the worst scenario's).
     """
 
     status: OcpStatus
@@ -165,6 +196,7 @@ class OcpResult(Presentable):
     design: dict[str, float] = field(default_factory=dict)
     design_units: dict[str, str] = field(default_factory=dict)
     sensitivities: Sensitivities | None = None
+    scenarios: tuple[ScenarioOutcome, ...] = ()
 
     @property
     def success(self) -> bool:
@@ -209,6 +241,10 @@ class OcpResult(Presentable):
             *self._term_rows(),
             ("violation", f"{self.constraint_violation:.3g} (scaled)"),
             ("horizon", f"{self.horizon} pulses, {float(self.t[-1] - self.t[0]):.3f} s"),
+        ]
+        rows += [
+            (f"scenario {o.name!r}", f"cost {o.cost:.6g}, weight {o.weight:.3g}")
+            for o in self.scenarios
         ]
         rows += [
             (f"design {name}", f"{value:.6g} {self.design_units.get(name, '')}".rstrip())

@@ -32,14 +32,11 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.compiled import (
-    compile_by_default,
-    derivatives_for,
     pulse_map_for,
-    saved_pulse_map_derivatives,
 )
 from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.errors import OptionError, ParameterError
-from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile
+from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.envelope import EnvelopeGradient
@@ -50,19 +47,19 @@ from lightcraft_opt.ocp.nlp_solver import (
     WARM_IPOPT,
     solver_setup,
     solver_status,
-    uses_chain,
 )
 from lightcraft_opt.ocp.options import (
     HessianApproximation,
     OcpOptions,
     OcpSolver,
     OcpStart,
-    PredictionMap,
     WarmHessian,
 )
+from lightcraft_opt.ocp.prediction import prediction_derivatives, prediction_map
 from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
-from lightcraft_opt.ocp.result import OcpResult, OcpStatus
+from lightcraft_opt.ocp.result import OcpResult, OcpStatus, ScenarioOutcome
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting, check_scenario_options
 from lightcraft_opt.ocp.sensitivity import Sensitivities
 from lightcraft_opt.ocp.start import (
     Start,
@@ -84,8 +81,6 @@ from lightcraft_opt.ocp.time_limit import (
 )
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
-from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
-from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, reduced_pulse_map
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
 
@@ -143,48 +138,20 @@ class CompiledOcp:
         if not ca.has_nlpsol(plugin) or (qp is not None and not ca.has_conic(qp)):
             raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
         self.problem, self.options = problem, opts
-        # the interpreted map (the NLP differentiates it): the one derivatives_for builds on
-        map_options = problem.pulse_map_options(opts.pulse_map)
-        if pulse_map is not None:
-            self.pulse_map = pulse_map
-        elif opts.prediction is PredictionMap.REDUCED:
-            if map_options.rcs_profile is not RcsProfile.HOLD:
-                raise OptionError(
-                    "OcpOptions.prediction 'reduced' takes held RCS levels only; this problem's "
-                    f"RCS profile is {map_options.rcs_profile.value!r}"
-                )
-            reduced = ReducedMapOptions(substeps=map_options.substeps, dense=map_options.dense)
-            self.pulse_map = reduced_pulse_map(problem.model, reduced)
-        else:
-            self.pulse_map = pulse_map_for(problem.model, map_options, compiled=False)
-        built = pulse_map is None and opts.prediction is PredictionMap.FULL
-        self._map_options = map_options if built else None
-        if self.pulse_map.step.size1_in(1) != problem.inputs.size or (
-            self.pulse_map.inputs is not None and self.pulse_map.inputs != problem.inputs
-        ):
-            raise ParameterError(
-                "pulse_map",
-                f"takes inputs {self.pulse_map.inputs or self.pulse_map.step.size1_in(1)}, "
-                f"the problem {problem.inputs}: build it from the problem's model with "
-                "problem.pulse_map_options(...)",
-            )
+        self.pulse_map, self._map_options = prediction_map(problem, opts, pulse_map)
         blocks = opts.blocks(problem.horizon)
-        derivatives = None
-        if uses_chain(opts) and self.pulse_map.pieces is not None:
-            # Φ's chain also in the designed entries of p (the launch spin is x0's, not p's)
-            design = tuple(sorted(int(i) for i in problem.design_layout.p_index))
-            derivatives = (
-                derivatives_for(problem.model, map_options, design=design, report=build_progress)
-                if pulse_map is None and opts.prediction is PredictionMap.FULL
-                else saved_pulse_map_derivatives(
-                    self.pulse_map, report=build_progress, design=design
-                )
-                if compile_by_default()
-                else build_pulse_map_derivatives(self.pulse_map, design=design)
-            )
-        self.transcription = tr = MultipleShooting(
+        derivatives = prediction_derivatives(
+            problem, opts, self.pulse_map, self._map_options, build_progress
+        )
+        single = MultipleShooting(
             problem, self.pulse_map, blocks=blocks, threads=opts.threads, derivatives=derivatives
         )
+        # a robust problem: its scenarios over the one transcription (ocp/scenario_shooting.py)
+        self.transcription: MultipleShooting | ScenarioShooting = single
+        if problem.scenarios is not None:
+            check_scenario_options(problem.scenarios, opts)
+            self.transcription = ScenarioShooting(single, problem.scenarios)
+        tr = self.transcription
         # the iteration callback of IPOPT and sqpmethod: the deadline (fatrop's solves are
         # forked instead), the stall rule and the progress hook (if any)
         self._deadline = (
@@ -292,6 +259,8 @@ class CompiledOcp:
             result = dataclasses.replace(result, sensitivities=sens)
         if not self.options.replay:
             return result
+        if isinstance(self.transcription, ScenarioShooting):  # the first scenario's plan
+            pv = self.transcription.scenario_p(pv, 0)
         return self.replayer.attach(result, self.designed_parameters(pv, result))
 
     def sensitivities(
@@ -317,12 +286,7 @@ class CompiledOcp:
         """(PARAMETERS.size,) ``p`` with the design ``result`` chose put in (``p`` itself
         without a design): the parameters its plan flies with."""
         tr = self.transcription
-        if not tr.design.in_p.any():
-            return p
-        d = tr.design_of(result.w)
-        out = np.array(p, dtype=float)
-        out[tr.design.p_index] = d[tr.design.in_p]
-        return out
+        return tr.design.parameters_with(p, tr.design_of(result.w)) if tr.design.size else p
 
     # ----------------------------------------------------------------- helpers
     def _run_time_values(
@@ -374,7 +338,7 @@ class CompiledOcp:
             cold = None
         else:
             cold = self._start(x0, p, t0, initial_guess)
-            w0 = tr.pack(cold.X, cold.U, u_previous)
+            w0 = self._packed(cold, x0, p, t0, u_previous, initial_guess, P)
         lbx, ubx = self._bounds
         # a start that flew is near-feasible: IPOPT starts it as it starts a warm start
         # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet
@@ -432,6 +396,36 @@ class CompiledOcp:
         return self._result(
             w, lam_x, lam_g, P, g, violation, status, message, iterations, solve_time, t0
         )
+
+    def _packed(
+        self,
+        cold: Start,
+        x0: np.ndarray,
+        p: np.ndarray,
+        t0: float,
+        u_previous: np.ndarray | None,
+        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+        P: np.ndarray,
+    ) -> np.ndarray:
+        """The scaled start of the NLP from the cold start ``cold``; with scenarios, each
+        scenario's own start from its launch state and parameters, its drop-outs'
+        energy 0."""
+        tr = self.transcription
+        if not isinstance(tr, ScenarioShooting):
+            return tr.pack(cold.X, cold.U, u_previous)
+        energy = self.problem.inputs.index("energy")
+        Xs, Us = [], []
+        for s, case in enumerate(tr.scenarios.cases):
+            x0s, ps = tr.scenario_x0(x0, s), tr.scenario_p(p, s)
+            own = np.array_equal(x0s, x0) and np.array_equal(ps, p)
+            start = cold if own else self._start(x0s, ps, t0, guess)
+            U = np.array(start.U, dtype=float)
+            # a drop-out fires nothing: its gap opens at that pulse alone (flying the inputs
+            # on open-loop from there would leave the beam)
+            U[list(case.dropouts), energy] = 0.0
+            Xs.append(start.X)
+            Us.append(U)
+        return tr.pack(Xs, Us, u_previous, None, P)
 
     def _violation(self, w: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, float]:
         """(n_g,) the constraints at ``w`` and the largest violation of any of them or of
@@ -510,7 +504,10 @@ class CompiledOcp:
         keep = (
             warm and self.options.warm_hessian is WarmHessian.KEPT and chain.kept_blocks.has_blocks
         )
-        chain.kept_blocks.frozen = keep
+        tr = self.transcription
+        chains = tr.chains if isinstance(tr, ScenarioShooting) else [chain]
+        for each in chains:  # a robust problem: every scenario's blocks
+            each.kept_blocks.frozen = keep
         return keep
 
     def _resolver(self) -> ca.Function:
@@ -605,7 +602,12 @@ class CompiledOcp:
         """The result of iterate ``w`` (constraints ``g``, largest violation ``viol``)."""
         tr, pr, tol = self.transcription, self.problem, self.options.tol
         X, U, eng = (np.asarray(v, dtype=float) for v in tr.trajectory(w, P))
-        terms = np.asarray(tr.cost_terms(w, P), dtype=float).ravel()
+        outcomes: tuple[ScenarioOutcome, ...] = ()
+        if isinstance(tr, ScenarioShooting):
+            terms, costs = tr.combined_terms(w, P)
+            outcomes = tr.outcomes(w, P, costs)
+        else:
+            terms = np.asarray(tr.cost_terms(w, P), dtype=float).ravel()
         rows = tr.constraint_rows
         gap = dynamics_gap(rows, g, tr.lbg, tr.ubg)
         if status is OcpStatus.INFEASIBLE:
@@ -643,6 +645,7 @@ class CompiledOcp:
             lam_g=lam_g,
             design=dict(zip(tr.design.labels, tr.design_of(w).tolist(), strict=True)),
             design_units={v.label: v.unit for v in tr.design.variables},
+            scenarios=outcomes,
         )
 
 

@@ -53,6 +53,7 @@ from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.design_rows import designed_parameters, designed_state, physical_rows
 from lightcraft_opt.ocp.evaluation import horizon_map
 from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
+from lightcraft_opt.ocp.nlp_parameters import lagrangian_gradient, parameters_read
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
@@ -483,31 +484,14 @@ class MultipleShooting:
         )
 
     def lagrangian_gradient(self) -> ca.Function:
-        """casadi.Function ``ocp_lagrangian_gradient_p(w, P, lam_g) -> grad_P``: the
-        gradient of the NLP's Lagrangian f + lam_gᵀ g with respect to its parameter vector
-        P (:attr:`parameters`; SI, as P holds them) at scaled w and multipliers lam_g of
-        the scaled g, by casadi's AD through Φ (one reverse sweep: Φ's chain has no
-        derivatives in p). At a solution it is the optimal cost's derivative with respect
-        to P (the envelope theorem; ocp/sensitivity.py); :meth:`parameters_read` says
-        which entries of P it depends on."""
-        w, P = self.nlp["x"], self.P
-        lam_g = ca.MX.sym("lam_g", self.lbg.size)
-        lagrangian = self.nlp["f"] + ca.dot(lam_g, self.nlp["g"])
-        return ca.Function(
-            "ocp_lagrangian_gradient_p",
-            [w, P, lam_g],
-            [ca.gradient(lagrangian, P)],
-            ["w", "P", "lam_g"],
-            ["grad_P"],
-        )
+        """``ocp_lagrangian_gradient_p(w, P, lam_g) -> grad_P`` of this NLP (scaled w, the
+        multipliers of the scaled g, P in SI as :attr:`parameters` holds it; casadi's AD
+        through Φ): ocp/nlp_parameters.py."""
+        return lagrangian_gradient(self.nlp, self.P)
 
     def parameters_read(self) -> np.ndarray:
-        """(P.size,) bool: the entries of the parameter vector that f or g depend on
-        (structurally: casadi's sparsity of their Jacobians, no evaluation)."""
-        read = np.zeros(self.P.numel(), dtype=bool)
-        for expr in (self.nlp["f"], self.nlp["g"]):
-            read[np.asarray(ca.jacobian_sparsity(expr, self.P).get_col(), dtype=int)] = True
-        return read
+        """(P.size,) bool: the entries of P that f or g depend on (ocp/nlp_parameters.py)."""
+        return parameters_read(self.nlp, self.P)
 
     def pulse_times(self) -> ca.MX:
         """(1, N) t_k = t0 + k T [s]."""

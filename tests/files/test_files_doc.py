@@ -52,10 +52,12 @@ from lightcraft_opt.files.problem_tables import (
     TableKind,
     slot_spec,
 )
+from lightcraft_opt.files.scenario_tables import SCENARIO_CASE_TABLE, SCENARIOS_TABLE
 from lightcraft_opt.files.schema import QUANTITIES, Spec
 from lightcraft_opt.files.track import TRACK_COLUMNS, read_track
 from lightcraft_opt.layout import PARAMETERS, RcsProfile, map_input_layout
 from lightcraft_opt.ocp.options import OCP_PULSE_MAP, OcpOptions
+from lightcraft_opt.ocp.scenarios import ScenarioObjective
 
 DOCS = REPO_ROOT / "docs"
 PAGES = DOCS / "files"
@@ -294,12 +296,16 @@ def test_the_problem_page_lists_every_key_of_the_problem_files() -> None:
     )
     expected["keys-control"] = _item_schema(CONTROL, "")
     expected["keys-design"] = DESIGN_TABLE
+    expected["keys-scenarios"] = SCENARIOS_TABLE
+    expected["keys-scenarios-case"] = SCENARIO_CASE_TABLE
     defaults: dict[str, dict[str, Any]] = {
         anchor(f"objective.{t}"): _item_defaults(k) for t, k in OBJECTIVES.items()
     }
     defaults.update({anchor(f"constraint.{c}"): _item_defaults(k) for c, k in CONSTRAINTS.items()})
     defaults["keys-control"] = {"input": REQUIRED}
     defaults["keys-design"] = {"parameter": REQUIRED, "lower": REQUIRED, "upper": REQUIRED}
+    defaults["keys-scenarios"] = {"objective": ScenarioObjective.EXPECTED, "shared_pulses": 0}
+    defaults["keys-scenarios-case"] = {"name": REQUIRED, "weight": 1.0, "tilt": 0.0}
     options = dataclass_defaults(OcpOptions, {"name": "solver"})
     options["stall_iterations"] = OcpOptions().stall_iterations
     defaults["keys-solver"] = {f: options[f] for f in problem.TABLES["solver"] if f in options}
