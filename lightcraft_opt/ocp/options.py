@@ -59,9 +59,10 @@ class OcpStart(Enum):
     air where the problem's wind blows it out of the beam.
     ``ROLLOUT``: the nominal rollout in the problem's wind always (the beam under the
     craft, the flight's energy).
-    ``HELD_DESIGN``: for a design problem, the same problem solved first with its design
-    held at the model's values (from its own FLOWN start), then the design freed from that
-    optimum (docs/design.md#how-a-design-is-solved); FLOWN when that solve fails.
+    ``HELD_DESIGN``: for a design problem without scenarios, the same problem solved first
+    with its design held at the model's values (from its own FLOWN start), then the design
+    freed from that optimum (docs/design.md#how-a-design-is-solved); FLOWN when that solve
+    fails, and for other problems.
     """
 
     FLOWN = "flown"

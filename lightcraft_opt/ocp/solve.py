@@ -548,7 +548,9 @@ class CompiledOcp:
         rollout in the problem's wind; with "held_design" the problem solved with its design
         held."""
         start = self.options.start
-        design_held = guess is None and start is OcpStart.HELD_DESIGN and self.problem.design
+        pr = self.problem  # held_design: a design without scenarios (each has its own start)
+        held_kind = guess is None and start is OcpStart.HELD_DESIGN
+        design_held = held_kind and bool(pr.design) and pr.scenarios is None
         if design_held and (held := self._held_design_start(x0, p, t0)) is not None:
             return held
         flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN)
