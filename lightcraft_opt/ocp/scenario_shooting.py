@@ -29,7 +29,11 @@ from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.ocp.chain import ChainNlp, chain_nlp
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
-from lightcraft_opt.ocp.nlp_parameters import lagrangian_gradient, parameters_read
+from lightcraft_opt.ocp.nlp_functions import (
+    gauss_newton_hessian,
+    lagrangian_gradient,
+    parameters_read,
+)
 from lightcraft_opt.ocp.options import HessianApproximation, OcpOptions, OcpSolver
 from lightcraft_opt.ocp.result import ScenarioOutcome
 from lightcraft_opt.ocp.scenarios import ScenarioObjective, Scenarios
@@ -291,29 +295,17 @@ class ScenarioShooting:
     def gauss_newton_hessian(self, *, upper: bool = True) -> ca.Function:
         """The Gauss-Newton Hessian of the expected cost (MultipleShooting's, over the S
         scenarios' residuals scaled by sqrt(w_s)); the worst-case cost, τ, has none."""
-        w, r = self.nlp["x"], self.residuals
-        lam_f = ca.MX.sym("lam_f")
-        lam_g = ca.MX.sym("lam_g", self.lbg.size)
-        Jr = ca.jacobian(r, w) if r.numel() else ca.MX(0, w.numel())
-        H = lam_f * 2 * ca.mtimes(Jr.T, Jr)
-        H = ca.triu(H) if upper else H
-        return ca.Function(
-            "nlp_hess_l",
-            [w, self.P, lam_f, lam_g],
-            [H],
-            ["x", "p", "lam_f", "lam_g"],
-            ["hess_gamma_x_x"],
-        )
+        return gauss_newton_hessian(self.nlp, self.P, self.residuals, upper=upper)
 
     # ----------------------------------------------------------------- numbers
     def lagrangian_gradient(self) -> ca.Function:
         """``ocp_lagrangian_gradient_p(w, P, lam_g) -> grad_P`` of the robust NLP: the
         objective's (expected or worst) derivative in the shared P at an optimum
-        (ocp/nlp_parameters.py)."""
+        (ocp/nlp_functions.py)."""
         return lagrangian_gradient(self.nlp, self.P)
 
     def parameters_read(self) -> np.ndarray:
-        """(P.size,) bool: the entries of P that f or g depend on (ocp/nlp_parameters.py)."""
+        """(P.size,) bool: the entries of P that f or g depend on (ocp/nlp_functions.py)."""
         return parameters_read(self.nlp, self.P)
 
     def outcomes(

@@ -53,7 +53,11 @@ from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.design_rows import designed_parameters, designed_state, physical_rows
 from lightcraft_opt.ocp.evaluation import horizon_map
 from lightcraft_opt.ocp.measures import build_node_measures, build_pulse_measures
-from lightcraft_opt.ocp.nlp_parameters import lagrangian_gradient, parameters_read
+from lightcraft_opt.ocp.nlp_functions import (
+    gauss_newton_hessian,
+    lagrangian_gradient,
+    parameters_read,
+)
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     ControlRate,
@@ -469,28 +473,16 @@ class MultipleShooting:
         constraints (Φ's second derivatives weighted by the multipliers) and of the
         residuals: the Gauss-Newton model of acados and of constrained Gauss-Newton SQP;
         convergence becomes linear, each iteration needs Φ's first derivatives only."""
-        w, r = self.nlp["x"], self.residuals
-        lam_f = ca.MX.sym("lam_f")
-        lam_g = ca.MX.sym("lam_g", self.lbg.size)
-        J = ca.jacobian(r, w) if r.numel() else ca.MX(0, w.numel())
-        H = lam_f * 2 * ca.mtimes(J.T, J)
-        H = ca.triu(H) if upper else H
-        return ca.Function(
-            "nlp_hess_l",
-            [w, self.P, lam_f, lam_g],
-            [H],
-            ["x", "p", "lam_f", "lam_g"],
-            ["hess_gamma_x_x"],
-        )
+        return gauss_newton_hessian(self.nlp, self.P, self.residuals, upper=upper)
 
     def lagrangian_gradient(self) -> ca.Function:
         """``ocp_lagrangian_gradient_p(w, P, lam_g) -> grad_P`` of this NLP (scaled w, the
         multipliers of the scaled g, P in SI as :attr:`parameters` holds it; casadi's AD
-        through Φ): ocp/nlp_parameters.py."""
+        through Φ): ocp/nlp_functions.py."""
         return lagrangian_gradient(self.nlp, self.P)
 
     def parameters_read(self) -> np.ndarray:
-        """(P.size,) bool: the entries of P that f or g depend on (ocp/nlp_parameters.py)."""
+        """(P.size,) bool: the entries of P that f or g depend on (ocp/nlp_functions.py)."""
         return parameters_read(self.nlp, self.P)
 
     def pulse_times(self) -> ca.MX:

@@ -23,11 +23,10 @@ import re
 import shutil
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 import pytest
 from ocp.test_chain_derivatives import RTOL, _lateral, _rel
-from support.nlp_points import off_optimum
+from support.nlp_points import ad_derivatives, off_optimum
 from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
 
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
@@ -399,21 +398,7 @@ def test_the_scenarios_chain_derivatives_equal_casadi_ad(objective):
         ]
     )
     lam_f, lam_g = 0.7, rng.normal(size=tr.lbg.size)
-    W, Ps = tr.nlp["x"], tr.nlp["p"]
-    lf, lg = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
-    lagrangian = lf * tr.nlp["f"] + ca.dot(lg, tr.nlp["g"])
-    ad = ca.Function(
-        "ad",
-        [W, Ps, lf, lg],
-        [
-            tr.nlp["f"],
-            ca.gradient(tr.nlp["f"], W),
-            tr.nlp["g"],
-            ca.jacobian(tr.nlp["g"], W),
-            ca.triu(ca.hessian(lagrangian, W)[0]),
-        ],
-    )
-    f, grad, g, jac, hess = ad(w, P, lam_f, lam_g)
+    f, grad, g, jac, hess = ad_derivatives(tr, w, P, lam_f, lam_g)
     chain = tr.chain_nlp(upper=True)
     f_n, g_n = chain.nlp(w, P)
     assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL

@@ -6,6 +6,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.ocp.problem import OcpProblem
+from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting
 from lightcraft_opt.ocp.solve import rollout
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
@@ -39,7 +40,11 @@ def cost_of(tr: MultipleShooting, problem: OcpProblem, X: np.ndarray, U: np.ndar
 
 
 def ad_derivatives(
-    tr: MultipleShooting, w: np.ndarray, P: np.ndarray, lam_f: float, lam_g: np.ndarray
+    tr: MultipleShooting | ScenarioShooting,
+    w: np.ndarray,
+    P: np.ndarray,
+    lam_f: float,
+    lam_g: np.ndarray,
 ) -> tuple[ca.DM, ...]:
     """(f, ∇f, g, ∂g/∂w, upper triangle of ∇²(lam_f f + lam_gᵀ g)) of ``tr``'s NLP at
     (``w``, ``P``) by casadi's AD through its own expressions: the reference the chain's

@@ -1,6 +1,7 @@
-"""An NLP's dependence on its parameter vector P, for the optimum's sensitivities
-(ocp/envelope.py, docs/design.md#sensitivities): the same for one scenario's transcription
-(ocp/transcription.py) and for a robust problem's (ocp/scenario_shooting.py).
+"""Functions of a transcription's NLP built alike for one scenario's (ocp/transcription.py)
+and a robust problem's (ocp/scenario_shooting.py): the Lagrangian's gradient in the
+parameter vector P and the entries of P it reads, for the optimum's sensitivities
+(ocp/envelope.py, docs/design.md#sensitivities), and the Gauss-Newton Hessian.
 """
 
 from __future__ import annotations
@@ -10,7 +11,7 @@ from collections.abc import Mapping
 import casadi as ca
 import numpy as np
 
-__all__ = ["lagrangian_gradient", "parameters_read"]
+__all__ = ["gauss_newton_hessian", "lagrangian_gradient", "parameters_read"]
 
 
 def lagrangian_gradient(nlp: Mapping[str, ca.MX], P: ca.MX) -> ca.Function:
@@ -38,3 +39,21 @@ def parameters_read(nlp: Mapping[str, ca.MX], P: ca.MX) -> np.ndarray:
     for expr in (nlp["f"], nlp["g"]):
         read[np.asarray(ca.jacobian_sparsity(expr, P).get_col(), dtype=int)] = True
     return read
+
+
+def gauss_newton_hessian(
+    nlp: Mapping[str, ca.MX], P: ca.MX, residuals: ca.MX, *, upper: bool = True
+) -> ca.Function:
+    """casadi.Function ``nlp_hess_l(x, p, lam_f, lam_g) -> hess_gamma_x_x``: lam_f 2 JᵀJ, J
+    the Jacobian of the least-squares ``residuals`` with respect to the NLP's w (nlpsol's
+    ``hess_lag`` option); its upper triangle with ``upper`` (IPOPT), else the whole matrix
+    (sqpmethod)."""
+    w = nlp["x"]
+    lam_f = ca.MX.sym("lam_f")
+    lam_g = ca.MX.sym("lam_g", nlp["g"].numel())
+    J = ca.jacobian(residuals, w) if residuals.numel() else ca.MX(0, w.numel())
+    H = lam_f * 2 * ca.mtimes(J.T, J)
+    H = ca.triu(H) if upper else H
+    return ca.Function(
+        "nlp_hess_l", [w, P, lam_f, lam_g], [H], ["x", "p", "lam_f", "lam_g"], ["hess_gamma_x_x"]
+    )
