@@ -412,7 +412,9 @@ def test_a_wall_clock_limit_stops_a_solve_that_would_not_end(vertical, solver, h
     assert not result.success
     assert f"{solver.value}: wall-clock limit 0.5 s reached" in result.message
     assert 0.5 <= elapsed < 2.0
-    assert 0.5 <= result.solve_time <= elapsed
+    # the limit counts from the call (the cold start's making included); solve_time is the
+    # solver's own share of it, so on a loaded machine it may end just under 0.5 s
+    assert 0.0 < result.solve_time <= elapsed
     assert result.u.shape == (5, problem.inputs.size)
     if solver is OcpSolver.FATROP:
         assert result.iterations == 0 and "initial guess, returned as is" in result.message
