@@ -101,7 +101,7 @@ def test_a_reader_waits_for_a_writer_between_its_two_moves(entry):
             time.sleep(0.3)
             line = entries_module._checksum_line(entry, hashlib.sha256(DATA).hexdigest())
             entries_module._replace(checksum_path(entry), line)
-        done.set()
+            done.set()  # inside the lock: the reader cannot get in before this
 
     thread = threading.Thread(target=writer)
     thread.start()
