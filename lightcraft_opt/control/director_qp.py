@@ -70,6 +70,8 @@ class DirectorQp:
     terminal_hessian : (nz, nz) H_N.
     horizon : N >= 1.
     solver, max_iter, tol : the QP solver, its iteration cap and tolerance.
+    error_on_fail : a solve the solver does not call successful raises (the step Function,
+        director_step.py); False (the default): it returns, and :meth:`solve` reads the status.
     """
 
     def __init__(
@@ -80,6 +82,8 @@ class DirectorQp:
         solver: MpcSolver = MpcSolver.HPIPM,
         max_iter: int = 30,
         tol: float = 1e-6,
+        *,
+        error_on_fail: bool = False,
     ) -> None:
         start = time.perf_counter()
         nz = terminal_hessian.shape[0]
@@ -133,7 +137,7 @@ class DirectorQp:
                 "director_qp_ipopt",
                 "ipopt",
                 nlp,
-                {"error_on_fail": False, "print_time": False, "ipopt": ipopt},
+                {"error_on_fail": error_on_fail, "print_time": False, "ipopt": ipopt},
             )
             sol = nlpsol(
                 x0=w0,
@@ -154,6 +158,7 @@ class DirectorQp:
                 opts = conic_options(solver, max_iter, tol, hpipm_mode="speed")
             except OptionError as err:
                 raise OptionError(f"DirectorOptions.{err}") from None
+            opts["error_on_fail"] = error_on_fail
             conic = ca.conic("director_qp_solver", solver.value, qp, opts)
             sol = conic(
                 h=self._H,

@@ -38,6 +38,8 @@ class TorqueAllocation:
     max_thrust : (n,) [N].
     torque_limit : the largest |τ| every transverse direction can reach [N m]: the radius of
         the disc inside the reachable set (16 directions sampled, the smallest taken).
+    hessian, solver : the least squares' (n, n) Hessian and its casadi ``conic`` (qrqp), which
+        the director's step Function calls.
     axis_limit : (2,) the largest |τ| along ±b2 and along ±b3 [N m] (each the smaller of its
         two senses): the box the director's QP bounds the torque to (for thrusters in
         opposed pairs on b2 and b3, the whole reachable set).
@@ -70,7 +72,7 @@ class TorqueAllocation:
         )
         n = self.max_thrust.size
         scale = float(np.max(np.abs(self.G))) ** 2 or 1.0
-        self._H = 2 * (self.G.T @ self.G + 1e-6 * scale * np.eye(n))
+        self.hessian = 2 * (self.G.T @ self.G + 1e-6 * scale * np.eye(n))
         qp = {"h": ca.Sparsity.dense(n, n), "a": ca.Sparsity(0, n)}
         opts = {
             "error_on_fail": False,
@@ -78,7 +80,7 @@ class TorqueAllocation:
             "print_header": False,
             "print_info": False,
         }
-        self._solver = ca.conic("rcs_allocation", "qrqp", qp, opts)
+        self.solver = ca.conic("rcs_allocation", "qrqp", qp, opts)
 
     def thrusts(self, torque_B: np.ndarray) -> np.ndarray:
         """(n,) held thrusts [N] for the transverse torque ``torque_B`` (2,) [N m, B frame b2,
@@ -86,8 +88,8 @@ class TorqueAllocation:
         tau = np.asarray(torque_B, dtype=float)
         if not np.any(tau):
             return np.zeros_like(self.max_thrust)
-        sol = self._solver(
-            h=self._H,
+        sol = self.solver(
+            h=self.hessian,
             g=-2 * self.G.T @ tau,
             lbx=0.0,
             ubx=self.max_thrust,

@@ -122,7 +122,9 @@ def test_memory_stays_flat_over_hundreds_of_closed_loop_steps(make, flights):
     fly, controller = make()
     for _ in range(WARM_UP):
         fly()
-    held_keys = list(controller.qp.function.stats())  # module docstring
+    # module docstring; the director's QP runs inside its step Function, which hands back
+    # no stats dict to churn the table
+    held_keys = list(controller.qp.function.stats()) if controller.name == "mpc" else []
     gc.collect()
     in_use, objects = _malloc_in_use(), len(gc.get_objects())
     steps = 0
