@@ -158,6 +158,7 @@ def flight_outputs(result: ClosedLoopResult) -> dict[str, Any]:
     k = int(np.argmax(r[:, 2]))
     landed = flight.status is SimulationStatus.LANDED
     log = result.log
+    counted = bool(np.all(log.iterations >= 0))
     return {
         "status": flight.status.value,
         "message": flight.message,
@@ -179,8 +180,11 @@ def flight_outputs(result: ClosedLoopResult) -> dict[str, Any]:
         "max_offset_m": float(np.max(result.offset)) if result.offset.size else math.nan,
         "rcs_used_kg": float(result.rcs_used[-1]),
         "fallbacks": int(np.sum(log.fallbacks)),
-        "iterations_total": int(np.sum(log.iterations)),
-        "iterations_max": int(np.max(log.iterations)) if log.iterations.size else 0,
+        # -1: a controller that does not say (a step Function: the director)
+        "iterations_total": int(np.sum(log.iterations)) if counted else -1,
+        "iterations_max": (int(np.max(log.iterations)) if log.iterations.size else 0)
+        if counted
+        else -1,
     }
 
 

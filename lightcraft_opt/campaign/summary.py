@@ -143,8 +143,9 @@ def campaign_summary(
         "fallbacks_total": int(np.sum(fallbacks)) if n else 0,
         "runs_with_fallback": int(np.sum(fallbacks > 0)),
         "fallbacks_per_run": _stats(fallbacks),
+        # NaN when a run's controller did not count them (iterations_total -1)
         "iterations_per_pulse_mean": float(np.sum(iterations) / np.sum(pulses))
-        if n and np.sum(pulses)
+        if n and np.sum(pulses) and np.all(iterations >= 0)
         else math.nan,
         "iterations_max": int(np.max(col("iterations_max"))) if n else 0,
     }

@@ -49,10 +49,12 @@ by the director's. "off": the thrusters rest.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
-from lightcraft_opt.compiled import reduced_derivatives_for
+from lightcraft_opt.compiled import compile_by_default, reduced_derivatives_for
+from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
 from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.director_qp import DirectorQp
 from lightcraft_opt.control.director_step import (
@@ -62,6 +64,7 @@ from lightcraft_opt.control.director_step import (
     TORQUE,
     VERGENCE,
     DirectorPieces,
+    DirectorStep,
     build_director_step,
     east_north,
 )
@@ -90,7 +93,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.linear.focus import scheduled_focus
 from lightcraft_opt.model import Model
-from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
+from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, build_reduced_map
 
 __all__ = ["DirectorController", "director_model"]
 
@@ -194,6 +197,10 @@ class DirectorController:
         "nutation" (None then leaves them off; ignored otherwise).
     p : the controller's parameter vector (default its model's).
     compiled : compile Ψ's pieces (None: ``compiled.compile_by_default``).
+    compile_step : compile the whole step (its Functions with Ψ's pieces and HPIPM in one
+        library each, cached on disk by their structure: the model's numbers and the
+        options are part of it; about 25 s on 2 cores the first time); None: as ``compiled``.
+        A step that does not compile warns once and runs interpreted over Ψ's pieces.
 
     Attributes
     ----------
@@ -219,6 +226,7 @@ class DirectorController:
         nutation: Controller | None = None,
         p: np.ndarray | None = None,
         compiled: bool | None = None,
+        compile_step: bool | None = None,
     ) -> None:
         start = time.perf_counter()
         self.options = opts = options or DirectorOptions()
@@ -271,37 +279,39 @@ class DirectorController:
         qp_args = (H_stage, 2 * Ct.T @ (Wt[:, None] * Ct), opts.horizon, opts.solver)
         self.qp = DirectorQp(*qp_args, opts.max_iter, opts.tol, error_on_fail=True)
         alloc = self.allocation
-        self.functions = build_director_step(
-            DirectorPieces(
-                horizon=opts.horizon,
-                relinearize=opts.relinearize,
-                disturbance_gain=opts.disturbance_gain,
-                warm_start=opts.warm_start,
-                period=self.period,
-                kick=model.flight.impulse_per_pulse / model.craft.mass,  # m/s, a pulse's Δv
-                energy=self.energy,
-                p=self.p,
-                project=psi.project,
-                value=d.value,
-                stage=d.stage,
-                psi_inputs=psi.inputs,
-                plant_inputs=inputs,
-                u_psi=nominal_inputs(self.model, psi.inputs),
-                u_plant=nominal_inputs(model, inputs),
-                u_lower=self.u_lower,
-                u_upper=self.u_upper,
-                C=C,
-                W=W,
-                Ct=Ct,
-                Wt=Wt,
-                heights=self._h_table,
-                vergences=self._kappa_table,
-                qp=self.qp.function,
-                torque_G=None if alloc is None else alloc.G,
-                max_thrust=None if alloc is None else alloc.max_thrust,
-                allocation=None if alloc is None else alloc.solver,
-                allocation_hessian=None if alloc is None else alloc.hessian,
-            )
+        pieces = DirectorPieces(
+            horizon=opts.horizon,
+            relinearize=opts.relinearize,
+            disturbance_gain=opts.disturbance_gain,
+            warm_start=opts.warm_start,
+            period=self.period,
+            kick=model.flight.impulse_per_pulse / model.craft.mass,  # m/s, a pulse's Δv
+            energy=self.energy,
+            p=self.p,
+            project=psi.project,
+            value=d.value,
+            stage=d.stage,
+            psi_inputs=psi.inputs,
+            plant_inputs=inputs,
+            u_psi=nominal_inputs(self.model, psi.inputs),
+            u_plant=nominal_inputs(model, inputs),
+            u_lower=self.u_lower,
+            u_upper=self.u_upper,
+            C=C,
+            W=W,
+            Ct=Ct,
+            Wt=Wt,
+            heights=self._h_table,
+            vergences=self._kappa_table,
+            qp=self.qp.function,
+            torque_G=None if alloc is None else alloc.G,
+            max_thrust=None if alloc is None else alloc.max_thrust,
+            allocation=None if alloc is None else alloc.solver,
+            allocation_hessian=None if alloc is None else alloc.hessian,
+        )
+        want = compile_by_default() if compiled is None else bool(compiled)
+        self.functions = _step_functions(
+            pieces, self.model, psi.options, want if compile_step is None else compile_step
         )
         self.reset()
         self.build_time = time.perf_counter() - start
@@ -364,7 +374,7 @@ class DirectorController:
             else:
                 status, message = ControllerStatus.SOLVED, f"{opts.solver.value}: solved"
         self.memory = np.asarray(memory, dtype=float).ravel()
-        u = np.asarray(u, dtype=float).ravel()
+        u = np.asarray(u, dtype=float).ravel()  # a new array: the caller may keep it
         if self.nutation is not None and self.options.rcs is DirectorRcs.NUTATION:
             u_rcs = self.nutation.step(x, t, fault=fault)
             u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]
@@ -396,3 +406,22 @@ class DirectorController:
                 for h in self._h_table
             ]
         )
+
+
+def _step_functions(
+    pieces: DirectorPieces, model: Model, psi_options: ReducedMapOptions, compile_step: bool
+) -> DirectorStep:
+    """The step Functions of ``pieces``: compiled, the step and its fallback each one library
+    generated over Ψ's interpreted pieces (their SX becomes C), HPIPM linked from the casadi
+    wheel; else, or when that fails (a CompilationWarning says why), interpreted over the
+    pieces ``pieces`` holds."""
+    if compile_step:
+        interpreted = reduced_derivatives_for(model, psi_options, compiled=False)
+        source = build_director_step(
+            replace(pieces, value=interpreted.value, stage=interpreted.stage)
+        )
+        jobs = [(source.step, DERIVATIVE_FLAGS), (source.fallback, DERIVATIVE_FLAGS)]
+        (step, fallback), libraries = compile_all(jobs, hpipm=True, what="the director's step")
+        if len(libraries) == len(jobs):
+            return replace(source, step=step, fallback=fallback)
+    return build_director_step(pieces)

@@ -18,7 +18,7 @@ with NaN or inf is caught inside: the step's first outputs are then the fallback
 same prepared data, for a caller that discards a solve that came late (the time budget is
 the caller's: a Function has no clock).
 
-casadi 3.8 crashes (segmentation fault) when an HPIPM ``conic`` inside an MX Function has an
+casadi crashes (segmentation fault) when an HPIPM ``conic`` inside an MX Function has an
 output nobody uses: every output of the QP feeds the memory or the diagnostics here.
 """
 

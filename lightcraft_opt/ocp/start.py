@@ -166,7 +166,8 @@ def _directed(
     options = DirectorOptions(
         energy_range=(max(low, 0.0), max(high, low, 0.0)), rcs=DirectorRcs.OFF, time_budget=None
     )
-    director = DirectorController(problem.model, lay, options, p=p)
+    # a start flies once per solve, for each problem's p: its step is not worth a compile
+    director = DirectorController(problem.model, lay, options, p=p, compile_step=False)
     held = ~problem.free
     x = np.asarray(x0, dtype=float)
     X, U, caught = [x], [], []

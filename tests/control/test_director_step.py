@@ -12,6 +12,7 @@ short horizon so that the flights stay quick.
 
 from __future__ import annotations
 
+import shutil
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -151,3 +152,26 @@ def test_the_torque_is_allocated_inside_the_function_as_the_reference_does():
 
 def test_diagnostics_layout_names_the_solve():
     assert DIRECTOR_DIAGNOSTICS.names == ("solved", "cost", "plan_age")
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs a C compiler")
+def test_the_compiled_step_flies_as_the_reference(tmp_path, monkeypatch):
+    """The step and its fallback compiled to C (Ψ's pieces and HPIPM inside one library
+    each; a coarse 2 x 4 optic and 4 pulses of horizon keep gcc's run short) give the
+    reference's inputs, faults and all."""
+    monkeypatch.setenv("LIGHTCRAFT_CACHE", str(tmp_path))
+    model = _waist("flight5.toml")
+    options = DirectorOptions(horizon=4, relinearize=3, quadrature=(2, 4), time_budget=None)
+    plant = build_pulse_map(model, PulseMapOptions(substeps=4, dense=2))
+    compiled = DirectorController(model, plant.inputs, options, compiled=False, compile_step=True)
+    assert compiled.functions.step.class_name() == "External"
+    assert compiled.functions.fallback.class_name() == "External"
+    twin = Twin(compiled, ReferenceDirector(model, plant.inputs, options, compiled=False))
+    x0 = initial_state(model).copy()
+    x0[STATE.slot("r_L").start] = 0.02
+    loop = ClosedLoopOptions(faults=(4, 5), fault=ControllerFault.RAISE, dropout_rate=0.1, seed=2)
+    closed_loop(model, twin, 0.5, x0=x0, pulse_map=plant, options=loop)
+    _assert_twins(twin)
+    statuses = [a for a, _ in twin.statuses]
+    assert statuses[4] is statuses[5] is ControllerStatus.FALLBACK_FAILED
+    assert statuses.count(ControllerStatus.SOLVED) == len(statuses) - 2

@@ -38,6 +38,12 @@ from lightcraft_opt.compiled.cache.entries import (
     reporter,
     structure_key,
 )
+from lightcraft_opt.compiled.cache.hpipm_source import (
+    HPIPM_SOURCE_FIX,
+    fixed_source,
+    hpipm_flags,
+    uses_hpipm,
+)
 
 __all__ = [
     "DEFAULT_FLAGS",
@@ -108,9 +114,14 @@ def _version(cc: str) -> str:
 
 
 def library_path(
-    f: ca.Function, *, compiler: str | None = None, flags: Sequence[str] = DEFAULT_FLAGS
+    f: ca.Function,
+    *,
+    compiler: str | None = None,
+    flags: Sequence[str] = DEFAULT_FLAGS,
+    hpipm: bool = False,
 ) -> Path:
-    """Where the compiled library of ``f`` is (or will be) cached.
+    """Where the compiled library of ``f`` is (or will be) cached (``hpipm``: as
+    :func:`compile_function`).
 
     Raises
     ------
@@ -118,13 +129,14 @@ def library_path(
         version is part of the key.
     """
     try:
-        return _library_path(f, _compiler_command(compiler), flags)
+        return _library_path(f, _compiler_command(compiler), flags, hpipm)
     except _CompileError as err:
         raise FileNotFoundError(str(err)) from err
 
 
-def _library_path(f: ca.Function, cc: str, flags: Sequence[str]) -> Path:
-    key = structure_key("library", f, _version(cc), " ".join(flags))
+def _library_path(f: ca.Function, cc: str, flags: Sequence[str], hpipm: bool = False) -> Path:
+    parts = [_version(cc), " ".join(flags)] + ([HPIPM_SOURCE_FIX] if hpipm else [])
+    key = structure_key("library", f, *parts)
     return cache_dir() / f"{f.name()}-{key}.so"
 
 
@@ -135,6 +147,7 @@ def compile_function(
     flags: Sequence[str] = DEFAULT_FLAGS,
     report: BuildReport | None = None,
     what: str | None = None,
+    hpipm: bool = False,
 ) -> ca.Function:
     """``f`` compiled to C and loaded back, from the cache when it is there and whole.
 
@@ -147,6 +160,9 @@ def compile_function(
         done (as :func:`compile_all` does); default: the enclosing
         :func:`~.entries.reported_builds`, else nothing.
     what : what ``f`` is, for the report (default: its name).
+    hpipm : ``f`` calls an HPIPM conic: its key carries the version of the source's fix
+        (hpipm_source.py). Generated C that calls HPIPM is always fixed and linked against
+        the casadi wheel's HPIPM and BLASFEO.
 
     Returns
     -------
@@ -156,11 +172,11 @@ def compile_function(
     """
     cc = _compiler_command(compiler)
     report = reporter(report)
-    if report is None or not _missing_libraries([(f, tuple(flags))], cc):
-        return _compiled(f, cc, flags)[0]
+    if report is None or not _missing_libraries([(f, tuple(flags))], cc, hpipm):
+        return _compiled(f, cc, flags, hpipm)[0]
     report(_compiling_line(what or f.name(), 1, cc))
     start = time.perf_counter()
-    out = _compiled(f, cc, flags)[0]
+    out = _compiled(f, cc, flags, hpipm)[0]
     report(_compiled_line(1, 1, f.name(), start))
     return out
 
@@ -177,12 +193,16 @@ def _compiled_line(k: int, n: int, name: str, start: float) -> str:
     return f"  compiled {k}/{n}: {name} ({time.perf_counter() - start:.1f} s)"
 
 
-def _compiled(f: ca.Function, cc: str, flags: Sequence[str]) -> tuple[ca.Function, Path | None]:
+def _compiled(
+    f: ca.Function, cc: str, flags: Sequence[str], hpipm: bool = False
+) -> tuple[ca.Function, Path | None]:
     """(:func:`compile_function` of ``f``, the library it loads or None when it is ``f``)."""
     try:
-        path = entry_file(_library_path(f, cc, flags), lambda target: _build(f, target, cc, flags))
+        path = entry_file(
+            _library_path(f, cc, flags, hpipm), lambda target: _build(f, target, cc, flags)
+        )
         return ca.external(f.name(), str(path)), path
-    except (_CompileError, OSError, RuntimeError) as err:
+    except (_CompileError, OSError, RuntimeError, ValueError) as err:
         warnings.warn(
             f"could not compile {f.name()!r}, using the interpreted Function: {err}",
             CompilationWarning,
@@ -192,12 +212,19 @@ def _compiled(f: ca.Function, cc: str, flags: Sequence[str]) -> tuple[ca.Functio
 
 
 def _build(f: ca.Function, target: Path, cc: str, flags: Sequence[str]) -> None:
-    """Generate C for ``f`` beside ``target`` and compile it into ``target``."""
+    """Generate C for ``f`` beside ``target`` and compile it into ``target`` (C that calls
+    HPIPM fixed and linked as hpipm_source.py says)."""
     source = target.with_name(f"{f.name()}.c")
     generator = ca.CodeGenerator(source.name, {"with_header": False})
     generator.add(f)
-    source.write_text(generator.dump())
-    cmd = [cc, *flags, *_BUILD, str(source), "-o", str(target), "-lm"]
+    text = generator.dump()
+    include: list[str] = []
+    link: list[str] = []
+    if uses_hpipm(text):
+        text = fixed_source(text)
+        include, link = hpipm_flags()
+    source.write_text(text)
+    cmd = [cc, *flags, *_BUILD, *include, str(source), "-o", str(target), *link, "-lm"]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
     except OSError as err:
@@ -217,13 +244,14 @@ def compile_all(
     max_instructions: int | None = None,
     report: BuildReport | None = None,
     what: str = "casadi Functions",
+    hpipm: bool = False,
 ) -> tuple[list[ca.Function], list[Path]]:
     """Each (Function, flags) compiled, its own library, ``workers`` at a time (default: the
     cores), in order; a Function over ``max_instructions`` SX instructions, or one that
     does not compile, stays interpreted. ``report`` (default: the enclosing
     :func:`~.entries.reported_builds`, else none) hears how many libraries of ``what``
     are not in the cache, then each one compiled, as ``compiled k/n``; nothing when all
-    are.
+    are. ``hpipm``: as :func:`compile_function`, for every job.
 
     Returns
     -------
@@ -237,7 +265,9 @@ def compile_all(
         return limit is None or f.n_instructions() <= limit
 
     report = reporter(report)
-    missing = _missing_libraries([j for j in jobs if small(j[0])], cc) if report else set()
+    missing = (
+        _missing_libraries([j for j in jobs if small(j[0])], cc, hpipm) if report else set()
+    )
     if report is not None and missing:
         report(_compiling_line(what, len(missing), cc))
     count = iter(range(1, len(missing) + 1))  # next() is atomic under the GIL
@@ -247,7 +277,7 @@ def compile_all(
         f, flags = job
         if not small(f):
             return f, None
-        out = _compiled(f, cc, flags)
+        out = _compiled(f, cc, flags, hpipm)
         if report is not None and id(f) in missing:
             report(_compiled_line(next(count), len(missing), f.name(), start))
         return out
@@ -258,14 +288,14 @@ def compile_all(
     return [f for f, _ in done], [path for _, path in done if path is not None]
 
 
-def _missing_libraries(jobs: Sequence[CompileJob], cc: str) -> set[int]:
+def _missing_libraries(jobs: Sequence[CompileJob], cc: str, hpipm: bool = False) -> set[int]:
     """ids of the Functions of ``jobs`` whose library is not whole in the cache (none when
     there is no compiler: nothing will be compiled)."""
     try:
         return {
             id(f)
             for f, flags in jobs
-            if check_entry(_library_path(f, cc, flags)).status is not EntryStatus.WHOLE
+            if check_entry(_library_path(f, cc, flags, hpipm)).status is not EntryStatus.WHOLE
         }
     except (_CompileError, OSError):
         return set()
