@@ -214,6 +214,7 @@ def closed_loop(
     feedback = _feedback(opts, sensors, estimator, x, p, phi, fixed, model.craft.thruster_count)
     steps: list[StepStats] = []
     commanded: list[np.ndarray] = []
+    told: list[np.ndarray] = []
     nodes = [x]
     if fixed is not None:  # open loop: no measurement, no faults to inject
         u = checked_vector("controller input", fixed, lay.size)
@@ -236,6 +237,7 @@ def closed_loop(
             )
             steps.append(_last(controller))
             commanded.append(u)
+            told.append(np.array(y, dtype=float))
             applied = u.copy()
             if dropped[k]:
                 applied[i_energy] = 0.0
@@ -278,6 +280,7 @@ def closed_loop(
         dropped=dropped[:k_done],
         p_plant=p,
         estimation=None if feedback is None else feedback.log(k_done, p),
+        told=np.array(told).reshape(-1, STATE.size)[:k_done],
     )
 
 

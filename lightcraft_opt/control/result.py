@@ -18,6 +18,7 @@ from enum import Enum
 
 import numpy as np
 
+from lightcraft_opt.layout import STATE
 from lightcraft_opt.presenters import Presentable
 from lightcraft_opt.simulation.result import SimulationResult
 
@@ -177,6 +178,9 @@ class ClosedLoopResult(Presentable):
     p_plant : the plant's parameter vector (dispersed).
     estimation : the estimator's estimates against the truth (:class:`EstimationLog`);
         None when the controller was told the true state (with the loop's noise).
+    told : (k, STATE.size) the state the controller was told at each pulse (L and B frames;
+        with the loop's noise, or the estimate): what a replay of its steps needs
+        (files/controller_replay.py); (0, STATE.size) for an open loop, told nothing.
     """
 
     flight: SimulationResult
@@ -190,6 +194,7 @@ class ClosedLoopResult(Presentable):
     dropped: np.ndarray
     p_plant: np.ndarray
     estimation: EstimationLog | None = None
+    told: np.ndarray = field(default_factory=lambda: np.empty((0, STATE.size)))
 
     @property
     def controller(self) -> str:

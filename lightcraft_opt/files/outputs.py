@@ -46,6 +46,7 @@ from lightcraft_opt.files.closed_loop_outputs import (
     write_closed_loop_summary,
     write_steps_csv,
 )
+from lightcraft_opt.files.controller_replay import replayable, write_replay_csv
 from lightcraft_opt.files.design_outputs import DESIGNED_MODEL, write_designed_model
 from lightcraft_opt.files.ocp_outputs import (
     node_flight,
@@ -233,6 +234,9 @@ def _loop_save(
     write_trajectory_csv(result.flight, folder / "trajectory.csv")
     write_pulses_csv(result.flight, folder / "pulses.csv")
     write_steps_csv(result, folder / "steps.csv")
+    inputs = context.get("inputs")
+    if inputs is not None and replayable(result):
+        write_replay_csv([result], inputs, folder / "replay.csv")
     write_closed_loop_summary(result, problem, folder / "summary.json")
     _draw(figures, _loop_plot, folder, result, problem=problem, **context)
     if animate:
