@@ -27,6 +27,7 @@ _READS = {
     "optimize": ("problem",),
     "closed-loop": ("closed-loop",),
     "montecarlo": ("campaign",),
+    "export-controller": ("closed-loop",),
 }
 
 

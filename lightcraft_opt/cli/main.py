@@ -19,6 +19,7 @@ from lightcraft_opt import __version__
 from lightcraft_opt.cli import (
     calibrate,
     closed_loop,
+    export_controller,
     montecarlo,
     optimize,
     simulate,
@@ -62,7 +63,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"lightcraft {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    for command in (simulate, optimize, closed_loop, montecarlo, calibrate, spin_margin):
+    for command in (
+        simulate,
+        optimize,
+        closed_loop,
+        montecarlo,
+        calibrate,
+        spin_margin,
+        export_controller,
+    ):
         command.add(sub)
     return parser
 

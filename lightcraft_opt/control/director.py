@@ -93,7 +93,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.linear.focus import scheduled_focus
 from lightcraft_opt.model import Model
-from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, build_reduced_map
+from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 
 __all__ = ["DirectorController", "director_model"]
 
@@ -309,10 +309,10 @@ class DirectorController:
             allocation=None if alloc is None else alloc.solver,
             allocation_hessian=None if alloc is None else alloc.hessian,
         )
+        self._pieces = pieces
         want = compile_by_default() if compiled is None else bool(compiled)
-        self.functions = _step_functions(
-            pieces, self.model, psi.options, want if compile_step is None else compile_step
-        )
+        self._psi_options = psi.options
+        self.functions = self._step_functions(want if compile_step is None else compile_step)
         self.reset()
         self.build_time = time.perf_counter() - start
 
@@ -381,6 +381,27 @@ class DirectorController:
         self.last = StepStats(status, call_time, time.perf_counter() - start, -1, message)
         return u
 
+    def _step_functions(self, compile_step: bool) -> DirectorStep:
+        """The step Functions: compiled, the step and its fallback each one library generated
+        over Ψ's interpreted pieces (:meth:`source_functions`), HPIPM linked from the casadi
+        wheel; else, or when that fails (a CompilationWarning says why), interpreted over the
+        pieces built for the controller."""
+        if compile_step:
+            source = self.source_functions()
+            jobs = [(source.step, DERIVATIVE_FLAGS), (source.fallback, DERIVATIVE_FLAGS)]
+            (step, fallback), libraries = compile_all(jobs, hpipm=True, what="the director's step")
+            if len(libraries) == len(jobs):
+                return replace(source, step=step, fallback=fallback)
+        return build_director_step(self._pieces)
+
+    def source_functions(self) -> DirectorStep:
+        """The step Functions over Ψ's interpreted pieces: what C is generated from
+        (compiled here, exported by files/controller_export.py)."""
+        interpreted = reduced_derivatives_for(self.model, self._psi_options, compiled=False)
+        return build_director_step(
+            replace(self._pieces, value=interpreted.value, stage=interpreted.stage)
+        )
+
     # ----------------------------------------------------------------- helpers
     def _vergence(self, altitude: float | np.ndarray) -> float | np.ndarray:
         """κ_ref = 1 / the schedule's focus at ``altitude`` [m] (above the director): the
@@ -406,22 +427,3 @@ class DirectorController:
                 for h in self._h_table
             ]
         )
-
-
-def _step_functions(
-    pieces: DirectorPieces, model: Model, psi_options: ReducedMapOptions, compile_step: bool
-) -> DirectorStep:
-    """The step Functions of ``pieces``: compiled, the step and its fallback each one library
-    generated over Ψ's interpreted pieces (their SX becomes C), HPIPM linked from the casadi
-    wheel; else, or when that fails (a CompilationWarning says why), interpreted over the
-    pieces ``pieces`` holds."""
-    if compile_step:
-        interpreted = reduced_derivatives_for(model, psi_options, compiled=False)
-        source = build_director_step(
-            replace(pieces, value=interpreted.value, stage=interpreted.stage)
-        )
-        jobs = [(source.step, DERIVATIVE_FLAGS), (source.fallback, DERIVATIVE_FLAGS)]
-        (step, fallback), libraries = compile_all(jobs, hpipm=True, what="the director's step")
-        if len(libraries) == len(jobs):
-            return replace(source, step=step, fallback=fallback)
-    return build_director_step(pieces)
