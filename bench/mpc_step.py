@@ -55,9 +55,7 @@ def main() -> None:
     problem = load_closed_loop(ROOT / "problems" / "nutation_suppression.toml")
     model, options = problem.model, problem.mpc
     prediction = coning_model(model, pulse_map=build_pulse_map(model, PLANT_MAP), cache=True)
-    shell = MpcController(model, options, prediction=prediction)
-    if args.compiled:
-        shell.compile()
+    shell = MpcController(model, options, prediction=prediction, compiled=args.compiled)
     reference = ReferenceMpc(model, options, prediction)
     c = model.craft
     w_t = c.inertia_axial * c.spin * math.tan(math.radians(args.degrees)) / c.inertia_transverse

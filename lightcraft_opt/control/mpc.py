@@ -55,13 +55,16 @@ import io
 import math
 import sys
 import time
+from dataclasses import replace
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.compiled.cache import DEFAULT_FLAGS, casadi_link_flags, compile_all
 from lightcraft_opt.control.controllers import ConingFrame, stage_weights
 from lightcraft_opt.control.mpc_qp import NutationQp, QpData, QpSolution, QpStatus
-from lightcraft_opt.control.mpc_step import build_mpc_step
+from lightcraft_opt.control.mpc_step import MpcStepFunctions, build_mpc_step
 from lightcraft_opt.control.options import ControllerFault, MpcOptions, MpcSolver
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus, StepStats
@@ -209,6 +212,12 @@ class MpcController:
     p : the controller's parameter vector (default the model's).
     terminal_altitude : altitude [m] of the model whose Riccati solution weighs the last
         predicted state (at the craft's nominal spin).
+    compiled : the step and fallback Functions compiled to C against casadi's HPIPM and
+        BLASFEO, on the disk cache (compiled/cache/compiler.py; ~12 s of gcc the first
+        time, once per controller: the key holds the tables and weights, which the
+        Functions carry as constants), the interpreted ones after a warning when that
+        fails. The same numbers to the bit; the solver's iterations are not known
+        (``last.iterations`` -1: a compiled Function reports no stats).
 
     Attributes
     ----------
@@ -237,6 +246,7 @@ class MpcController:
         pulse_map: PulseMap | PulseMapJacobian | None = None,
         p: np.ndarray | None = None,
         terminal_altitude: float = 2.0,
+        compiled: bool = False,
     ) -> None:
         start = time.perf_counter()
         self.options = opts = options or MpcOptions()
@@ -249,6 +259,9 @@ class MpcController:
             data, opts.horizon, opts.solver, opts.max_iter, opts.tol, error_on_fail=True
         )
         self.functions = build_mpc_step(self.prediction, self.frame, self.qp, opts)
+        if compiled:
+            self.functions = _compiled(self.functions)
+        self._callers: dict[int, _Buffered] = {}
         # the first call allocates the solver's memory (milliseconds; figures:
         # bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp):
         # pay it here, not in flight
@@ -343,7 +356,7 @@ class MpcController:
             status = ControllerStatus.FALLBACK_FAILED
         else:
             u, memory, diagnostics, u_fallback, memory_fallback = out
-            stats = fn.step.stats()
+            stats = self.solver_stats()
             iterations = int(stats.get("iter_count", -1))
             message = f"{opts.solver.value}: {stats.get('return_status', 'unknown')}"
             late = fault is ControllerFault.LATE or (
@@ -369,20 +382,76 @@ class MpcController:
         self.last = StepStats(status, solve_time, step_time, iterations, message)
         return u
 
-    @staticmethod
+    def solver_stats(self) -> dict[str, Any]:
+        """casadi's stats of the latest call of the step Function: its first QP solver's
+        (``iter_count``, ``return_status`` ...) when interpreted, none when compiled."""
+        caller = self._callers.get(id(self.functions.step))
+        return {} if caller is None else caller.stats()
+
     def _call(
-        function: ca.Function, x: np.ndarray, memory: np.ndarray, t: float = 0.0
+        self, function: ca.Function, x: np.ndarray, memory: np.ndarray, t: float = 0.0
     ) -> list[np.ndarray]:
-        """``function(x, t, memory)``'s outputs as flat arrays. casadi prints the inputs of
-        a solver that raised inside a Function to stderr (kilobytes); that print is
-        dropped with the error, anything else the call prints passes through."""
+        """``function(x, t, memory)``'s outputs as flat arrays, through its buffers
+        (:class:`_Buffered`, one per Function)."""
+        caller = self._callers.get(id(function))
+        if caller is None or caller.function is not function:
+            caller = _Buffered(function)
+            self._callers[id(function)] = caller
+        return caller(x, t, memory)
+
+
+class _Buffered:
+    """A Function of (x, t, memory) called through casadi's buffers: its inputs copied
+    into arrays it owns, its outputs written into others (no conversion to and from DM,
+    a tenth of a millisecond a step). casadi prints the inputs of a solver that failed
+    inside a Function to stderr (kilobytes); that print is dropped with the error the call
+    raises, anything else the call prints passes through. A stand-in that is no casadi
+    Function (a test's) is called as it is."""
+
+    def __init__(self, function: ca.Function) -> None:
+        self.function = function
+        self._buffered = isinstance(function, ca.Function)
+        if self._buffered:
+            n_in, n_out = function.n_in(), function.n_out()
+            self._args = [np.zeros(function.nnz_in(i)) for i in range(n_in)]
+            self._res = [np.zeros(function.nnz_out(i)) for i in range(n_out)]
+            self._buffer, self._trigger = function.buffer()
+            for i, a in enumerate(self._args):
+                self._buffer.set_arg(i, a.data.cast("B"))
+            for i, r in enumerate(self._res):
+                self._buffer.set_res(i, r.data.cast("B"))
+
+    def __call__(self, x: np.ndarray, t: float, memory: np.ndarray) -> list[np.ndarray]:
         printed = io.StringIO()
+        with contextlib.redirect_stderr(printed):
+            if self._buffered:
+                self._args[0][:] = x
+                self._args[1][0] = t
+                self._args[2][:] = memory
+                self._trigger()
+                if self._buffer.ret() != 0:
+                    raise RuntimeError(f"{self.function.name()}: evaluation failed")
+                out = [r.copy() for r in self._res]
+            else:
+                out = [np.asarray(v, dtype=float).ravel() for v in self.function(x, t, memory)]
+        if printed.getvalue():
+            sys.stderr.write(printed.getvalue())
+        return out
+
+    def stats(self) -> dict[str, Any]:
+        """The Function's stats of the latest call (the solver's, when it calls one
+        directly)."""
         try:
-            with contextlib.redirect_stderr(printed):
-                out = function(x, t, memory)
-        except RuntimeError:
-            raise
-        else:
-            if printed.getvalue():
-                sys.stderr.write(printed.getvalue())
-        return [np.asarray(v, dtype=float).ravel() for v in out]
+            return dict(self._buffer.stats() if self._buffered else self.function.stats())
+        except RuntimeError:  # a compiled Function keeps none
+            return {}
+
+
+def _compiled(functions: MpcStepFunctions) -> MpcStepFunctions:
+    """``functions`` with the step and the fallback compiled (MpcController's
+    ``compiled``); the plan, asked for rarely, stays interpreted."""
+    flags = (*DEFAULT_FLAGS, *casadi_link_flags("hpipm", "blasfeo"))
+    (step, fallback), _ = compile_all(
+        [(functions.step, flags), (functions.fallback, flags)], what="the MPC's step"
+    )
+    return replace(functions, step=step, fallback=fallback)

@@ -398,13 +398,13 @@ def build_mpc_step(
     step = ca.Function(
         "mpc_step",
         [x, t, memory],
-        [
+        _dense(
             ca.if_else(finite, u, u_fallback),
             ca.if_else(finite, memory_next, memory_fallback),
             diagnostics,
             u_fallback,
             memory_fallback,
-        ],
+        ),
         ["x", "t", "memory"],
         ["u", "memory_next", "diagnostics", "u_fallback", "memory_fallback"],
     )
@@ -421,7 +421,7 @@ def build_mpc_step(
     fallback = ca.Function(
         "mpc_fallback",
         [x, t, memory],
-        [u_fallback, memory_fallback, diagnostics_fallback],
+        _dense(u_fallback, memory_fallback, diagnostics_fallback),
         ["x", "t", "memory"],
         ["u", "memory_next", "diagnostics"],
     )
@@ -443,6 +443,11 @@ def build_mpc_step(
         ["inputs"],
     )
     return MpcStepFunctions(step, fallback, plan, mem, diag)
+
+
+def _dense(*outputs: ca.MX) -> list[ca.MX]:
+    """The outputs with every entry stored (a caller reads them as flat arrays)."""
+    return [ca.densify(v) for v in outputs]
 
 
 def _packed(layout: VectorLayout, **parts: ca.MX | float) -> ca.MX:

@@ -29,6 +29,7 @@ import pytest
 from support.paths import MODELS, REPO_ROOT
 from support.reference_mpc import ReferenceMpc
 
+from lightcraft_opt.compiled.cache import compiler_version
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.mpc_step import build_horizon, build_map_input
@@ -219,3 +220,23 @@ def test_map_input_function_is_the_frames_map_input_with_its_saturation(predicti
             du, yaw = scale * rng.standard_normal(m), rng.uniform(-math.pi, math.pi)
             u = mpc.frame.map_input(du, yaw)
             np.testing.assert_allclose(np.asarray(f(du, yaw)).ravel(), u, rtol=0, atol=1e-15)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(compiler_version() is None, reason="needs a C compiler")
+def test_compiled_step_is_the_interpreted_one(prediction, tmp_path, monkeypatch):
+    """The step and fallback compiled to C against casadi's HPIPM and BLASFEO (~12 s of
+    gcc, in a cache folder of its own) give the interpreted Functions' inputs and memory to
+    the bit over six pulses from the file's start, a NaN fault among them; a compiled
+    Function reports no iterations (-1)."""
+    monkeypatch.setenv("LIGHTCRAFT_CACHE", str(tmp_path))
+    shell = MpcController(MODEL, PROBLEM.mpc, prediction=prediction)
+    compiled = MpcController(MODEL, PROBLEM.mpc, prediction=prediction, compiled=True)
+    assert compiled.functions.step.class_name() == "External"
+    x = PROBLEM.x0
+    for k in range(6):
+        fault = NON_FINITE if k == 3 else None
+        u, u_c = shell.step(x, fault=fault), compiled.step(x, fault=fault)
+        assert np.array_equal(u, u_c) and np.array_equal(shell.memory, compiled.memory)
+        assert shell.last.status is compiled.last.status
+        assert shell.last.iterations > 0 and compiled.last.iterations == -1

@@ -44,6 +44,7 @@ __all__ = [
     "DERIVATIVE_FLAGS",
     "CompilationWarning",
     "CompileJob",
+    "casadi_link_flags",
     "compile_all",
     "compile_function",
     "compiler_version",
@@ -64,6 +65,24 @@ DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
 #: faster than casadi's interpreter (-O0 compiles sooner still but gains much less; figures:
 #: bench/README.md#compile-cost-and-compiler-flags). Same IEEE semantics as -O2.
 DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
+
+
+def casadi_link_flags(*libraries: str) -> tuple[str, ...]:
+    """Flags that compile against the C libraries casadi's wheel ships beside its own and
+    link them (e.g. ``"hpipm", "blasfeo"``: a Function that calls HPIPM through casadi's
+    ``conic`` generates C that calls them): casadi's ``include`` folder, its package folder
+    as library path and run path, and the libraries, linked whether or not the linker
+    thinks them needed (they precede the source on the command line). Paths are absolute,
+    so the key of a library changes with casadi's place."""
+    folder = Path(ca.__file__).resolve().parent
+    return (
+        f"-I{folder / 'include'}",
+        f"-L{folder}",
+        f"-Wl,-rpath,{folder}",
+        "-Wl,--no-as-needed",
+        *(f"-l{name}" for name in libraries),
+    )
+
 
 #: A Function to compile and its flags.
 CompileJob = tuple[ca.Function, tuple[str, ...]]
