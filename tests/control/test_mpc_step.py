@@ -24,8 +24,10 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import casadi as ca
 import numpy as np
 import pytest
+from support.jacobian_check import assert_jacobians_match_finite_differences
 from support.paths import MODELS, REPO_ROOT
 from support.reference_mpc import ReferenceMpc
 
@@ -191,7 +193,8 @@ def test_horizon_function_is_the_scheduled_models_horizon(prediction):
     """ConingModel.horizon (numpy, bilinear, clamped to the grid) against the Function at
     spins and altitudes inside the grid, on its nodes and beyond both ends, with a climb,
     an expected coning and a phase correction: equal to 1e-14 of each matrix's largest
-    entry (measured: to the bit)."""
+    entry (measured: to the bit). Inside a grid cell its Jacobians match central
+    differences (docs/architecture.md#rule-3)."""
     N = 6
     f = build_horizon(prediction, N)
     s0 = MODEL.craft.spin
@@ -204,13 +207,17 @@ def test_horizon_function_is_the_scheduled_models_horizon(prediction):
         A_side, B_side = np.concatenate(list(A), axis=1), np.concatenate(list(B), axis=1)
         assert np.max(np.abs(A_f - A_side)) <= 1e-14 * np.max(np.abs(A_side))
         assert np.max(np.abs(B_f - B_side)) <= 1e-14 * np.max(np.abs(B_side))
+    args = f.mx_in()
+    flat = ca.Function("mpc_horizon", args, [ca.vec(v) for v in f(*args)])  # columns
+    point = [0.95 * s0, 1.1 * s0, 1.3, 6.0, coning + 0.01, 0.3]
+    assert_jacobians_match_finite_differences(flat, point, scale=[1.0, 1.0, 0.1, 0.1, 0.01, 0.1])
 
 
 def test_map_input_function_is_the_frames_map_input_with_its_saturation(prediction):
     """ConingFrame.map_input (numpy: the pointing turned into L, then saturated_inputs)
     against the Function, for inputs inside the limits and far outside them (pointing
     past its reach, amplitudes past half the thrust, means below their amplitude): equal to
-    1e-15 (rounding)."""
+    1e-15 (rounding). Inside the limits its Jacobians match central differences."""
     mpc = MpcController(MODEL, PROBLEM.mpc, prediction=prediction)
     f = build_map_input(mpc.frame)
     rng = np.random.default_rng(3)
@@ -220,6 +227,11 @@ def test_map_input_function_is_the_frames_map_input_with_its_saturation(predicti
             du, yaw = scale * rng.standard_normal(m), rng.uniform(-math.pi, math.pi)
             u = mpc.frame.map_input(du, yaw)
             np.testing.assert_allclose(np.asarray(f(du, yaw)).ravel(), u, rtol=0, atol=1e-15)
+    inside = np.zeros(m)
+    inside[:2] = (0.01, -0.02)  # pointing [m]
+    inside[2:6] = 0.1  # mean thrusts [N], amplitudes small below
+    inside[6:] = 0.01 * rng.standard_normal(m - 6)
+    assert_jacobians_match_finite_differences(f, [inside, 0.7], scale=[0.01, 0.1])
 
 
 @pytest.mark.slow
