@@ -1,6 +1,9 @@
 """Model predictive control of the coning (nutation), tilt and beam offset, pulse by pulse.
 
-Built once, then ``u = controller.step(x)`` every pulse (docs/architecture.md#rule-1):
+Built once, then ``u = controller.step(x)`` every pulse (docs/architecture.md#rule-1). The
+pulse is one casadi Function of the state and the controller's memory (mpc_step.py,
+docs/mpc.md#the-step-function); :class:`MpcController` keeps the memory, times the call and
+picks the fallback for a late solve or an injected fault:
 
 1. measure the coning coordinates z of the state (symbolic/maps/coning_coordinates.py: lateral
    position and velocity in the yaw-aligned frame, tilt of H, coning vector);
