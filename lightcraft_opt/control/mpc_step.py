@@ -19,7 +19,8 @@ layout). One pulse, as :mod:`~.mpc` describes it, every branch inside the Functi
 2. the coning expected over the horizon, from the plan made ``plan_age + 1`` pulses ago
    (a parametric index into the plan), and the scheduled model along it
    (:meth:`ConingModel.horizon`'s bilinear interpolation, clamped to the grid, as
-   parametric indices into the tables: equal to numpy's to rounding);
+   parametric indices into the tables: its operations in its order, equal to it to the
+   bit);
 3. the QP (HPIPM by default), warm-started from the memory; on a pulse without a plan a
    second QP along the first one's prediction (a ``ca.Function.conditional`` on
    ``has_plan``, so a pulse with a plan solves once);
@@ -124,7 +125,7 @@ def _interpolated(
 ) -> ca.MX:
     """Bilinear interpolation of ``table`` (ns, na, ...) at each (spin, alt) (columns of N):
     (size of a node's entries x N), each node's entries in Fortran order (a matrix node's
-    vec). Equal to :meth:`ConingModel._at` to rounding, the four terms in its order."""
+    vec). :meth:`ConingModel._at`'s operations in its order: equal to it to the bit."""
     ns, na = spins.size, altitudes.size
     block = int(np.prod(table.shape[2:], dtype=int))
     entries = table.reshape(ns, na, *table.shape[2:])
