@@ -332,10 +332,12 @@ def build_mpc_step(
     c, e, corr0 = z[_C], get("phase_expected"), get("phase_correction")
     angle = ca.atan2(e[0] * c[1] - e[1] * c[0], e[0] * c[0] + e[1] * c[1])
     wrapped = corr0 + track.gain * angle
-    moved = ca.logic_and(
-        get("has_expected") > 0.5,
-        ca.fmin(ca.hypot(c[0], c[1]), ca.hypot(e[0], e[1])) > track.min_coning,
+    # both longer than the threshold (PhaseTracker's min of the two, which a NaN
+    # measurement fails as a comparison does, where fmin would drop the NaN)
+    long_enough = ca.logic_and(
+        ca.hypot(c[0], c[1]) > track.min_coning, ca.hypot(e[0], e[1]) > track.min_coning
     )
+    moved = ca.logic_and(get("has_expected") > 0.5, long_enough)
     corr = ca.if_else(moved, ca.atan2(ca.sin(wrapped), ca.cos(wrapped)), corr0)
     warm = [get(n) for n in ("warm_w", "warm_lam_x", "warm_lam_a")]
     start = warm if options.warm_start else [ca.MX.zeros(v.shape) for v in warm]

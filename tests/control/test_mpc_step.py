@@ -184,6 +184,26 @@ def test_solves_that_fail_raise_out_of_the_function_and_fall_back_quietly(
     assert "Input 0" not in capsys.readouterr().err
 
 
+def test_a_state_with_nan_falls_back_as_the_python_step_does(prediction):
+    """A told state with a NaN entry (position, rate, spin) after three solved pulses: the
+    QP refuses its NaN bounds (casadi's "ill-posed" error, raised inside the Function),
+    both fall back on the plan and leave the phase tracker alone (a NaN coning is not
+    longer than the threshold), and the pulses after it fly as the Python step's: the same
+    statuses, inputs to 1e-9."""
+    shell = MpcController(MODEL, PROBLEM.mpc, prediction=prediction)
+    reference = ReferenceMpc(MODEL, PROBLEM.mpc, prediction)
+    x = PROBLEM.x0
+    for k, bad in enumerate((None, None, None, 0, None, 11, 13, None, None)):
+        told = x.copy()
+        if bad is not None:
+            told[bad] = np.nan
+        u, r = shell.step(told, 0.04 * k), reference.step(told, 0.04 * k)
+        assert shell.last.status is reference.last.status
+        expected = ControllerStatus.SOLVED if bad is None else ControllerStatus.FALLBACK_FAILED
+        assert shell.last.status is expected
+        np.testing.assert_allclose(u, r, rtol=1e-9, atol=1e-9, err_msg=f"pulse {k}")
+
+
 def test_the_step_is_a_pure_function_of_state_and_memory(plant, prediction):
     """The same (x, t, memory) twice gives the same outputs to the bit, and ``mpc_fallback``
     gives the step's own fallback outputs; the shell's memory before a flight is zeros."""
