@@ -226,8 +226,8 @@ class MpcController:
     ----------
     last : :class:`StepStats` of the latest step. ``solve_time`` is the step Function's
         call (the QP and everything around it, what a time budget is held to);
-        ``iterations`` the solver's in the step's last QP (on a pulse without a plan, the
-        second of its two).
+        ``iterations`` the solver's in the step's first QP (on a pulse without a plan, the
+        first of its two; -1 compiled).
     functions : the step and fallback Functions and the memory's layout
         (:class:`~.mpc_step.MpcStepFunctions`).
     memory : (functions.memory.size,) the memory the next step starts from.
@@ -343,7 +343,7 @@ class MpcController:
         """
         start = time.perf_counter()
         opts, fn = self.options, self.functions
-        x = np.asarray(x, dtype=float)
+        x = np.array(x, dtype=float)  # a copy: last_qp reads it later
         out: list[np.ndarray] | None = None
         solve_time, iterations = 0.0, 0
         message = "injected solver failure"
