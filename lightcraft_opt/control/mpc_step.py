@@ -52,6 +52,7 @@ from lightcraft_opt.control.controllers import ConingFrame, PhaseTracker
 from lightcraft_opt.control.mpc_qp import NutationQp
 from lightcraft_opt.control.options import MpcOptions
 from lightcraft_opt.control.prediction_model import ConingModel
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import (
     CONING,
     STATE,
@@ -276,7 +277,13 @@ def build_mpc_step(
         a failed solve raises out of ``mpc_step``).
     options : horizon and warm start (the rest is in ``qp``).
     tracker : the phase tracker's gain and threshold (default :class:`PhaseTracker`'s).
+
+    Raises
+    ------
+    ParameterError naming ``qp`` when it was built without ``error_on_fail``.
     """
+    if not qp.error_on_fail:
+        raise ParameterError("qp", "must be built with error_on_fail=True (a failed solve raises)")
     track = tracker or PhaseTracker()
     N, nx, nv = options.horizon, qp.nx, qp.nv
     basis = ca.DM(qp.data.basis)
@@ -293,8 +300,9 @@ def build_mpc_step(
         return ca.horzcat(w[kk], w[kk + 1]).T
 
     def expected(z: ca.MX, w: ca.MX, age: ca.MX | float, has: ca.MX | float) -> ca.MX:
-        """(N,) |c| expected at each pulse of the horizon (MpcController's
-        ``_expected_coning``): measured now, then the plan's from ``age + 2`` on."""
+        """(N,) |c| expected at each pulse of the horizon: measured now, then the plan's
+        from ``age + 2`` on (the yaw turn's linearisation point, as a real-time iteration
+        linearises about the shifted previous solution)."""
         now = ca.hypot(z[_C.start], z[_C.start + 1])
         if N == 1:
             return now
@@ -368,7 +376,7 @@ def build_mpc_step(
         phase_expected=w[blk + _C.start : blk + _C.stop],
         has_expected=1,
     )
-    # the fallback (MpcController._fallback): the plan's next input, or the operating one
+    # the fallback: the plan's next input at its yaw, or the operating one once used up
     age_next = age + 1
     used_up = ca.logic_or(has_plan < 0.5, age_next >= N)
     k_next = _clip(age_next, 0, N - 1) * blk + nx + ca.DM(np.arange(nm, dtype=float))

@@ -34,10 +34,12 @@ from support.reference_mpc import ReferenceMpc
 from lightcraft_opt.compiled.cache import compiler_version
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.mpc import MpcController
-from lightcraft_opt.control.mpc_step import build_horizon, build_map_input
+from lightcraft_opt.control.mpc_qp import NutationQp
+from lightcraft_opt.control.mpc_step import build_horizon, build_map_input, build_mpc_step
 from lightcraft_opt.control.options import ControllerFault, MpcOptions, MpcSolver
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus, StepStats
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import RcsProfile
@@ -285,3 +287,12 @@ def test_compiled_step_is_the_interpreted_one(prediction, tmp_path, monkeypatch)
         assert np.array_equal(u, u_c) and np.array_equal(shell.memory, compiled.memory)
         assert shell.last.status is compiled.last.status
         assert shell.last.iterations > 0 and compiled.last.iterations == -1
+
+
+def test_a_qp_that_does_not_raise_on_failure_is_refused_naming_qp(prediction):
+    """The step tells a failed solve by the error it raises: a QP built without
+    ``error_on_fail`` would fly its last iterate as a solution."""
+    mpc = MpcController(MODEL, PROBLEM.mpc, prediction=prediction)
+    quiet = NutationQp(mpc.qp.data, PROBLEM.mpc.horizon, PROBLEM.mpc.solver, 30, 1e-6)
+    with pytest.raises(ParameterError, match=r"^qp: must be built with error_on_fail=True"):
+        build_mpc_step(prediction, mpc.frame, quiet, PROBLEM.mpc)
