@@ -157,6 +157,19 @@ def test_the_step_function_flies_the_python_step(plant, prediction, faults, fall
         assert all(a == 0 for a in amplitudes[13:17])  # used up: the operating input
 
 
+@pytest.mark.parametrize(
+    "changed", [{"horizon": 1}, {"horizon": 3}, {"warm_start": False}], ids=["N1", "N3", "cold"]
+)
+def test_other_horizons_and_cold_starts_fly_the_python_step(plant, prediction, changed):
+    """Horizons of 1 (no plan beyond the pulse: every fallback flies the operating input)
+    and 3 (used up after three failures in a row), and every solve started cold, with
+    faults at pulses 2-4, 6 and 7: the same statuses, inputs to 1e-9 (measured 1.4e-17)."""
+    faults = {2: RAISE, 3: RAISE, 4: RAISE, 6: NON_FINITE, 7: LATE}
+    twin = _fly(plant, prediction, faults, replace(PROBLEM.mpc, **changed))
+    _assert_same(twin)
+    assert [k for k, (s, _) in enumerate(twin.statuses) if s.fallback][:5] == list(faults)
+
+
 @pytest.mark.parametrize("solver", [MpcSolver.OSQP, MpcSolver.IPOPT])
 def test_the_other_solvers_fly_the_python_step_too(plant, prediction, solver):
     """OSQP (conic) and IPOPT (nlpsol on the QP written as an NLP) inside the step
