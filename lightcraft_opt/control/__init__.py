@@ -15,7 +15,9 @@ and the closed loop that flies them on the full pulse map Φ.
   :class:`OpenLoopController`, :class:`LqrController`, and the coning frame
   (:class:`ConingFrame`: coning coordinates of a state, Φ's saturated input of the
   model's inputs) and phase tracker they share;
-- :mod:`.mpc_qp`: the stage-structured QP (HPIPM, ...); :mod:`.mpc`: :class:`MpcController`;
+- :mod:`.mpc_qp`: the stage-structured QP (HPIPM, ...); :mod:`.mpc_step`: the MPC's whole
+  pulse as casadi Functions of (state, memory); :mod:`.mpc`: :class:`MpcController`, the
+  shell around them;
 - :mod:`.director_qp`, :mod:`.director`: :class:`DirectorController`, beam tracking by a
   real-time iteration on the reduced map Ψ (beam pointing, focus, pulse energy);
 - :mod:`.estimation`: readings, estimates, the estimators' interface, and the output

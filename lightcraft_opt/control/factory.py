@@ -84,7 +84,8 @@ def build_controller(
     mpc : the MPC's options (default :class:`MpcOptions`); the LQR takes their weights, the
         director its nutation MPC's.
     director : the director's options (default :class:`DirectorOptions`).
-    compiled : compile the director's Ψ pieces (None: ``compiled.compile_by_default``).
+    compiled : compile the director's Ψ pieces and the controllers' steps (None:
+        ``compiled.compile_by_default``).
 
     Raises
     ------
@@ -100,14 +101,14 @@ def build_controller(
         nutation = None
         if model.craft.rcs is not None and director.rcs is DirectorRcs.NUTATION:
             prediction = coning_model(model, pulse_map=plant, cache=True)
-            nutation = MpcController(model, mpc, prediction=prediction)
+            nutation = MpcController(model, mpc, prediction=prediction, compiled=compiled)
         return DirectorController(
             model, plant.inputs, director, nutation=nutation, compiled=compiled
         )
     # linearised once per model structure and numbers, then read from the disk cache
     prediction = coning_model(model, pulse_map=plant, cache=True)
     if kind is ControllerKind.MPC:
-        return MpcController(model, mpc, prediction=prediction)
+        return MpcController(model, mpc, prediction=prediction, compiled=compiled)
     return LqrController(model, prediction, mpc.weights)
 
 

@@ -1,6 +1,9 @@
 """Model predictive control of the coning (nutation), tilt and beam offset, pulse by pulse.
 
-Built once, then ``u = controller.step(x)`` every pulse (docs/architecture.md#rule-1):
+Built once, then ``u = controller.step(x)`` every pulse (docs/architecture.md#rule-1). The
+pulse is one casadi Function of the state and the controller's memory (mpc_step.py,
+docs/mpc.md#the-step-function); :class:`MpcController` keeps the memory, times the call and
+picks the fallback for a late solve or an injected fault:
 
 1. measure the coning coordinates z of the state (symbolic/maps/coning_coordinates.py: lateral
    position and velocity in the yaw-aligned frame, tilt of H, coning vector);
@@ -50,25 +53,33 @@ radius of the optic (inscribed 2P-gons, so they hold in L at any yaw).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
+import sys
 import time
 from dataclasses import replace
+from typing import Any
 
+import casadi as ca
 import numpy as np
 
-from lightcraft_opt.control.controllers import ConingFrame, Measurement, PhaseTracker, stage_weights
+from lightcraft_opt.compiled import compile_by_default
+from lightcraft_opt.compiled.cache import DEFAULT_FLAGS, compile_all
+from lightcraft_opt.control.controllers import ConingFrame, stage_weights
 from lightcraft_opt.control.mpc_qp import NutationQp, QpData, QpSolution, QpStatus
+from lightcraft_opt.control.mpc_step import MpcStepFunctions, build_mpc_step
 from lightcraft_opt.control.options import ControllerFault, MpcOptions, MpcSolver
 from lightcraft_opt.control.prediction_model import ConingModel, coning_model
 from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
-from lightcraft_opt.layout import CONING
+from lightcraft_opt.layout import CONING, initial_state
 from lightcraft_opt.linear.operating_points import PulseMapJacobian
 from lightcraft_opt.linear.riccati import dlqr_gain
 from lightcraft_opt.model import Model
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
-__all__ = ["MpcController", "input_basis", "input_constraints"]
+__all__ = ["MpcController", "input_basis", "input_constraints", "mpc_qp_data"]
 
 
 def input_basis(prediction: ConingModel, rtol: float = 1e-3) -> np.ndarray:
@@ -153,8 +164,46 @@ def input_constraints(
     return np.array(zrows), np.array(rows), np.array(lo), np.array(hi), np.array(soft)
 
 
+def mpc_qp_data(
+    model: Model,
+    options: MpcOptions,
+    prediction: ConingModel,
+    frame: ConingFrame,
+    terminal_altitude: float,
+) -> QpData:
+    """The nutation MPC's QP data (cost, terminal weight, input basis, constraints) for
+    ``model`` under ``options``, on the scheduled model ``prediction`` in ``frame``; the
+    terminal weight is the Riccati solution at ``terminal_altitude`` [m] and the craft's
+    nominal spin (:class:`MpcController`)."""
+    pred, opts = prediction, options
+    cost = stage_weights(opts.weights, pred.inputs)
+    basis = input_basis(pred)
+    spin = model.craft.spin
+    omega = float(np.interp(spin, pred.spins, pred.omega_per_spin[:, 0])) * spin
+    A, B = pred.at(spin, omega, terminal_altitude)
+    _, P = dlqr_gain(A, B @ basis, cost.Q, basis.T @ cost.R @ basis, cost.S @ basis)
+    max_offset = opts.max_offset_over_capture_radius * model.craft.engine.capture_radius
+    Cz, C, lo, hi, soft = input_constraints(
+        pred, frame.max_thrust, frame.pointing_limit, max_offset, opts.envelope_directions
+    )
+    lim, top = frame.pointing_limit, frame.max_thrust
+    n_keep = 2 + top.size  # pointing and means: identity columns of the basis
+    nv = basis.shape[1]
+    v_lo = np.r_[-lim, -lim, np.zeros(top.size), np.full(nv - n_keep, -np.inf)]
+    v_hi = np.r_[lim, lim, top, np.full(nv - n_keep, np.inf)]
+    # the offset's slack: 100 per cm beyond the limit, 100 per cm^2 (the offset
+    # weight's 1 per cm^2 a hundred times over): exact for the multipliers seen
+    slack_cost = (1e4, 1e6)
+    return QpData(
+        cost.Q, cost.R, cost.S, cost.g, P, basis, Cz, C, lo, hi, v_lo, v_hi, soft, slack_cost
+    )
+
+
 class MpcController:
-    """The nutation MPC (module docstring), built once.
+    """The nutation MPC (module docstring), built once: a thin shell around its step
+    Function (control/mpc_step.py), which holds the whole pulse; the shell keeps the
+    memory between pulses, times the step, and picks the step's or the fallback's
+    outputs for a late solve or an injected fault.
 
     Parameters
     ----------
@@ -167,14 +216,28 @@ class MpcController:
     p : the controller's parameter vector (default the model's).
     terminal_altitude : altitude [m] of the model whose Riccati solution weighs the last
         predicted state (at the craft's nominal spin).
+    compiled : the step and fallback Functions compiled to C against casadi's HPIPM and
+        BLASFEO, on the disk cache (compiled/cache/compiler.py; ~12 s of gcc the first
+        time, once per controller: the key holds the tables and weights, which the
+        Functions carry as constants), the interpreted ones after a warning when that
+        fails; None (the default): ``compiled.compile_by_default`` (IPOPT's never). The
+        same numbers to the bit; the solver's iterations are not known
+        (``last.iterations`` -1: a compiled Function reports no stats).
 
     Attributes
     ----------
-    last : :class:`StepStats` of the latest step.
-    solution : the latest QP solution (predicted z and inputs), None before the first.
+    last : :class:`StepStats` of the latest step. ``solve_time`` is the step Function's
+        call (the QP and everything around it, what a time budget is held to);
+        ``iterations`` the solver's in the step's first QP (on a pulse without a plan, the
+        first of its two; -1 compiled).
+    functions : the step and fallback Functions and the memory's layout
+        (:class:`~.mpc_step.MpcStepFunctions`).
+    memory : (functions.memory.size,) the memory the next step starts from.
+    solution : the plan as a QP solution (predicted z and inputs), None before the first.
     last_qp : (z0 (8,), A (N, 8, 8), B (N, 8, m)) of the latest QP posed, to pose it to
         another solver (bench/mpc.py); None before the first.
-    build_time : [s], the QP's (the prediction model's is apart).
+    qp : the QP the step calls (built with ``error_on_fail``).
+    build_time : [s], the QP's and the step's (the prediction model's is apart).
     """
 
     name = "mpc"
@@ -188,47 +251,58 @@ class MpcController:
         pulse_map: PulseMap | PulseMapJacobian | None = None,
         p: np.ndarray | None = None,
         terminal_altitude: float = 2.0,
+        compiled: bool | None = None,
     ) -> None:
+        start = time.perf_counter()
         self.options = opts = options or MpcOptions()
         if not isinstance(opts, MpcOptions):
             raise ParameterError("options", f"must be MpcOptions, got {opts!r}")
         self.prediction = prediction or coning_model(model, pulse_map=pulse_map)
         self.frame = ConingFrame(model, self.prediction, p)
-        pred = self.prediction
-        cost = stage_weights(opts.weights, pred.inputs)
-        basis = input_basis(pred)
-        spin = model.craft.spin
-        omega = float(np.interp(spin, pred.spins, pred.omega_per_spin[:, 0])) * spin
-        A, B = pred.at(spin, omega, terminal_altitude)
-        _, P = dlqr_gain(A, B @ basis, cost.Q, basis.T @ cost.R @ basis, cost.S @ basis)
-        max_offset = opts.max_offset_over_capture_radius * model.craft.engine.capture_radius
-        Cz, C, lo, hi, soft = input_constraints(
-            pred,
-            self.frame.max_thrust,
-            self.frame.pointing_limit,
-            max_offset,
-            opts.envelope_directions,
+        data = mpc_qp_data(model, opts, self.prediction, self.frame, terminal_altitude)
+        self.qp = NutationQp(
+            data, opts.horizon, opts.solver, opts.max_iter, opts.tol, error_on_fail=True
         )
-        lim, top = self.frame.pointing_limit, self.frame.max_thrust
-        n_keep = 2 + top.size  # pointing and means: identity columns of the basis
-        nv = basis.shape[1]
-        v_lo = np.r_[-lim, -lim, np.zeros(top.size), np.full(nv - n_keep, -np.inf)]
-        v_hi = np.r_[lim, lim, top, np.full(nv - n_keep, np.inf)]
-        # the offset's slack: 100 per cm beyond the limit, 100 per cm^2 (the offset
-        # weight's 1 per cm^2 a hundred times over): exact for the multipliers seen
-        slack_cost = (1e4, 1e6)
-        data = QpData(
-            cost.Q, cost.R, cost.S, cost.g, P, basis, Cz, C, lo, hi, v_lo, v_hi, soft, slack_cost
-        )
-        self.qp = NutationQp(data, opts.horizon, opts.solver, opts.max_iter, opts.tol)
+        self.functions = build_mpc_step(self.prediction, self.frame, self.qp, opts)
+        want = compile_by_default() if compiled is None else compiled
+        if want and opts.solver is not MpcSolver.IPOPT:
+            self.functions = _compiled(self.functions)
+        self._callers: dict[int, _Buffered] = {}
         # the first call allocates the solver's memory (milliseconds; figures:
         # bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp):
         # pay it here, not in flight
-        A_h, B_h = pred.horizon(spin, omega, terminal_altitude, 0.0, opts.horizon)
-        self.qp.solve(np.zeros(CONING.size), A_h, B_h)
-        self.build_time = self.qp.build_time
-        self.phase = PhaseTracker()
+        with contextlib.suppress(RuntimeError):  # a solve that fails here costs nothing
+            self._call(self.functions.step, initial_state(model), self.functions.initial_memory())
+        self.build_time = time.perf_counter() - start
         self.reset()
+
+    def reset(self) -> None:
+        """Forget the plan and the warm start (a new flight)."""
+        self.memory = self.functions.initial_memory()
+        self._posed: tuple[np.ndarray, np.ndarray] | None = None  # (x, diagnostics)
+        self._solved: tuple[str, float, int, float] | None = None
+        self.last = StepStats(ControllerStatus.SOLVED)
+
+    # ----------------------------------------------------------------- the plan
+    @property
+    def solution(self) -> QpSolution | None:
+        """The plan flying, as the QP solution it came from (status SOLVED; ``lam_x`` and
+        ``lam_a`` are NaN: the memory keeps only their shifted copies, the warm start);
+        None before the first."""
+        mem = self.functions.memory
+        if self._solved is None or mem.get("has_plan", self.memory) < 0.5:
+            return None
+        message, cost, iterations, solve_time = self._solved
+        w = np.array(mem.get("plan_w", self.memory))
+        qp, N = self.qp, self.options.horizon
+        body = w[: N * (qp.nx + qp.nv)].reshape(N, qp.nx + qp.nv)
+        z = np.vstack([body[:, : qp.nx], w[None, N * (qp.nx + qp.nv) :]])
+        du = body[:, qp.nx : qp.nx + self.qp.data.basis.shape[1]] @ self.qp.data.basis.T
+        slack = body[:, -1] if qp.ns else np.zeros(N)
+        nan_x, nan_a = np.full(qp.n_w, np.nan), np.full(qp.n_a, np.nan)
+        return QpSolution(
+            QpStatus.SOLVED, message, du, z, slack, cost, iterations, solve_time, w, nan_x, nan_a
+        )
 
     @property
     def plan(self) -> np.ndarray | None:
@@ -236,104 +310,155 @@ class MpcController:
         pointing turned into L at that pulse's yaw); None before the first."""
         if self.solution is None:
             return None
-        return np.array([self.frame.map_input(du, self._yaw) for du in self.solution.du])
+        return np.array(self.functions.plan(self.memory), dtype=float).T
 
-    def reset(self) -> None:
-        """Forget the plan and the warm start (a new flight)."""
-        self.solution: QpSolution | None = None
-        self.last_qp: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._yaw = 0.0
-        self._age = 0
-        self._start: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.phase.reset()
-        self.last = StepStats(ControllerStatus.SOLVED)
-
-    def step(
-        self, x: np.ndarray, t: float = 0.0, *, fault: ControllerFault | None = None
-    ) -> np.ndarray:
-        """The map input of the pulse fired now, from the (measured) state ``x``.
-
-        ``t`` [s] is the pulse time (the model is time-invariant; kept for the common
-        interface); ``fault`` injects a solver failure (closed_loop.py).
-        """
-        start = time.perf_counter()
-        opts = self.options
-        meas = self.frame.measure(np.asarray(x, dtype=float))
-        self.phase.update(CONING.get("c_B", meas.z))
-        warm = self._start if opts.warm_start else None
-        sol = self._solve(
-            meas, self._expected_coning(meas.z, self.solution, self._age), warm, fault
-        )
-        if self.solution is None and sol.status is QpStatus.SOLVED:
-            # no plan to take the yaw turn from: a second QP along the first's prediction
-            again = self._solve(meas, self._expected_coning(meas.z, sol, -1), warm, fault)
-            sol = replace(
-                again,
-                iterations=sol.iterations + again.iterations,
-                solve_time=sol.solve_time + again.solve_time,
-            )
-        late = fault is ControllerFault.LATE or (
-            opts.time_budget is not None
-            and sol.solve_time > opts.time_budget
-            and opts.solver is not MpcSolver.IPOPT
-        )
-        if sol.status is QpStatus.SOLVED and not late:
-            self.solution, self._yaw, self._age = sol, meas.yaw, 0
-            self._start = self.qp.shifted(sol)
-            u = self.frame.map_input(sol.du[0], meas.yaw)
-            status, message = ControllerStatus.SOLVED, sol.message
-            self.phase.expect(sol.z[1, CONING.index("c_B")])
-        else:
-            u = self._fallback()
-            if late and sol.status is QpStatus.SOLVED:
-                status = ControllerStatus.FALLBACK_LATE
-                message = f"late: {sol.solve_time * 1e3:.3f} ms > budget"
-            else:
-                status, message = ControllerStatus.FALLBACK_FAILED, sol.message
-        step_time = time.perf_counter() - start
-        self.last = StepStats(status, sol.solve_time, step_time, sol.iterations, message)
-        return u
-
-    def _solve(
-        self,
-        meas: Measurement,
-        coning: np.ndarray,
-        warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
-        fault: ControllerFault | None,
-    ) -> QpSolution:
+    @property
+    def last_qp(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(z0, A, B) of the latest QP posed (the scheduled model along the coning the
+        step expected, recomputed by :meth:`ConingModel.horizon`); None before the first
+        and after a fallback without a solve."""
+        if self._posed is None:
+            return None
+        x, diagnostics = self._posed
+        d = self.functions.diagnostics
+        meas = self.frame.measure(x)
         A, B = self.prediction.horizon(
             meas.spin,
             meas.omega,
             meas.altitude,
             meas.climb_rate,
             self.options.horizon,
-            coning=coning,
-            phase=self.phase.correction,
+            coning=np.array(d.get("coning_expected", diagnostics)),
+            phase=float(d.get("phase_correction", diagnostics)),
         )
-        self.last_qp = (meas.z.copy(), A, B)
-        return self.qp.solve(meas.z, A, B, warm, fault)
+        return np.array(d.get("z", diagnostics)), A, B
 
-    def _expected_coning(self, z: np.ndarray, plan: QpSolution | None, age: int) -> np.ndarray:
-        """(N,) |c| at each pulse of the horizon: measured now, then the prediction of
-        ``plan`` made ``age + 1`` pulses ago (held at the measured value without one).
-        It sets the yaw turn of the prediction (control.prediction_model), the one term of
-        the model quadratic in the coning: evaluated along the last plan, as a real-time
-        iteration linearises about the shifted previous solution."""
-        N = self.options.horizon
-        c = np.full(N, float(np.hypot(*CONING.get("c_B", z))))
-        if plan is not None:
-            ahead = np.hypot(*plan.z[age + 2 :, CONING.index("c_B")].T)
-            n = min(N - 1, ahead.size)
-            c[1 : 1 + n] = ahead[:n]
-        return c
+    # ----------------------------------------------------------------- the step
+    def step(
+        self, x: np.ndarray, t: float = 0.0, *, fault: ControllerFault | None = None
+    ) -> np.ndarray:
+        """The map input of the pulse fired now, from the (measured) state ``x``.
 
-    def _fallback(self) -> np.ndarray:
-        """The previous plan's next input (its warm start shifted along), or the operating
-        input once the plan is used up or before any plan."""
-        self._age += 1
-        if self._start is not None:
-            self._start = self.qp.shifted(self._start)
-        if self.solution is None or self._age >= self.options.horizon:
-            return self.frame.project(self.prediction.u_op.copy())
-        self.phase.expect(self.solution.z[self._age + 1, CONING.index("c_B")])
-        return self.frame.map_input(self.solution.du[self._age], self._yaw)
+        ``t`` [s] is the pulse time (the model is time-invariant; kept for the common
+        interface); ``fault`` injects a solver failure (closed_loop.py): RAISE as a solve
+        that raised, NON_FINITE as one that answered NaN (both FALLBACK_FAILED), LATE as
+        one over the time budget (FALLBACK_LATE when it solved).
+        """
+        start = time.perf_counter()
+        opts, fn = self.options, self.functions
+        x = np.array(x, dtype=float)  # a copy: last_qp reads it later
+        out: list[np.ndarray] | None = None
+        solve_time, iterations = 0.0, 0
+        message = "injected solver failure"
+        if fault is not ControllerFault.RAISE:
+            t0 = time.perf_counter()
+            try:
+                out = self._call(fn.step, x, self.memory, t)
+            except RuntimeError as err:
+                message = str(err).strip().splitlines()[-1]
+            solve_time = time.perf_counter() - t0
+        if out is None:
+            u, memory, diagnostics = self._call(fn.fallback, x, self.memory, t)
+            status = ControllerStatus.FALLBACK_FAILED
+        else:
+            u, memory, diagnostics, u_fallback, memory_fallback = out
+            stats = self.solver_stats()
+            iterations = int(stats.get("iter_count", -1))
+            message = f"{opts.solver.value}: {stats.get('return_status', 'unknown')}"
+            late = fault is ControllerFault.LATE or (
+                opts.time_budget is not None
+                and solve_time > opts.time_budget
+                and opts.solver is not MpcSolver.IPOPT
+            )
+            if fault is ControllerFault.NON_FINITE or not fn.diagnostics.get("finite", diagnostics):
+                u, memory = u_fallback, memory_fallback
+                status = ControllerStatus.FALLBACK_FAILED
+                message = f"{message}; the answer is not finite"
+            elif late:
+                u, memory = u_fallback, memory_fallback
+                status = ControllerStatus.FALLBACK_LATE
+                message = f"late: {solve_time * 1e3:.3f} ms > budget"
+            else:
+                status = ControllerStatus.SOLVED
+                cost = float(fn.diagnostics.get("cost", diagnostics))
+                self._solved = (message, cost, iterations, solve_time)
+            self._posed = (x, diagnostics)
+        self.memory = memory
+        step_time = time.perf_counter() - start
+        self.last = StepStats(status, solve_time, step_time, iterations, message)
+        return u
+
+    def solver_stats(self) -> dict[str, Any]:
+        """casadi's stats of the latest call of the step Function: its first QP solver's
+        (``iter_count``, ``return_status`` ...) when interpreted, none when compiled."""
+        caller = self._callers.get(id(self.functions.step))
+        return {} if caller is None else caller.stats()
+
+    def _call(
+        self, function: ca.Function, x: np.ndarray, memory: np.ndarray, t: float = 0.0
+    ) -> list[np.ndarray]:
+        """``function(x, t, memory)``'s outputs as flat arrays, through its buffers
+        (:class:`_Buffered`, one per Function)."""
+        caller = self._callers.get(id(function))
+        if caller is None or caller.function is not function:
+            caller = _Buffered(function)
+            self._callers[id(function)] = caller
+        return caller(x, t, memory)
+
+
+class _Buffered:
+    """A Function of (x, t, memory) called through casadi's buffers: its inputs copied
+    into arrays it owns, its outputs written into others (no conversion to and from DM,
+    a tenth of a millisecond a step). casadi prints the inputs of a solver that failed
+    inside a Function to stderr (kilobytes); that print is dropped with the error the call
+    raises, anything else the call prints passes through. A stand-in that is no casadi
+    Function (a test's) is called as it is."""
+
+    def __init__(self, function: ca.Function) -> None:
+        self.function = function
+        self._buffered = isinstance(function, ca.Function)
+        if self._buffered:
+            n_in, n_out = function.n_in(), function.n_out()
+            self._args = [np.zeros(function.nnz_in(i)) for i in range(n_in)]
+            self._res = [np.zeros(function.nnz_out(i)) for i in range(n_out)]
+            self._buffer, self._trigger = function.buffer()
+            for i, a in enumerate(self._args):
+                self._buffer.set_arg(i, a.data.cast("B"))
+            for i, r in enumerate(self._res):
+                self._buffer.set_res(i, r.data.cast("B"))
+
+    def __call__(self, x: np.ndarray, t: float, memory: np.ndarray) -> list[np.ndarray]:
+        printed = io.StringIO()
+        with contextlib.redirect_stderr(printed):
+            if self._buffered:
+                self._args[0][:] = x
+                self._args[1][0] = t
+                self._args[2][:] = memory
+                self._trigger()
+                if self._buffer.ret() != 0:
+                    raise RuntimeError(f"{self.function.name()}: evaluation failed")
+                out = [r.copy() for r in self._res]
+            else:
+                out = [np.asarray(v, dtype=float).ravel() for v in self.function(x, t, memory)]
+        if printed.getvalue():
+            sys.stderr.write(printed.getvalue())
+        return out
+
+    def stats(self) -> dict[str, Any]:
+        """The Function's stats of the latest call (the solver's, when it calls one
+        directly)."""
+        try:
+            return dict(self._buffer.stats() if self._buffered else self.function.stats())
+        except RuntimeError:  # a compiled Function keeps none
+            return {}
+
+
+def _compiled(functions: MpcStepFunctions) -> MpcStepFunctions:
+    """``functions`` with the step and the fallback compiled (MpcController's
+    ``compiled``); the plan, asked for rarely, stays interpreted."""
+    (step, fallback), _ = compile_all(
+        [(functions.step, DEFAULT_FLAGS), (functions.fallback, DEFAULT_FLAGS)],
+        hpipm=True,
+        what="the MPC's step",
+    )
+    return replace(functions, step=step, fallback=fallback)

@@ -202,14 +202,21 @@ def _status(stats: dict[str, Any]) -> QpStatus:
 
 
 def conic_options(
-    solver: MpcSolver, max_iter: int, tol: float, hpipm_mode: str = "speed_abs"
+    solver: MpcSolver,
+    max_iter: int,
+    tol: float,
+    hpipm_mode: str = "speed_abs",
+    *,
+    error_on_fail: bool = False,
 ) -> dict[str, Any]:
     """casadi ``conic`` options of ``solver`` (not IPOPT) with its iteration cap and residual
     tolerance; ``hpipm_mode`` HPIPM's mode ("speed_abs" absolute residuals, "speed"
-    relative ones). Raises OptionError when the casadi build lacks the solver."""
+    relative ones); ``error_on_fail``: a solve the solver does not call successful
+    (iteration cap, failure) raises (a nonzero return in generated C) instead of returning
+    its last iterate. Raises OptionError when the casadi build lacks the solver."""
     if not ca.has_conic(solver.value):
         raise OptionError(f"solver {solver.value!r}: not in this casadi build")
-    common: dict[str, Any] = {"error_on_fail": False}
+    common: dict[str, Any] = {"error_on_fail": error_on_fail}
     if solver is MpcSolver.HPIPM:
         return {
             **common,
@@ -247,6 +254,9 @@ class NutationQp:
     solver : which QP solver.
     max_iter : iteration cap.
     tol : solver tolerance on the residuals.
+    error_on_fail : a solve the solver does not call successful raises RuntimeError from
+        ``function`` (:func:`conic_options`; the step Function of mpc_step.py) instead of
+        returning a status through :meth:`solve`.
 
     Attributes
     ----------
@@ -256,10 +266,18 @@ class NutationQp:
     """
 
     def __init__(
-        self, data: QpData, horizon: int, solver: MpcSolver, max_iter: int, tol: float
+        self,
+        data: QpData,
+        horizon: int,
+        solver: MpcSolver,
+        max_iter: int,
+        tol: float,
+        *,
+        error_on_fail: bool = False,
     ) -> None:
         start = time.perf_counter()
         self.data, self.horizon, self.solver = data, horizon, solver
+        self.error_on_fail = error_on_fail
         nx, nu = data.S.shape
         ng = data.C.shape[0]
         slack = np.zeros(ng) if data.slack is None else np.asarray(data.slack, dtype=float)
@@ -310,18 +328,34 @@ class NutationQp:
             lbx[k : k + nv], ubx[k : k + nv] = y_lo, y_hi
         self._lbx, self._ubx = lbx, ubx
 
+        self._solver = self._qp_solver(assemble.sparsity_out(0), max_iter, tol)
         z0 = ca.MX.sym("z0", nx)
         A_in, B_in = ca.MX.sym("A", nx, nx * N), ca.MX.sym("B", nx, nu * N)
         w0 = ca.MX.sym("w0", self.n_w)
         lam_x0, lam_a0 = ca.MX.sym("lam_x0", self.n_w), ca.MX.sym("lam_a0", self.n_a)
-        lbx_mx = ca.vertcat(z0, ca.DM(lbx[nx:]))
-        ubx_mx = ca.vertcat(z0, ca.DM(ubx[nx:]))
-        a = assemble(A_in, B_in)
-        self._solver = self._qp_solver(assemble.sparsity_out(0), max_iter, tol)
-        if solver is MpcSolver.IPOPT:
+        self.function = ca.Function(
+            "mpc_qp",
+            [z0, A_in, B_in, w0, lam_x0, lam_a0],
+            self.call(z0, A_in, B_in, w0, lam_x0, lam_a0),
+            ["z0", "A", "B", "w0", "lam_x0", "lam_a0"],
+            ["w", "cost", "lam_x", "lam_a"],
+        )
+        self.build_time = time.perf_counter() - start
+
+    def call(
+        self, z0: ca.MX, A: ca.MX, B: ca.MX, w0: ca.MX, lam_x0: ca.MX, lam_a0: ca.MX
+    ) -> list[ca.MX]:
+        """[w, cost, lam_x, lam_a]: the solver called on MX expressions (``function``'s
+        inputs), its node in the caller's graph: a Function that calls the solver directly
+        reports the solver's stats (iterations) as its own, one that calls ``function``
+        does not. The caller must use all four (casadi's HPIPM crashes otherwise)."""
+        nx = self.nx
+        lbx_mx = ca.vertcat(z0, ca.DM(self._lbx[nx:]))
+        ubx_mx = ca.vertcat(z0, ca.DM(self._ubx[nx:]))
+        if self.solver is MpcSolver.IPOPT:
             sol = self._solver(
                 x0=w0,
-                p=ca.vertcat(ca.vec(A_in), ca.vec(B_in)),
+                p=ca.vertcat(ca.vec(A), ca.vec(B)),
                 lbx=lbx_mx,
                 ubx=ubx_mx,
                 lbg=self._lba,
@@ -329,29 +363,20 @@ class NutationQp:
                 lam_x0=lam_x0,
                 lam_g0=lam_a0,
             )
-            outs = [sol["x"], sol["f"], sol["lam_x"], sol["lam_g"]]
-        else:
-            sol = self._solver(
-                h=self._H,
-                g=self._g,
-                a=a,
-                lba=self._lba,
-                uba=self._uba,
-                lbx=lbx_mx,
-                ubx=ubx_mx,
-                x0=w0,
-                lam_x0=lam_x0,
-                lam_a0=lam_a0,
-            )
-            outs = [sol["x"], sol["cost"], sol["lam_x"], sol["lam_a"]]
-        self.function = ca.Function(
-            "mpc_qp",
-            [z0, A_in, B_in, w0, lam_x0, lam_a0],
-            outs,
-            ["z0", "A", "B", "w0", "lam_x0", "lam_a0"],
-            ["w", "cost", "lam_x", "lam_a"],
+            return [sol["x"], sol["f"], sol["lam_x"], sol["lam_g"]]
+        sol = self._solver(
+            h=self._H,
+            g=self._g,
+            a=self._assemble(A, B),
+            lba=self._lba,
+            uba=self._uba,
+            lbx=lbx_mx,
+            ubx=ubx_mx,
+            x0=w0,
+            lam_x0=lam_x0,
+            lam_a0=lam_a0,
         )
-        self.build_time = time.perf_counter() - start
+        return [sol["x"], sol["cost"], sol["lam_x"], sol["lam_a"]]
 
     # ----------------------------------------------------------------- layout
     def _z(self, j: int) -> int:
@@ -383,10 +408,10 @@ class NutationQp:
                 "mpc_qp_ipopt",
                 "ipopt",
                 nlp,
-                {"error_on_fail": False, "print_time": False, "ipopt": ipopt},
+                {"error_on_fail": self.error_on_fail, "print_time": False, "ipopt": ipopt},
             )
         try:
-            opts = conic_options(self.solver, max_iter, tol)
+            opts = conic_options(self.solver, max_iter, tol, error_on_fail=self.error_on_fail)
         except OptionError as err:
             raise OptionError(f"MpcOptions.{err}") from None
         qp = {"h": self._H.sparsity(), "a": a_sparsity}

@@ -193,20 +193,20 @@ class ConingModel:
         """
         alts = altitude + climb_rate * self.period * np.arange(steps)
         decay = self._at(self.spin_decay, np.array([spin]), alts[:1])[0]
-        spins = spin * decay ** np.arange(steps)
+        # decay^k as a running product, and the turns below entry by entry: the operations
+        # the MPC's step Function makes (control/mpc_step.py), so that both round alike
+        spins = spin * np.cumprod(np.r_[1.0, np.full(steps - 1, decay)])
         A = self._at(self.A, spins, alts)
         B = self._at(self.B, spins, alts)
         omegas = omega * spins / spin
-        R = turn(omegas * self.period + phase)
-        A[:, _C] = R @ A[:, _C]
-        B[:, _C] = R @ B[:, _C]
+        for M in (A, B):
+            _turn_rows(M, _C, omegas * self.period + phase)
         tan = np.broadcast_to(np.asarray(coning, dtype=float), (steps,))
         yaw = omegas * self.period * (1.0 - 1.0 / np.sqrt(1.0 + tan**2))
         if np.any(yaw):
-            back = turn(-yaw)
             for rows in _L_ROWS:
-                A[:, rows] = back @ A[:, rows]
-                B[:, rows] = back @ B[:, rows]
+                for M in (A, B):
+                    _turn_rows(M, rows, -yaw)
         return A, B
 
     def at(
@@ -216,6 +216,16 @@ class ConingModel:
         altitude [m], the coning turn corrected by ``phase`` [rad] (:meth:`horizon`)."""
         A, B = self.horizon(spin, omega, altitude, 0.0, 1, phase=phase)
         return A[0], B[0]
+
+
+def _turn_rows(M: np.ndarray, rows: slice, angle: np.ndarray) -> None:
+    """Turn the two ``rows`` of each stage's matrix M[j] (N, rows, cols) by ``angle[j]``
+    [rad] in place: ``turn(angle) @ M[:, rows]``, written entry by entry (c a - s b, s a + c
+    b)."""
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    a, b = M[:, rows.start].copy(), M[:, rows.start + 1].copy()
+    M[:, rows.start] = c * a + (-s) * b
+    M[:, rows.start + 1] = s * a + c * b
 
 
 def coning_model(

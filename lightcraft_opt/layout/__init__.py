@@ -24,6 +24,8 @@ from lightcraft_opt.layout.controllers import (
     DIRECTOR_STATE,
     DIRECTOR_TERMINAL_OUTPUT,
     coning_input_layout,
+    mpc_diagnostics_layout,
+    mpc_memory_layout,
 )
 from lightcraft_opt.layout.defaults import (
     coning_rates,
@@ -79,6 +81,8 @@ __all__ = [
     "initial_state",
     "input_layout",
     "map_input_layout",
+    "mpc_diagnostics_layout",
+    "mpc_memory_layout",
     "nominal_inputs",
     "parameter_values",
     "quaternion_from_tilt",

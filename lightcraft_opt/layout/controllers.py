@@ -30,6 +30,8 @@ __all__ = [
     "DIRECTOR_STATE",
     "DIRECTOR_TERMINAL_OUTPUT",
     "coning_input_layout",
+    "mpc_diagnostics_layout",
+    "mpc_memory_layout",
 ]
 
 Spec = list[tuple[str, int, str, str, tuple[str, ...]]]
@@ -65,6 +67,56 @@ def coning_input_layout(n_thrusters: int) -> VectorLayout:
     full = map_input_layout(n_thrusters, False, RcsProfile.PHASE_LOCKED)
     names = ("pointing_L", "rcs_thrust", "rcs_cos", "rcs_sin")
     return VectorLayout("coning input", _spec(full, names))
+
+
+def mpc_memory_layout(horizon: int, n_w: int, n_a: int) -> VectorLayout:
+    """The nutation MPC's memory between pulses (control/mpc_step.py), all zeros before a
+    flight: ``plan_w`` (n_w) the primal solution of the latest solve that flew, by stage
+    ([z_0, v_0, ..., z_N], control/mpc_qp.py); the warm start of the next solve
+    ``warm_w`` (n_w), ``warm_lam_x`` (n_w), ``warm_lam_a`` (n_a): that solution shifted a
+    stage a pulse; ``plan_yaw`` [rad] the yaw the plan was made at; ``plan_age`` [pulses]
+    since then; ``has_plan`` (1 or 0); the phase tracker's ``phase_correction`` [rad] and
+    the coning vector it expects at the next pulse, ``phase_expected`` [rad, B], with
+    ``has_expected`` (1 or 0). ``horizon`` N sets no slot's size (n_w and n_a hold it)."""
+    if horizon < 1 or n_w < 1 or n_a < 1:
+        raise ValueError(f"mpc memory: horizon {horizon}, n_w {n_w}, n_a {n_a} must be >= 1")
+    return VectorLayout(
+        "mpc memory",
+        [
+            ("plan_w", n_w, "", "", ()),
+            ("warm_w", n_w, "", "", ()),
+            ("warm_lam_x", n_w, "", "", ()),
+            ("warm_lam_a", n_a, "", "", ()),
+            ("plan_yaw", 1, "rad", "L", ()),
+            ("plan_age", 1, "", "", ()),
+            ("has_plan", 1, "", "", ()),
+            ("phase_correction", 1, "rad", "", ()),
+            ("phase_expected", 2, "rad", "B", B123[1:]),
+            ("has_expected", 1, "", "", ()),
+        ],
+    )
+
+
+def mpc_diagnostics_layout(horizon: int) -> VectorLayout:
+    """What the nutation MPC's step Function tells besides its input (control/mpc_step.py):
+    ``cost`` of the QP that flies; ``finite`` (1: the solution is finite, 0: the
+    fallback's outputs were chosen); ``solves`` (QP solves made: 2 on a pulse without a
+    plan, 0 in the fallback Function); ``phase_correction`` [rad] the tracker's, used
+    this pulse; ``coning_expected`` (N) |c| [-] at each pulse of the horizon the last QP
+    was posed with; ``z`` (8) the measured coning coordinates (layout CONING);
+    ``used_up`` (1: the fallback flies the operating input)."""
+    return VectorLayout(
+        "mpc diagnostics",
+        [
+            ("cost", 1, "", "", ()),
+            ("finite", 1, "", "", ()),
+            ("solves", 1, "", "", ()),
+            ("phase_correction", 1, "rad", "", ()),
+            ("coning_expected", horizon, "", "", ()),
+            ("z", 8, "", "", ()),
+            ("used_up", 1, "", "", ()),
+        ],
+    )
 
 
 #: The director QP's states (11 entries): the head of Ψ's state REDUCED_STATE, whose

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -220,11 +221,11 @@ def test_injected_solver_failures_are_counted_answered_by_the_shifted_plan_and_s
 
 
 class _SlowAt:
-    """The QP Function of an MPC, 50 ms slower at one pulse (a machine under load): ten
+    """The step Function of an MPC, 50 ms slower at one pulse (a machine under load): ten
     times the default 5 ms budget, inside the solve time the MPC measures."""
 
     def __init__(self, controller: MpcController, pulse: int) -> None:
-        self.function, self.pulse, self.step = controller.qp.function, pulse, -1
+        self.function, self.pulse, self.step = controller.functions.step, pulse, -1
         step = controller.step
 
         def counting(x, t=0.0, *, fault=None):  # type: ignore[no-untyped-def]
@@ -232,7 +233,7 @@ class _SlowAt:
             return step(x, t, fault=fault)
 
         controller.step = counting  # type: ignore[method-assign]
-        controller.qp.function = self
+        controller.functions = replace(controller.functions, step=self)
 
     def __call__(self, *args):  # type: ignore[no-untyped-def]
         if self.step == self.pulse:

@@ -71,6 +71,7 @@ DEFAULT_FLAGS: tuple[str, ...] = ("-O2",)
 #: bench/README.md#compile-cost-and-compiler-flags). Same IEEE semantics as -O2.
 DERIVATIVE_FLAGS: tuple[str, ...] = ("-O1",)
 
+
 #: A Function to compile and its flags.
 CompileJob = tuple[ca.Function, tuple[str, ...]]
 
@@ -265,9 +266,7 @@ def compile_all(
         return limit is None or f.n_instructions() <= limit
 
     report = reporter(report)
-    missing = (
-        _missing_libraries([j for j in jobs if small(j[0])], cc, hpipm) if report else set()
-    )
+    missing = _missing_libraries([j for j in jobs if small(j[0])], cc, hpipm) if report else set()
     if report is not None and missing:
         report(_compiling_line(what, len(missing), cc))
     count = iter(range(1, len(missing) + 1))  # next() is atomic under the GIL
