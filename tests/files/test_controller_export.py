@@ -1,4 +1,5 @@
-"""The director exported as standalone C (files/controller_export.py, files/controller_replay.py).
+"""The director and the nutation MPC exported as standalone C (files/controller_export.py,
+files/controller_replay.py).
 
 Reference: the director's step Function interpreted in Python (itself equal to the Python step
 it replaced to 1e-15, tests/control/test_director_step.py). Ten recorded closed-loop flights
@@ -25,18 +26,22 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.cli import main
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.director import DirectorController
+from lightcraft_opt.control.mpc import MpcController
 from lightcraft_opt.control.options import (
     ClosedLoopOptions,
     ControllerFault,
     DirectorOptions,
     MeasurementNoise,
 )
+from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.control.result import ControllerStatus
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.controller_export import export_controller
 from lightcraft_opt.files.controller_replay import read_replay, write_replay_csv
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import STATE, initial_state
+from lightcraft_opt.layout import STATE, RcsProfile, initial_state
+from lightcraft_opt.linear.operating_points import pulse_map_jacobian
 from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
@@ -129,14 +134,67 @@ def test_a_closed_loop_folder_holds_its_replay(recorded, tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("file", "field"),
+    ("change", "field"),
     [
-        ("problems/nutation_suppression.toml", "controller"),  # the MPC's file
-        ("problems/beam_tracking_focus.toml", "problem"),  # an optimal control problem
+        (('controller = "director"', 'controller = "lqr"'), "controller"),
+        (('rcs = "tilt"', 'rcs = "nutation"'), "director.rcs"),
+        (("duration_s = 5.0", "horizon_pulses = 130\nduration_s = 5.0"), "problem file"),
     ],
 )
-def test_export_controller_refuses_what_it_cannot_export(file, field, tmp_path, capsys):
-    assert main(["export-controller", str(REPO_ROOT / file), "--out", str(tmp_path)]) == 2
+def test_export_controller_refuses_what_it_cannot_export(change, field, tmp_path, capsys):
+    """An LQR (no step Function), a director with the nutation MPC alongside, a file of
+    another kind: exit 2, one line naming the field."""
+    text = (REPO_ROOT / "problems" / "director_crosswind.toml").read_text()
+    old, new = change
+    assert old in text
+    path = tmp_path / "director_crosswind.toml"
+    path.write_text(text.replace(old, new, 1).replace("../models/", f"{REPO_ROOT}/models/"))
+    assert main(["export-controller", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert field in err
+
+
+def test_the_exported_mpc_replays_its_flights_to_1e9(tmp_path):
+    """The nutation MPC exported likewise: forty one-second flights of
+    problems/nutation_suppression.toml's kind (its 5 degrees of coning, noise, dispersion and
+    drop-outs, a seed each; a coarse engine and a 2 x 3 schedule grid), 1,040 pulses,
+    replayed by the C to 1e-9, then 10,000 more steps with flat memory (the director's test
+    above takes 100,000)."""
+    problem = load_closed_loop(REPO_ROOT / "problems" / "nutation_suppression.toml")
+    model = load_model(REPO_ROOT / "models" / "flight5-rcs.toml")
+    engine = replace(model.craft.engine, quadrature_radial=2, quadrature_azimuthal=8)
+    model = replace(model, craft=replace(model.craft, engine=engine))
+    options = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED, substeps=4, dense=2)
+    plant = build_pulse_map(model, options)
+    spin = model.craft.spin
+    grid = dict(spins=[0.9 * spin, spin], altitudes=[0.0, 2.0, 10.0], speeds=[0.0, 5.0, 8.0])
+    prediction = coning_model(model, pulse_map=pulse_map_jacobian(plant), **grid)
+    mpc = MpcController(model, problem.mpc, prediction=prediction, compiled=False)
+    flights = [
+        closed_loop(
+            model,
+            mpc,
+            1.0,
+            x0=problem.x0,
+            pulse_map=plant,
+            options=replace(problem.loop, seed=seed),
+        )
+        for seed in range(40)
+    ]
+    path = write_replay_csv(flights, plant.inputs, tmp_path / "replay.csv")
+    assert read_replay(path)["u"].shape[0] >= 1000
+    functions = mpc.functions
+    out = export_controller(
+        functions.step, functions.fallback, functions.initial_memory(), tmp_path / "c", name="mpc"
+    )
+    build = subprocess.run(["make"], cwd=out.folder, capture_output=True, text=True)
+    assert build.returncode == 0, build.stderr[-2000:]
+    run = subprocess.run(
+        ["./replay", str(path), "memory0.txt", "10000"],
+        cwd=out.folder,
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert float(re.search(r"largest input difference (\S+)", run.stdout).group(1)) <= 1e-9
