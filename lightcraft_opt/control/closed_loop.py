@@ -42,6 +42,12 @@ from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.estimation.estimate import Estimator
 from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
+from lightcraft_opt.control.loop_chunks import (
+    ChunkedPulses,
+    StepFunctionController,
+    fly_chunk,
+    loop_chunk,
+)
 from lightcraft_opt.control.options import ClosedLoopOptions, MeasurementNoise, PlantDispersion
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerLog, StepStats
 from lightcraft_opt.errors import ParameterError
@@ -56,7 +62,7 @@ from lightcraft_opt.layout import (
 )
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import checked_duration, checked_vector
-from lightcraft_opt.simulation.chunks import step_in_chunks
+from lightcraft_opt.simulation.chunks import chunk_pulses, step_in_chunks
 from lightcraft_opt.simulation.flight_log import FlightLog  # simulate's end rule
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord
@@ -65,7 +71,7 @@ from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.terms.invariants import build_invariants
 
-__all__ = ["closed_loop", "disperse", "measured", "plant_options"]
+__all__ = ["closed_loop", "disperse", "measured", "noise_draw", "plant_options", "told_state"]
 
 #: Map of the plant unless given: Φ's defaults with the phase-locked RCS profile.
 PLANT_MAP = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED)
@@ -96,6 +102,17 @@ def measured(x: np.ndarray, noise: MeasurementNoise, rng: np.random.Generator) -
     """What the controller is told: ``x`` with Gaussian noise on position, velocity, the
     attitude (a small rotation of B, error-state chart), w_B and the spin. No draw is
     made for a zero standard deviation (a noiseless loop uses no random numbers)."""
+    return told_state(x, noise_draw(noise, rng))
+
+
+def told_state(x: np.ndarray, dx: np.ndarray | None) -> np.ndarray:
+    """``x`` ⊕ ``dx`` (the error-state chart: L and B frames); ``x`` itself for None."""
+    return x if dx is None else np.asarray(_retract()(x, dx), dtype=float).ravel()
+
+
+def noise_draw(noise: MeasurementNoise, rng: np.random.Generator) -> np.ndarray | None:
+    """(ERROR_STATE.size,) one pulse's noise δ of :func:`measured`, drawn from ``rng`` in
+    its order; None for a noiseless loop (no draw)."""
     sigma = {
         "r_L": noise.position,
         "v_L": noise.velocity,
@@ -104,13 +121,13 @@ def measured(x: np.ndarray, noise: MeasurementNoise, rng: np.random.Generator) -
         "spin": noise.spin,
     }
     if not any(sigma.values()):
-        return x
+        return None
     dx = np.zeros(ERROR_STATE.size)
     for name, s in sigma.items():
         if s:
             idx = ERROR_STATE.index(name)
             dx[idx] = s * rng.standard_normal(idx.stop - idx.start)
-    return np.asarray(_retract()(x, dx), dtype=float).ravel()
+    return dx
 
 
 @functools.cache
@@ -228,16 +245,13 @@ def closed_loop(
             flight.rest(k * phi.period, applied[k], x, ENGINE.size)
         nodes = [x] * resting + step_in_chunks(phi, applied[resting:], x, p, flight, resting)
     else:
-        for k in range(n):
+
+        def fired(k: int, u: np.ndarray, X: np.ndarray | None, eng: np.ndarray | None) -> bool:
+            """Record pulse k's input ``u`` and its flight (Φ's dense ``X`` and ``eng``, or
+            None to evaluate them here); True when it ended the flight."""
+            nonlocal x
             t = k * phi.period
-            fault = opts.fault if k in faults else None
-            y = measured(x, opts.noise, rng) if feedback is None else feedback.told(k, t, x)
-            u = checked_vector(
-                f"controller input {k}", controller.step(y, t, fault=fault), lay.size
-            )
-            steps.append(_last(controller))
             commanded.append(u)
-            told.append(np.array(y, dtype=float))
             applied = u.copy()
             if dropped[k]:
                 applied[i_energy] = 0.0
@@ -246,14 +260,56 @@ def closed_loop(
                 nodes.append(x)
                 if feedback is not None:
                     feedback.rested(applied)
-                continue
-            X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
+                return False
+            if X is None or eng is None:
+                X, eng = (np.asarray(v) for v in phi.dense(x, applied, p, t))
             if flight.ended_by(t, applied, X, eng.ravel()):
-                break
+                return True
             if feedback is not None:
                 feedback.coasted(applied, X, t)
             x = X[:, -1]
             nodes.append(x)
+            return False
+
+        chunked = feedback is None and opts.chunked and _chunkable(controller)
+        size = chunk_pulses(phi) if chunked else 1
+        ended = False
+        for k0 in range(0, n, size):
+            ks = range(k0, min(n, k0 + size))
+            # the draws of the pulse-by-pulse order, made up front: the same numbers
+            draws = [noise_draw(opts.noise, rng) if feedback is None else None for _ in ks]
+            pulses = None
+            if chunked and not faults.intersection(ks):
+                pulses = _chunk(phi, controller, x, flight.on_pad, p, ks, draws, dropped)
+            if pulses is not None:
+                assert isinstance(controller, StepFunctionController)
+                d = pulses.X.shape[1] // len(ks)
+                share = pulses.seconds / len(ks)
+                for j, k in enumerate(ks):
+                    diagnostics = pulses.diagnostics[:, j]
+                    status = controller.chunk_status(diagnostics)
+                    steps.append(StepStats(status, share, share, -1, f"{status.value} (chunk)"))
+                    told.append(pulses.told[:, j].copy())
+                    controller.memory = pulses.memory[:, j].copy()
+                    u = checked_vector(f"controller input {k}", pulses.u[:, j], lay.size)
+                    X_j, eng_j = pulses.X[:, j * d : (j + 1) * d], pulses.engine[:, j]
+                    if ended := fired(k, u, X_j, eng_j):
+                        break
+                controller.last = steps[-1]
+            else:
+                for j, k in enumerate(ks):
+                    t = k * phi.period
+                    fault = opts.fault if k in faults else None
+                    y = told_state(x, draws[j]) if feedback is None else feedback.told(k, t, x)
+                    u = checked_vector(
+                        f"controller input {k}", controller.step(y, t, fault=fault), lay.size
+                    )
+                    steps.append(_last(controller))
+                    told.append(np.array(y, dtype=float))
+                    if ended := fired(k, u, None, None):
+                        break
+            if ended:
+                break
     k_done = len(flight.pulse_t)
     record = PulseRecord(
         t=np.asarray(flight.pulse_t),
@@ -282,6 +338,34 @@ def closed_loop(
         estimation=None if feedback is None else feedback.log(k_done, p),
         told=np.array(told).reshape(-1, STATE.size)[:k_done],
     )
+
+
+def _chunkable(controller: Controller) -> bool:
+    """Whether ``controller``'s steps may be flown in chunks (loop_chunks.py)."""
+    return isinstance(controller, StepFunctionController) and controller.chunkable()
+
+
+def _chunk(
+    phi: PulseMap,
+    controller: Controller,
+    x: np.ndarray,
+    on_pad: bool,
+    p: np.ndarray,
+    ks: range,
+    draws: list[np.ndarray | None],
+    dropped: np.ndarray,
+) -> ChunkedPulses | None:
+    """Pulses ``ks`` from ``x`` in one call (loop_chunks.py); None when a solve failed in
+    it (the chunk is flown again pulse by pulse)."""
+    assert isinstance(controller, StepFunctionController)
+    noiseless = draws[0] is None
+    chunk = loop_chunk(phi, controller.functions.step, len(ks), None if noiseless else _retract())
+    dx = np.zeros((len(ks), ERROR_STATE.size)) if noiseless else np.array(draws)
+    t = np.arange(ks.start, ks.stop) * phi.period  # the same floats as k * period
+    try:
+        return fly_chunk(chunk, x, controller.memory, on_pad, p, t, dx, dropped[ks.start : ks.stop])
+    except RuntimeError:
+        return None
 
 
 def _feedback(

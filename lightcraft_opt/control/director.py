@@ -394,6 +394,18 @@ class DirectorController:
                 return replace(source, step=step, fallback=fallback)
         return build_director_step(self._pieces)
 
+    def chunkable(self) -> bool:
+        """Whether the closed loop may take its steps a chunk at a time
+        (control/loop_chunks.py): no time budget, no nutation MPC stepped beside it."""
+        alongside = self.nutation is not None and self.options.rcs is DirectorRcs.NUTATION
+        return self.options.time_budget is None and not alongside
+
+    def chunk_status(self, diagnostics: np.ndarray) -> ControllerStatus:
+        """A step's status from its ``diagnostics`` (DIRECTOR_DIAGNOSTICS): solved, or
+        the fallback of a solution that was not finite."""
+        solved = DIRECTOR_DIAGNOSTICS.get("solved", np.asarray(diagnostics).ravel())
+        return ControllerStatus.SOLVED if solved else ControllerStatus.FALLBACK_FAILED
+
     def source_functions(self) -> DirectorStep:
         """The step Functions over Ψ's interpreted pieces: what C is generated from
         (compiled here, exported by files/controller_export.py)."""

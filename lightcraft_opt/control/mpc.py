@@ -388,6 +388,17 @@ class MpcController:
         self.last = StepStats(status, solve_time, step_time, iterations, message)
         return u
 
+    def chunkable(self) -> bool:
+        """Whether the closed loop may take its steps a chunk at a time
+        (control/loop_chunks.py): no time budget."""
+        return self.options.time_budget is None
+
+    def chunk_status(self, diagnostics: np.ndarray) -> ControllerStatus:
+        """A step's status from its ``diagnostics``: solved, or the fallback of a solution
+        that was not finite."""
+        finite = self.functions.diagnostics.get("finite", np.asarray(diagnostics).ravel())
+        return ControllerStatus.SOLVED if finite else ControllerStatus.FALLBACK_FAILED
+
     def solver_stats(self) -> dict[str, Any]:
         """casadi's stats of the latest call of the step Function: its first QP solver's
         (``iter_count``, ``return_status`` ...) when interpreted, none when compiled."""

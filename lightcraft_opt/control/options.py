@@ -440,6 +440,12 @@ class ClosedLoopOptions:
         controller's step.
     fault : the failure injected (:class:`ControllerFault`).
     seed : of the random generator (drop-outs, dispersion, noise), >= 0.
+    chunked : fly a controller whose pulse is a casadi Function (the director, the MPC)
+        together with the plant a second of pulses per call (control/loop_chunks.py) when
+        nothing needs Python between pulses (no estimator, no time budget, no fault in the
+        chunk): the same flight to the last bit, its steps' iterations unknown (-1) and
+        their times the chunk's shared. False (the default): pulse by pulse, which measured
+        as fast (docs/mpc.md#the-closed-loop-in-chunks).
     """
 
     noise: MeasurementNoise = MeasurementNoise()
@@ -448,6 +454,7 @@ class ClosedLoopOptions:
     faults: tuple[int, ...] = ()
     fault: ControllerFault = ControllerFault.RAISE
     seed: int = 0
+    chunked: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.noise, MeasurementNoise):
@@ -475,6 +482,10 @@ class ClosedLoopOptions:
             )
         checked_choice("ClosedLoopOptions", "fault", self.fault, ControllerFault)
         checked_int("ClosedLoopOptions", "seed", self.seed, 0)
+        if not isinstance(self.chunked, bool):
+            raise OptionError(
+                f"ClosedLoopOptions.chunked must be True or False, got {self.chunked!r}"
+            )
 
 
 class EstimatorKind(Enum):

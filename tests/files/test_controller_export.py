@@ -18,6 +18,7 @@ import re
 import shutil
 import subprocess
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -50,6 +51,20 @@ pytestmark = pytest.mark.skipif(
     shutil.which("gcc") is None or shutil.which("make") is None, reason="needs gcc and make"
 )
 OPTIONS = DirectorOptions(horizon=4, relinearize=3, quadrature=(2, 4), time_budget=None)
+
+
+def _built_and_replayed(folder: Path, replay: Path, steps: int) -> str:
+    """``make`` in the exported ``folder``, then its test program over ``replay`` and
+    ``steps`` more steps: what it printed, once it passed (exit 0) with every input within
+    1e-9."""
+    env = {**os.environ, "CC": os.environ.get("CC", "gcc")}
+    build = subprocess.run(["make"], cwd=folder, capture_output=True, text=True, env=env)
+    assert build.returncode == 0, build.stderr[-2000:]
+    command = ["./replay", str(replay), "memory0.txt", str(steps)]
+    run = subprocess.run(command, cwd=folder, capture_output=True, text=True)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert float(re.search(r"largest input difference (\S+)", run.stdout).group(1)) <= 1e-9
+    return run.stdout
 
 
 @pytest.fixture(scope="module")
@@ -99,20 +114,9 @@ def test_the_exported_c_replays_the_flights_to_1e9_with_flat_memory(recorded, tm
     )
     for f in (out.source, out.header, out.memory0, out.replay, out.makefile, out.readme):
         assert f.is_file()
-    env = {**os.environ, "CC": os.environ.get("CC", "gcc")}
-    build = subprocess.run(["make"], cwd=out.folder, capture_output=True, text=True, env=env)
-    assert build.returncode == 0, build.stderr[-2000:]
-    run = subprocess.run(
-        ["./replay", str(path), "memory0.txt", "100000"],
-        cwd=out.folder,
-        capture_output=True,
-        text=True,
-    )
-    assert run.returncode == 0, run.stdout + run.stderr
-    worst = float(re.search(r"largest input difference (\S+)", run.stdout).group(1))
-    assert worst <= 1e-9
-    assert "0 solves failed that were recorded as solved" in run.stdout
-    grown = int(re.search(r"\(\+(-?\d+) kB\)", run.stdout).group(1))
+    printed = _built_and_replayed(out.folder, path, 100000)
+    assert "0 solves failed that were recorded as solved" in printed
+    grown = int(re.search(r"\(\+(-?\d+) kB\)", printed).group(1))
     assert grown <= 1024
 
 
@@ -188,13 +192,4 @@ def test_the_exported_mpc_replays_its_flights_to_1e9(tmp_path):
     out = export_controller(
         functions.step, functions.fallback, functions.initial_memory(), tmp_path / "c", name="mpc"
     )
-    build = subprocess.run(["make"], cwd=out.folder, capture_output=True, text=True)
-    assert build.returncode == 0, build.stderr[-2000:]
-    run = subprocess.run(
-        ["./replay", str(path), "memory0.txt", "10000"],
-        cwd=out.folder,
-        capture_output=True,
-        text=True,
-    )
-    assert run.returncode == 0, run.stdout + run.stderr
-    assert float(re.search(r"largest input difference (\S+)", run.stdout).group(1)) <= 1e-9
+    _built_and_replayed(out.folder, path, 10000)
