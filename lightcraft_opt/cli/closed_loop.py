@@ -90,10 +90,15 @@ def _fly(
     (flight.gif too when ``animate``)."""
     model = problem.model
     name = kind.value
-    if kind is not ControllerKind.NONE:
+    what = {
+        ControllerKind.MPC: "its linear prediction model and its compiled step: ~40 s",
+        ControllerKind.LQR: "its linear prediction model: ~20 s",
+        ControllerKind.DIRECTOR: "its compiled reduced map and step: a minute or two",
+    }
+    if kind in what:
         print(
-            f"building the {name} controller (its linear prediction model: ~20 s the first "
-            "time for a model, then read from the disk cache) ...",
+            f"building the {name} controller ({what[kind]} the first time for a model, then "
+            "read from the disk cache) ...",
             flush=True,
         )
     start = time.perf_counter()
