@@ -1,7 +1,9 @@
 """Benchmark: a controller's step, the Python it was, its Function interpreted and compiled.
 
-One closed-loop problem file (default ``problems/director_crosswind.toml``) flown ``--repeat``
-times in one process on the same compiled plant Φ by three builds of its director:
+One closed-loop problem file (default ``problems/director_crosswind.toml``; an MPC file such
+as ``problems/nutation_suppression.toml`` flies the nutation MPC likewise, its Python step
+tests/support/reference_mpc.py) flown ``--repeat`` times in one process on the same compiled
+plant Φ by three builds of its controller:
 
 * ``python``: the director as it stepped in Python before its step became one casadi Function
   (the reference the Function is tested against, tests/support/reference_director.py);
@@ -35,11 +37,15 @@ import numpy as np
 from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.director import DirectorController
+from lightcraft_opt.control.mpc import MpcController
+from lightcraft_opt.control.options import ControllerKind
+from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.files.closed_loop import load_closed_loop
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))  # the Python step, kept as the tests' reference
 from support.reference_director import ReferenceDirector  # noqa: E402
+from support.reference_mpc import ReferenceMpc  # noqa: E402
 
 
 class Timed:
@@ -77,12 +83,24 @@ def main() -> None:
     model = problem.model
     plant = pulse_map_for(model, plant_options(model))
     assert plant.inputs is not None
-    options = problem.director
-    builds: dict[str, Callable[[], object]] = {
-        "python": lambda: ReferenceDirector(model, plant.inputs, options),
-        "function": lambda: DirectorController(model, plant.inputs, options, compile_step=False),
-        "compiled": lambda: DirectorController(model, plant.inputs, options, compile_step=True),
-    }
+    builds: dict[str, Callable[[], object]]
+    if problem.controller is ControllerKind.MPC:
+        mpc = dataclasses.replace(problem.mpc, time_budget=None)
+        prediction = coning_model(model, pulse_map=plant, cache=True)
+        builds = {
+            "python": lambda: ReferenceMpc(model, mpc, prediction),
+            "function": lambda: MpcController(model, mpc, prediction=prediction, compiled=False),
+            "compiled": lambda: MpcController(model, mpc, prediction=prediction, compiled=True),
+        }
+    else:
+        options = problem.director
+        builds = {
+            "python": lambda: ReferenceDirector(model, plant.inputs, options),
+            "function": lambda: DirectorController(
+                model, plant.inputs, options, compile_step=False
+            ),
+            "compiled": lambda: DirectorController(model, plant.inputs, options, compile_step=True),
+        }
     timed: dict[str, Timed] = {}
     for name, build in builds.items():
         start = time.perf_counter()
