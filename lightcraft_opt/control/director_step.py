@@ -302,14 +302,17 @@ class _Builder:
         return u
 
     def jacobians(self, z: ca.MX, v: ca.MX, t: ca.MX, B_torque: ca.MX) -> tuple[ca.MX, ca.MX]:
-        """(A (ns, ns), B (ns, nv)): the QP's blocks of Ψ's Jacobians at (z, v), time t."""
+        """(A (ns, ns), B (ns, nv)): the QP's blocks of Ψ's Jacobians at Ψ's state z
+        (REDUCED_STATE, L frame) and the QP input v (DIRECTOR_INPUT: pointing in L, torque in
+        B), time t [s]; ``B_torque`` (nz, 2) H's response to the torque (L per B)."""
         _, _, A, B = self.k.stage(z, self.psi_input(v), self.k.p, t)
         return A[QP_STATE, QP_STATE], self.qp_columns(B, v, B_torque)
 
     # ------------------------------------------------------------- the two starts
     def cold(self, z0: ca.MX, t: ca.MX, B_torque: ca.MX) -> tuple[ca.MX, ...]:
-        """(Z (nz, N+1), V (nv, N), A (ns, ns N), B (ns, nv N)): the rollout of the beam on
-        the craft with the schedule's focus, and its Jacobians."""
+        """(Z (nz, N+1), V (nv, N), A (ns, ns N), B (ns, nv N)): from Ψ's state z0
+        (REDUCED_STATE, L frame) at time t [s], the rollout of the beam on the craft with the
+        schedule's focus, and its Jacobians."""
         k, N = self.k, self.k.horizon
         v0 = self.beam_on_craft(z0)
         Z, V, As, Bs = [z0], [], [], []
@@ -323,8 +326,9 @@ class _Builder:
         return ca.horzcat(*Z), ca.horzcat(*V), ca.horzcat(*As), ca.horzcat(*Bs)
 
     def warm(self, z0: ca.MX, memory: ca.MX) -> tuple[ca.MX, ca.MX, ca.MX, ca.MX, ca.MX]:
-        """(Z, V, A, B, disturbance): the plan shifted (z̄_0 the measurement), the Jacobians
-        shifted, the disturbance estimate taught by what the plan missed."""
+        """(Z, V, A, B, disturbance): the plan in ``memory`` shifted (z̄_0 the measured Ψ
+        state z0, REDUCED_STATE, L frame), the Jacobians shifted, the disturbance estimate
+        (L east, north) taught by what the plan missed."""
         N, nz, nv, ns, mem = self.k.horizon, self.nz, self.nv, self.ns, self.memory
         Zp = ca.reshape(mem.get("plan_z", memory), nz, N + 1)
         Vp = ca.reshape(mem.get("plan_v", memory), nv, N)
@@ -427,12 +431,11 @@ class _Builder:
         ubx = ca.vertcat(hi, ca.inf * ca.DM.ones(ns))
         dq = d[QP_STATE, :]
         posed = _finite(A, B, dq, g)
-        zero = 0.0
         w, cost, lam_x, lam_a = k.qp(
-            ca.if_else(posed, A, zero),
-            ca.if_else(posed, B, zero),
-            ca.if_else(posed, g, zero),
-            ca.if_else(posed, ca.vec(dq), zero),
+            ca.if_else(posed, A, 0.0),
+            ca.if_else(posed, B, 0.0),
+            ca.if_else(posed, g, 0.0),
+            ca.if_else(posed, ca.vec(dq), 0.0),
             lbx,
             ubx,
             w0,
@@ -455,7 +458,7 @@ class _Builder:
             )
         else:
             start_next = (ca.DM.zeros(self.n_w), ca.DM.zeros(self.n_w), ca.DM.zeros(self.n_a))
-        solved_memory = mem_pack(
+        solved_memory = _packed(
             mem,
             has_plan=1.0,
             age=0.0,
@@ -513,7 +516,7 @@ class _Builder:
         Zp = ca.reshape(mem.get("plan_z", memory), nz, N + 1)
         Vp = ca.reshape(mem.get("plan_v", memory), nv, N)
         v = ca.if_else(keep, Vp[:, 1], self.beam_on_craft(z0))
-        kept = mem_pack(
+        kept = _packed(
             mem,
             has_plan=keep,
             age=age,
@@ -534,7 +537,7 @@ class _Builder:
         return np.zeros(self.memory.size)
 
 
-def mem_pack(layout: VectorLayout, **slots: ca.MX | float) -> ca.MX:
+def _packed(layout: VectorLayout, **slots: ca.MX | float) -> ca.MX:
     """The memory vector from its slots (every slot, in the layout's order)."""
     parts = []
     for s in layout.slots:
