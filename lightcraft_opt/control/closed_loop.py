@@ -69,7 +69,7 @@ from lightcraft_opt.simulation.result import PulseRecord
 from lightcraft_opt.symbolic.maps.error_state import build_error_state
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
-from lightcraft_opt.symbolic.terms.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.invariants import invariants_map
 
 __all__ = ["closed_loop", "disperse", "measured", "noise_draw", "plant_options", "told_state"]
 
@@ -322,7 +322,7 @@ def closed_loop(
         model, np.asarray(flight.times), states, p, flight.status, flight.message, record
     )
     X_nodes = np.array([*nodes[:k_done], states[-1]])
-    _, _, tilt, coning, _ = build_invariants().map(len(X_nodes))(X_nodes.T, p)
+    _, _, tilt, coning, _ = invariants_map(len(X_nodes))(X_nodes.T, p)
     rcs = X_nodes[:, STATE.slot("rcs_mass").start]
     return ClosedLoopResult(
         flight=result,

@@ -35,7 +35,7 @@ from lightcraft_opt.ocp.result import OcpResult
 from lightcraft_opt.ocp.sensitivity import SHOWN
 from lightcraft_opt.simulation.flight_measures import flight_result
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
-from lightcraft_opt.symbolic.terms.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.invariants import invariants_map
 
 __all__ = [
     "constraint_margins",
@@ -124,7 +124,7 @@ def solution_table(result: OcpResult, problem: OcpProblem) -> dict[str, np.ndarr
     state at node k (with mass, tilt and coning as in trajectory.csv), then pulse k's
     inputs and engine outputs, NaN on the last node (no pulse fires there)."""
     n = len(result.t)
-    _, _, tilt, coning, mass = build_invariants().map(n)(result.x.T, problem.p)
+    _, _, tilt, coning, mass = invariants_map(n)(result.x.T, problem.p)
     nodes = np.column_stack(
         [
             result.t,
@@ -168,7 +168,7 @@ def _cell(value: float, *, integer: bool = False) -> str:
 
 def node_tilt(result: OcpResult, problem: OcpProblem) -> np.ndarray:
     """(N + 1,) angle of b1 from L up at the nodes [rad]."""
-    _, _, tilt, _, _ = build_invariants().map(len(result.t))(result.x.T, problem.p)
+    _, _, tilt, _, _ = invariants_map(len(result.t))(result.x.T, problem.p)
     return np.asarray(tilt).ravel()
 
 

@@ -7,7 +7,7 @@ import numpy as np
 
 from lightcraft_opt.model import Model
 from lightcraft_opt.simulation.result import PulseRecord, SimulationResult, SimulationStatus
-from lightcraft_opt.symbolic.terms.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.invariants import invariants_map
 
 __all__ = ["flight_result"]
 
@@ -22,7 +22,7 @@ def flight_result(
     pulses: PulseRecord | None = None,
 ) -> SimulationResult:
     """Result for states ``x`` (n, STATE.size) at times ``t`` (n,) [s] under parameters p."""
-    H, energy, tilt, coning, mass = build_invariants().map(len(t))(x.T, p)
+    H, energy, tilt, coning, mass = invariants_map(len(t))(x.T, p)
     return SimulationResult(
         model_name=model.name,
         t=t,

@@ -30,7 +30,7 @@ from lightcraft_opt.control.result import EstimationLog
 from lightcraft_opt.errors import LightcraftError, ParameterError
 from lightcraft_opt.layout import PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
 from lightcraft_opt.model.checks import checked_vector
-from lightcraft_opt.symbolic.terms.invariants import build_invariants
+from lightcraft_opt.symbolic.terms.invariants import invariants_map
 
 __all__ = ["OutputFeedback", "ReadingSource", "held_inputs"]
 
@@ -206,7 +206,7 @@ class OutputFeedback:
         told = np.reshape(self._told[:n], (n, STATE.size))
         angles = np.zeros((2, 2, n))
         if n:
-            f = build_invariants().map(n)
+            f = invariants_map(n)
             for i, X in enumerate((told, truth)):
                 _, _, tilt, coning, _ = f(X.T, p)
                 angles[i, 0] = np.asarray(tilt, dtype=float).ravel()

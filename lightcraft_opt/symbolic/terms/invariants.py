@@ -4,6 +4,8 @@ kinetic energy, tilt and coning (nutation) angle.
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
 
 from lightcraft_opt.layout import PARAMETERS, STATE
@@ -11,9 +13,10 @@ from lightcraft_opt.symbolic.terms.gyrostat import angular_momentum
 from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
 from lightcraft_opt.symbolic.terms.rotation import dcm
 
-__all__ = ["build_invariants"]
+__all__ = ["build_invariants", "invariants_map"]
 
 
+@functools.cache
 def build_invariants() -> ca.Function:
     """casadi.Function ``invariants(x, p) -> (H_L, kinetic_energy, tilt, coning, mass)``.
 
@@ -48,3 +51,11 @@ def build_invariants() -> ca.Function:
         ["x", "p"],
         ["H_L", "kinetic_energy", "tilt", "coning", "mass"],
     )
+
+
+@functools.lru_cache(maxsize=64)
+def invariants_map(n: int) -> ca.Function:
+    """:func:`build_invariants` over ``n`` states side by side (``x`` (STATE.size, n), ``p``
+    shared). Both are built once per process: a flight's measures were rebuilding the SX
+    graph and its map every call, 15-20 ms of a 10 s Flight 5 campaign run's 193 ms."""
+    return build_invariants().map(n)
