@@ -201,6 +201,7 @@ REQUIRED = {
     "montecarlo": ["p.toml"],
     "calibrate": ["m.toml", "--track", "t.csv", "--fit", "cm"],
     "spin-margin": ["m.toml"],
+    "export-controller": ["p.toml"],
 }
 FLAG_VALUES = ("nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "1.5", "text", "", "0x10")
 
