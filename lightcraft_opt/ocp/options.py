@@ -62,7 +62,8 @@ class OcpStart(Enum):
     ``HELD_DESIGN``: for a design problem, the same problem solved first with its design
     held at the model's values (from its own FLOWN start), then the design freed from that
     optimum (docs/design.md#how-a-design-is-solved); with scenarios, the nominal problem (no
-    scenarios) so held, and every scenario started from its optimum
+    scenarios) so held, re-solved in each scenario's launch state and air, and the robust
+    problem started from those optima and their multipliers
     (docs/design.md#robust-design). FLOWN when that solve fails, and for problems without
     a design.
     """

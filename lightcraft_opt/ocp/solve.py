@@ -31,15 +31,14 @@ from typing import Any, cast
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import (
-    pulse_map_for,
-)
+from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.envelope import EnvelopeGradient
+from lightcraft_opt.ocp.held_start import HeldDesignStarts
 from lightcraft_opt.ocp.nlp_solver import (
     CONVEX_PHASE_TOL,
     QP_SOLVERS,
@@ -60,7 +59,6 @@ from lightcraft_opt.ocp.problem import OcpProblem
 from lightcraft_opt.ocp.replay import PlanReplayer
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus, ScenarioOutcome
 from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting, check_scenario_options
-from lightcraft_opt.ocp.scenarios import ScenarioObjective
 from lightcraft_opt.ocp.sensitivity import Sensitivities
 from lightcraft_opt.ocp.start import (
     Start,
@@ -118,9 +116,7 @@ class CompiledOcp:
         (U, X, cost)``: the parametric solve in one Function (U (size, N) map inputs,
         X (STATE.size, N + 1) states, w0 a scaled initial guess, e.g. ``result.w``).
     build_time : wall time of the build [s].
-    scenario_starts : with scenarios, each one's cold start of the last cold solve
-        (ocp/start.py; with ``OcpStart.HELD_DESIGN`` the nominal optimum re-solved in that
-        scenario's launch state and air, docs/design.md#robust-design); () before one.
+    scenario_starts : each scenario's start in the last cold solve (ocp/held_start.py).
     """
 
     def __init__(
@@ -201,9 +197,7 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
-        self._held: CompiledOcp | None = None  # the problem with its design held
-        self._held_result: OcpResult | None = None  # its last optimum
-        self._scenario_optima: list[OcpResult | None] = []  # each scenario's, held
+        self._held: HeldDesignStarts | None = None  # the problem with its design held
         self.scenario_starts: tuple[Start, ...] = ()
         self._given_map = pulse_map
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
@@ -347,17 +341,16 @@ class CompiledOcp:
         else:
             cold = self._start(x0, p, t0, initial_guess)
             w0 = self._packed(cold, x0, p, t0, u_previous, initial_guess, P)
-        # a robust problem from its scenarios' held optima: their multipliers too (a
-        # re-solve's start); from the copied nominal optimum, as a flown start
         held = cold is not None and cold.kind is StartKind.HELD_DESIGN
-        duals = self._scenario_duals() if held else None
+        robust = tr if isinstance(tr, ScenarioShooting) else None
+        duals = self._held.duals(robust) if held and self._held and robust else None
         if duals is not None:
             lam_x0, lam_g0 = duals
         lbx, ubx = self._bounds
         # a start that flew is near-feasible: IPOPT starts it as it starts a warm start
-        # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet
-        flown = cold is not None and cold.flown
-        flown = flown or (held and isinstance(self.transcription, ScenarioShooting))
+        # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet (a
+        # robust problem from its scenarios' held optima: with them, as a re-solve)
+        flown = (cold is not None and cold.flown) or (held and robust is not None)
         solver = (
             self._resolver()
             if warm_start is not None or duals is not None
@@ -428,59 +421,19 @@ class CompiledOcp:
         tr = self.transcription
         if not isinstance(tr, ScenarioShooting):
             return tr.pack(cold.X, cold.U, u_previous)
-        energy = self.problem.inputs.index("energy")
         starts: list[Start] = []
-        self._scenario_optima = []
         for s, case in enumerate(tr.scenarios.cases):
             x0s, ps = tr.scenario_x0(x0, s), tr.scenario_p(p, s)
             own = np.array_equal(x0s, x0) and np.array_equal(ps, p)
-            if cold.kind is StartKind.HELD_DESIGN:  # from the nominal optimum, re-solved
-                start = self._scenario_start(cold, x0s, ps, t0, case.dropouts, own)
-            else:
-                start = cold if own else self._start(x0s, ps, t0, guess)
-                U = np.array(start.U, dtype=float)
-                # a drop-out fires nothing: its gap opens at that pulse alone (flying the
-                # inputs on open-loop from there would leave the beam)
-                U[list(case.dropouts), energy] = 0.0
-                start = dataclasses.replace(start, U=U)
+            if cold.kind is StartKind.HELD_DESIGN and self._held is not None:  # re-solved
+                start = self._held.scenario_start(cold, x0s, ps, t0, case.dropouts, own)
+            else:  # a drop-out fires nothing: its gap opens at that pulse alone (flying
+                # the inputs on open-loop from there would leave the beam)
+                flown = cold if own else self._start(x0s, ps, t0, guess)
+                start = scenario_start(flown, self.problem, x0s, dropouts=case.dropouts)
             starts.append(start)
         self.scenario_starts = tuple(starts)
         return tr.pack([s.X for s in starts], [s.U for s in starts], u_previous, None, P)
-
-    def _scenario_duals(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """(lam_x, lam_g) of the robust NLP from its scenarios' held optima (the last
-        :meth:`_packed`): scenario s's multipliers scaled by its weight (the expected
-        cost's λ_f = w_s), the design's, its physical rows' and the shared pulses' 0.
-        None for a worst-case cost (its λ_f are the unknown epigraph multipliers), where a
-        scenario has no optimum, or where the held NLP is not the scenario's own (its
-        variables, scales and rows those of the design problem less the design)."""
-        tr, held = self.transcription, self._held
-        optima = self._scenario_optima
-        if not isinstance(tr, ScenarioShooting) or held is None:
-            return None
-        if tr.scenarios.objective is not ScenarioObjective.EXPECTED:
-            return None
-        if len(optima) != tr.scenarios.size or any(o is None for o in optima):
-            return None
-        base, h = tr.base, held.transcription
-        assert isinstance(h, MultipleShooting)
-        ng, nh = base.lbg.size, h.lbg.size
-        same = (
-            h.n_w == tr.n_s
-            and nh <= ng
-            and np.array_equal(h.lbg, base.lbg[:nh])
-            and np.array_equal(h.ubg, base.ubg[:nh])
-            and np.array_equal(h.x_scale, base.x_scale)
-            and np.array_equal(h.u_scale, base.u_scale)
-        )
-        if not same:
-            return None
-        lam_x, lam_g = np.zeros(tr.n_w), np.zeros(tr.lbg.size)
-        for s, (optimum, weight) in enumerate(zip(optima, tr.scenarios.weights, strict=True)):
-            assert optimum is not None
-            lam_x[tr.stage_index[s]] = weight * optimum.lam_x
-            lam_g[s * ng : s * ng + nh] = weight * optimum.lam_g
-        return lam_x, lam_g
 
     def _violation(self, w: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, float]:
         """(n_g,) the constraints at ``w`` and the largest violation of any of them or of
@@ -617,56 +570,16 @@ class CompiledOcp:
         return Start(kind, X, U, time.perf_counter() - began)
 
     def _held_design_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
-        """The problem with its design held at its start values (the model's), solved from
-        its own flown start: the design problem's start (docs/design.md#how-a-design-is-solved).
-        With scenarios, the nominal problem (x0, p; no scenarios) so held, every scenario
-        then started from its optimum (:meth:`_packed`, docs/design.md#robust-design).
-        None when that solve does not succeed (a design may be what makes the problem
-        feasible)."""
-        began = time.perf_counter()
+        """The problem with its design held at the model's values (with scenarios, the
+        nominal case alone) solved from its flown start (ocp/held_start.py); None when
+        that solve does not succeed."""
         if self._held is None:
-            held_options = dataclasses.replace(
-                self.options,
-                sensitivities=False,
-                replay=False,
-                start=OcpStart.FLOWN,
-                warm_hessian=WarmHessian.EXACT,  # a scenario's re-solve moves x0 and p far
-            )
+            kw: dict[str, Any] = dict(sensitivities=False, replay=False, start=OcpStart.FLOWN)
+            held_options = dataclasses.replace(self.options, warm_hessian=WarmHessian.EXACT, **kw)
             held_problem = dataclasses.replace(self.problem, design=(), scenarios=None)
-            self._held = CompiledOcp(held_problem, held_options, pulse_map=self._given_map)
-        held = self._held.solve(x0=x0, p=p, t0=t0)
-        self._held_result = held if held.success else None
-        if not held.success:
-            return None
-        seconds = time.perf_counter() - began
-        return Start(StartKind.HELD_DESIGN, held.x, held.u, seconds, held.iterations)
-
-    def _scenario_start(
-        self,
-        held: Start,
-        x0: np.ndarray,
-        p: np.ndarray,
-        t0: float,
-        dropouts: tuple[int, ...],
-        own: bool,
-    ) -> Start:
-        """A scenario's start from the nominal optimum ``held`` (docs/design.md#robust-design):
-        the nominal problem re-solved in the scenario's launch state ``x0`` and parameters
-        ``p`` from the nominal optimum (primal and dual, as MPC's re-solves), its
-        drop-outs' energy then 0; the nominal optimum itself for the nominal case
-        (``own``) and where that re-solve fails (ocp/start.py's scenario_start). Each
-        scenario's optimum (None where it failed) is kept for :meth:`_scenario_duals`."""
-        nominal = self._held_result
-        optimum = nominal if own else None
-        if self._held is not None and nominal is not None and not own:
-            began = time.perf_counter()
-            again = self._held.solve(x0=x0, p=p, t0=t0, warm_start=nominal)
-            if again.success:
-                seconds = time.perf_counter() - began
-                held = Start(StartKind.HELD_DESIGN, again.x, again.u, seconds, again.iterations)
-                optimum = again
-        self._scenario_optima.append(optimum)
-        return scenario_start(held, self.problem, x0, dropouts=dropouts)
+            held = CompiledOcp(held_problem, held_options, pulse_map=self._given_map)
+            self._held = HeldDesignStarts(held, self.problem)
+        return self._held.nominal_start(x0, p, t0)
 
     def _flight_map(self) -> PulseMap:
         """Φ to fly a start with: the prediction map compiled where this CompiledOcp built
