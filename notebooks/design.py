@@ -25,7 +25,7 @@
 #
 # By default the notebook runs its quick size: the first 20 pulses of each problem and 4
 # campaign runs of 1 s, interpreted; `LIGHTCRAFT_FULL=1` in the environment solves the 130
-# pulses and flies 100 runs of 5 s.
+# pulses and flies 100 runs of 6 s (long enough to reach the design altitude, 50 m).
 
 # %%
 import dataclasses
@@ -46,7 +46,7 @@ from lightcraft_opt.ocp.solve import CompiledOcp
 ROOT = next(p for p in (Path.cwd(), *Path.cwd().parents) if (p / "pyproject.toml").is_file())
 QUICK = os.environ.get("LIGHTCRAFT_FULL") != "1"  # the quick size unless LIGHTCRAFT_FULL=1
 HORIZON = 20 if QUICK else None  # pulses: the files' 130 in the full size
-RUNS, DURATION = (4, 1.0) if QUICK else (100, 5.0)
+RUNS, DURATION = (4, 1.0) if QUICK else (100, 6.0)
 
 # %% [markdown]
 # ## The two problems
@@ -174,6 +174,85 @@ for name, model in (("baseline", campaign.model), ("design", model_designed)):
 fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
 for name, c in campaigns.items():
     ax.hist(c.table["apogee_m"], bins=20, alpha=0.6, label=name)
+ax.set_xlabel("highest altitude in the beam [m]")
+ax.set_ylabel("runs")
+ax.legend()
+
+# %% [markdown]
+# ## A robust design: one craft for many flights
+#
+# `problems/design_robust.toml` chooses the rotor's transverse moment and the launch spin for
+# 8 drawn cases of the flight at once (wind, launch offset and lean, coupling, missed pulses;
+# docs/design.md#robust-design), each case with its own plan, the first half second of pulses
+# one plan for all, the expected cost. Solved here from `start = "held_design"`: the nominal
+# problem solved with the craft as built, re-solved in each case's launch state and air, and
+# the robust problem started from those optima and their multipliers. The quick size solves
+# its first 3 cases over the notebook's pulses (the terminal altitude of 50 m, out of reach
+# in 20 pulses, dropped): 50 iterations from this start where the director's flight needs
+# 188 (docs/design.md#robust-design). `LIGHTCRAFT_FULL=1` solves the file as it is: there
+# the solve does not converge yet (docs/design.md), and its last iterate's design is shown.
+
+# %%
+from lightcraft_opt.ocp.options import OcpStart
+from lightcraft_opt.ocp.problem import TerminalAltitude
+from lightcraft_opt.ocp.scenarios import Scenarios
+
+robust_file = lc.load_problem(ROOT / "problems" / "design_robust.toml", horizon=HORIZON)
+if QUICK:
+    rp = robust_file.problem
+    assert rp.scenarios is not None
+    few = Scenarios(rp.scenarios.cases[:3], rp.scenarios.objective, rp.scenarios.shared_pulses)
+    kept = tuple(c for c in rp.constraints if not isinstance(c, TerminalAltitude))
+    rp = dataclasses.replace(rp, scenarios=few, constraints=kept)
+    robust_file = dataclasses.replace(robust_file, problem=rp)
+held = dataclasses.replace(robust_file.options, start=OcpStart.HELD_DESIGN)
+robust = CompiledOcp(robust_file.problem, held).solve()
+print(f"robust: {robust.status.value}, {robust.iterations} iterations, {robust.solve_time:.1f} s")
+for o in robust.scenarios:
+    print(f"  {o.name:8s}: cost {o.cost:.4f}, altitude {o.state('r_L')[-1, 2]:.2f} m")
+
+# %% [markdown]
+# The two designs against the craft as built, in the robust problem's two variables: the
+# nominal design chose them (with the mass, the axial moment and the beam) for the one
+# flight, the robust design for all its cases.
+
+# %%
+RPM = 30 / np.pi
+rp = robust_file.problem
+as_built = rp.design_layout.values_of(rp.p, np.asarray(rp.x0))  # the model's own values
+rows = {"as built": dict(zip(rp.design_layout.labels, as_built, strict=True))}
+rows |= {"nominal design": nominal.design, "robust design": robust.design}
+for name, d in rows.items():
+    print(
+        f"{name:15s}: transverse moment {1e7 * d['rotor_transverse_inertia_dry']:6.1f} g cm^2, "
+        f"launch spin {d['launch_spin'] * RPM:6.0f} RPM"
+    )
+
+# %% [markdown]
+# The robust craft (`designed_model` of the robust result: the craft as built with its
+# transverse moment and launch spin) in the same dispersed campaign, with the same draws as
+# the other two. The issue's target: at least 95 % of the runs in the beam up to the design
+# altitude, 50 m (a quick run of 1 s flies lower: there, the share that stayed in the beam).
+
+# %%
+model_robust = designed_model(robust_file, robust)
+runs = dataclasses.replace(campaign, model=model_robust)
+campaigns["robust"] = run_campaign(
+    runs, RUNS, 0, out / "robust", workers=1 if QUICK else None, progress=False
+)
+ALTITUDE = 50.0  # m, the design altitude
+for name, c in campaigns.items():
+    apogee = np.asarray(c.table["apogee_m"], dtype=float)
+    stayed = np.mean(np.asarray(c.table["status"]) != "left_beam")
+    print(
+        f"{name:8s}: in the beam to {ALTITUDE:.0f} m in {100 * np.mean(apogee >= ALTITUDE):5.1f} % "
+        f"of {RUNS} runs, stayed in the beam in {100 * stayed:5.1f} %; highest "
+        f"{apogee.mean():.2f} ± {apogee.std():.2f} m"
+    )
+fig, ax = plt.subplots(figsize=(7, 3.5), layout="constrained")
+for name, c in campaigns.items():
+    ax.hist(c.table["apogee_m"], bins=20, alpha=0.5, label=name)
+ax.axvline(ALTITUDE, color="k", lw=0.8)
 ax.set_xlabel("highest altitude in the beam [m]")
 ax.set_ylabel("runs")
 ax.legend()

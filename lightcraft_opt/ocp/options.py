@@ -59,10 +59,13 @@ class OcpStart(Enum):
     air where the problem's wind blows it out of the beam.
     ``ROLLOUT``: the nominal rollout in the problem's wind always (the beam under the
     craft, the flight's energy).
-    ``HELD_DESIGN``: for a design problem without scenarios, the same problem solved first
-    with its design held at the model's values (from its own FLOWN start), then the design
-    freed from that optimum (docs/design.md#how-a-design-is-solved); FLOWN when that solve
-    fails, and for other problems.
+    ``HELD_DESIGN``: for a design problem, the same problem solved first with its design
+    held at the model's values (from its own FLOWN start), then the design freed from that
+    optimum (docs/design.md#how-a-design-is-solved); with scenarios, the nominal problem (no
+    scenarios) so held, re-solved in each scenario's launch state and air, and the robust
+    problem started from those optima and their multipliers
+    (docs/design.md#robust-design). FLOWN when that solve fails, and for problems without
+    a design.
     """
 
     FLOWN = "flown"

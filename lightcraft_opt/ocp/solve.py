@@ -31,15 +31,14 @@ from typing import Any, cast
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import (
-    pulse_map_for,
-)
+from lightcraft_opt.compiled import pulse_map_for
 from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.envelope import EnvelopeGradient
+from lightcraft_opt.ocp.held_start import HeldDesignStarts
 from lightcraft_opt.ocp.nlp_solver import (
     CONVEX_PHASE_TOL,
     QP_SOLVERS,
@@ -69,6 +68,7 @@ from lightcraft_opt.ocp.start import (
     guessed_nodes,
     nominal_start,
     rollout,
+    scenario_start,
     wind_scaled,
 )
 from lightcraft_opt.ocp.time_limit import (
@@ -116,6 +116,7 @@ class CompiledOcp:
         (U, X, cost)``: the parametric solve in one Function (U (size, N) map inputs,
         X (STATE.size, N + 1) states, w0 a scaled initial guess, e.g. ``result.w``).
     build_time : wall time of the build [s].
+    scenario_starts : each scenario's start in the last cold solve (ocp/held_start.py).
     """
 
     def __init__(
@@ -196,7 +197,8 @@ class CompiledOcp:
         )
         self._bounds = (lbx, ubx)
         self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
-        self._held: CompiledOcp | None = None  # the problem with its design held
+        self._held: HeldDesignStarts | None = None  # the problem with its design held
+        self.scenario_starts: tuple[Start, ...] = ()
         self._given_map = pulse_map
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
@@ -339,13 +341,19 @@ class CompiledOcp:
         else:
             cold = self._start(x0, p, t0, initial_guess)
             w0 = self._packed(cold, x0, p, t0, u_previous, initial_guess, P)
+        held = cold is not None and cold.kind is StartKind.HELD_DESIGN
+        robust = tr if isinstance(tr, ScenarioShooting) else None
+        duals = self._held.duals(robust) if held and self._held and robust else None
+        if duals is not None:
+            lam_x0, lam_g0 = duals
         lbx, ubx = self._bounds
         # a start that flew is near-feasible: IPOPT starts it as it starts a warm start
-        # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet
-        flown = cold is not None and cold.flown
+        # (barrier 1e-6, bounds barely pushed: ocp/start.py), with no multipliers yet (a
+        # robust problem from its scenarios' held optima: with them, as a re-solve)
+        flown = (cold is not None and cold.flown) or (held and robust is not None)
         solver = (
             self._resolver()
-            if warm_start is not None
+            if warm_start is not None or duals is not None
             else self._warm_started()
             if flown
             else self.solver
@@ -413,19 +421,19 @@ class CompiledOcp:
         tr = self.transcription
         if not isinstance(tr, ScenarioShooting):
             return tr.pack(cold.X, cold.U, u_previous)
-        energy = self.problem.inputs.index("energy")
-        Xs, Us = [], []
+        starts: list[Start] = []
         for s, case in enumerate(tr.scenarios.cases):
             x0s, ps = tr.scenario_x0(x0, s), tr.scenario_p(p, s)
             own = np.array_equal(x0s, x0) and np.array_equal(ps, p)
-            start = cold if own else self._start(x0s, ps, t0, guess)
-            U = np.array(start.U, dtype=float)
-            # a drop-out fires nothing: its gap opens at that pulse alone (flying the inputs
-            # on open-loop from there would leave the beam)
-            U[list(case.dropouts), energy] = 0.0
-            Xs.append(start.X)
-            Us.append(U)
-        return tr.pack(Xs, Us, u_previous, None, P)
+            if cold.kind is StartKind.HELD_DESIGN and self._held is not None:  # re-solved
+                start = self._held.scenario_start(cold, x0s, ps, t0, case.dropouts, own)
+            else:  # a drop-out fires nothing: its gap opens at that pulse alone (flying
+                # the inputs on open-loop from there would leave the beam)
+                flown = cold if own else self._start(x0s, ps, t0, guess)
+                start = scenario_start(flown, self.problem, x0s, dropouts=case.dropouts)
+            starts.append(start)
+        self.scenario_starts = tuple(starts)
+        return tr.pack([s.X for s in starts], [s.U for s in starts], u_previous, None, P)
 
     def _violation(self, w: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, float]:
         """(n_g,) the constraints at ``w`` and the largest violation of any of them or of
@@ -548,10 +556,8 @@ class CompiledOcp:
         rollout in the problem's wind; with "held_design" the problem solved with its design
         held."""
         start = self.options.start
-        pr = self.problem  # held_design: a design without scenarios (each has its own start)
         held_kind = guess is None and start is OcpStart.HELD_DESIGN
-        design_held = held_kind and bool(pr.design) and pr.scenarios is None
-        if design_held and (held := self._held_design_start(x0, p, t0)) is not None:
+        if held_kind and self.problem.design and (held := self._held_design_start(x0, p, t0)):
             return held
         flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN)
         if guess is None and flown and director_applies(self.problem):
@@ -564,21 +570,16 @@ class CompiledOcp:
         return Start(kind, X, U, time.perf_counter() - began)
 
     def _held_design_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
-        """The problem with its design held at its start values (the model's), solved from
-        its own flown start: the design problem's start (docs/design.md#how-a-design-is-solved);
-        None when that solve does not succeed (a design may be what makes the problem
-        feasible)."""
-        began = time.perf_counter()
+        """The problem with its design held at the model's values (with scenarios, the
+        nominal case alone) solved from its flown start (ocp/held_start.py); None when
+        that solve does not succeed."""
         if self._held is None:
-            held_options = dataclasses.replace(
-                self.options, sensitivities=False, replay=False, start=OcpStart.FLOWN
-            )
-            held_problem = dataclasses.replace(self.problem, design=())
-            self._held = CompiledOcp(held_problem, held_options, pulse_map=self._given_map)
-        held = self._held.solve(x0=x0, p=p, t0=t0)
-        if not held.success:
-            return None
-        return Start(StartKind.HELD_DESIGN, held.x, held.u, time.perf_counter() - began)
+            kw: dict[str, Any] = dict(sensitivities=False, replay=False, start=OcpStart.FLOWN)
+            held_options = dataclasses.replace(self.options, warm_hessian=WarmHessian.EXACT, **kw)
+            held_problem = dataclasses.replace(self.problem, design=(), scenarios=None)
+            held = CompiledOcp(held_problem, held_options, pulse_map=self._given_map)
+            self._held = HeldDesignStarts(held, self.problem)
+        return self._held.nominal_start(x0, p, t0)
 
     def _flight_map(self) -> PulseMap:
         """Φ to fly a start with: the prediction map compiled where this CompiledOcp built

@@ -57,6 +57,7 @@ __all__ = [
     "guessed_nodes",
     "nominal_start",
     "rollout",
+    "scenario_start",
     "wind_scaled",
 ]
 
@@ -82,12 +83,14 @@ class Start:
     X : (N + 1, STATE.size) states at the nodes (docs/frames.md).
     U : (N, map-input size) inputs, one row per pulse.
     seconds : wall time to make it [s].
+    iterations : the solver's iterations that made it (HELD_DESIGN), else 0.
     """
 
     kind: StartKind
     X: np.ndarray
     U: np.ndarray
     seconds: float = 0.0
+    iterations: int = 0
 
     @property
     def flown(self) -> bool:
@@ -104,9 +107,10 @@ class Start:
         """One line: how it was made and how it flew (altitude, drift from the pad)."""
         r = self.X[:, STATE.index("r_L")]
         drift = float(np.max(np.hypot(r[:, 0], r[:, 1])))
+        made = f"{self.iterations} iterations, " if self.iterations else ""
         return (
             f"started from {_FLIGHT_NAMES[self.kind]}: highest {float(r[:, 2].max()):.1f} m, "
-            f"drift at most {100 * drift:.1f} cm ({self.seconds:.1f} s)"
+            f"drift at most {100 * drift:.1f} cm ({made}{self.seconds:.1f} s)"
         )
 
 
@@ -353,3 +357,24 @@ def guessed_nodes(
     if X is None or U is None:
         return rollout(problem, pulse_map, U, x0=x0, p=p, t0=t0)
     return X, U
+
+
+def scenario_start(
+    held: Start,
+    problem: OcpProblem,
+    x0: np.ndarray,
+    *,
+    dropouts: tuple[int, ...] = (),
+) -> Start:
+    """One scenario's start from ``held``, an optimum of the problem with its design held
+    (the nominal one, or the nominal re-solved in this scenario's launch state and air:
+    docs/design.md#robust-design): its nodes, node 0 the scenario's launch state ``x0``
+    (STATE.size,), and its inputs, the energy of the pulses in ``dropouts`` 0 (that
+    scenario's gap opens there alone; ``problem`` gives the input layout)."""
+    began = time.perf_counter()
+    U = np.array(held.U, dtype=float)
+    U[list(dropouts), problem.inputs.index("energy")] = 0.0
+    X = np.array(held.X, dtype=float)
+    X[0] = x0
+    seconds = held.seconds + time.perf_counter() - began
+    return Start(held.kind, X, U, seconds, held.iterations)
