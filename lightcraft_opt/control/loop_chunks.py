@@ -22,6 +22,7 @@ solve's fallback included).
 
 from __future__ import annotations
 
+import time
 from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
@@ -142,8 +143,6 @@ def fly_chunk(
     ``memory`` and ``on_pad`` over the pulse times ``t`` (m,) [s] with the told state's
     draws ``dx`` (m, ERROR_STATE.size) and the drop-outs ``drop`` (m,). Raises RuntimeError
     when a solve failed inside (the caller flies the chunk again pulse by pulse)."""
-    import time
-
     start = time.perf_counter()
     out = chunk(
         x,
