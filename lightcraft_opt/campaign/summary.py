@@ -139,13 +139,15 @@ def campaign_summary(
     fallbacks = col("fallbacks")
     iterations = col("iterations_total")
     pulses = col("pulses_commanded")
+    counted = (iterations >= 0) & (pulses >= 0)
     out["controller"] = {
         "fallbacks_total": int(np.sum(fallbacks)) if n else 0,
         "runs_with_fallback": int(np.sum(fallbacks > 0)),
         "fallbacks_per_run": _stats(fallbacks),
-        # NaN when a run's controller did not count them (iterations_total -1)
-        "iterations_per_pulse_mean": float(np.sum(iterations) / np.sum(pulses))
-        if n and np.sum(pulses) and np.all(iterations >= 0)
+        # over the runs that counted them (iterations_total -1: an errored run, or a
+        # controller that does not say, a compiled step); NaN without one
+        "iterations_per_pulse_mean": float(np.sum(iterations[counted]) / np.sum(pulses[counted]))
+        if np.any(counted) and np.sum(pulses[counted]) > 0
         else math.nan,
         "iterations_max": int(np.max(col("iterations_max"))) if n else 0,
     }

@@ -116,6 +116,18 @@ def test_summary_reads_the_table():
         )
 
 
+def test_iterations_per_pulse_are_averaged_over_the_runs_that_counted_them():
+    """An errored run (-1) and a run whose controller does not count its iterations (a
+    compiled step: -1) are left out of the mean, not summed in; none counted: NaN."""
+    t = _table(4, np.random.default_rng(2))
+    t["iterations_total"] = np.array([-1.0, 260.0, -1.0, 390.0])
+    t["pulses_commanded"] = np.array([-1.0, 130.0, 130.0, 130.0])
+    s = campaign_summary(t)
+    assert s["controller"]["iterations_per_pulse_mean"] == pytest.approx(650.0 / 260.0)
+    t["iterations_total"] = np.full(4, -1.0)
+    assert np.isnan(campaign_summary(t)["controller"]["iterations_per_pulse_mean"])
+
+
 def test_run_table_repairs_a_cut_line_and_sorts_when_finished(tmp_path):
     path = tmp_path / "runs.csv"
     table = RunTable(path, ("run", "x", "status"))
