@@ -93,7 +93,7 @@ def _fly(
     what = {
         ControllerKind.MPC: "its linear prediction model and its compiled step: ~40 s",
         ControllerKind.LQR: "its linear prediction model: ~20 s",
-        ControllerKind.DIRECTOR: "its compiled reduced map and step: a minute or two",
+        ControllerKind.DIRECTOR: "its compiled step: about a minute",
     }
     if kind in what:
         print(

@@ -244,7 +244,9 @@ class DirectorController:
         psi = build_reduced_map(self.model)
         self._psi_inputs = psi.inputs
         self.period = psi.period
-        d = reduced_derivatives_for(self.model, psi.options, compiled=compiled)
+        # Ψ's interpreted chains: what the step is generated from (compiled or exported);
+        # an interpreted step runs over compiled pieces instead (_step_functions)
+        d = reduced_derivatives_for(self.model, psi.options, compiled=False)
         self._stage = d.stage
         laser = self.model.laser
         self.laser = laser
@@ -312,7 +314,9 @@ class DirectorController:
         self._pieces = pieces
         want = compile_by_default() if compiled is None else bool(compiled)
         self._psi_options = psi.options
-        self.functions = self._step_functions(want if compile_step is None else compile_step)
+        self.functions = self._step_functions(
+            want if compile_step is None else compile_step, compile_pieces=want
+        )
         self.reset()
         self.build_time = time.perf_counter() - start
 
@@ -381,18 +385,24 @@ class DirectorController:
         self.last = StepStats(status, call_time, time.perf_counter() - start, -1, message)
         return u
 
-    def _step_functions(self, compile_step: bool) -> DirectorStep:
+    def _step_functions(self, compile_step: bool, *, compile_pieces: bool) -> DirectorStep:
         """The step Functions: compiled, the step and its fallback each one library generated
         over Ψ's interpreted pieces (:meth:`source_functions`), HPIPM linked from the casadi
-        wheel; else, or when that fails (a CompilationWarning says why), interpreted over the
-        pieces built for the controller."""
+        wheel; else, or when that fails (a CompilationWarning says why), interpreted, over Ψ's
+        pieces compiled when ``compile_pieces`` (only then are they compiled: a compiled step
+        holds its own)."""
+        if not (compile_step or compile_pieces):
+            return self.source_functions()
         if compile_step:
             source = self.source_functions()
             jobs = [(source.step, DERIVATIVE_FLAGS), (source.fallback, DERIVATIVE_FLAGS)]
             (step, fallback), libraries = compile_all(jobs, hpipm=True, what="the director's step")
             if len(libraries) == len(jobs):
                 return replace(source, step=step, fallback=fallback)
-        return build_director_step(self._pieces)
+            if not compile_pieces:
+                return source
+        d = reduced_derivatives_for(self.model, self._psi_options, compiled=True)
+        return build_director_step(replace(self._pieces, value=d.value, stage=d.stage))
 
     def chunkable(self) -> bool:
         """Whether the closed loop may take its steps a chunk at a time
@@ -409,16 +419,9 @@ class DirectorController:
     def source_functions(self) -> DirectorStep:
         """The step Functions over Ψ's interpreted pieces: what C is generated from
         (compiled here, exported by files/controller_export.py)."""
-        interpreted = reduced_derivatives_for(self.model, self._psi_options, compiled=False)
-        return build_director_step(
-            replace(self._pieces, value=interpreted.value, stage=interpreted.stage)
-        )
+        return build_director_step(self._pieces)
 
     # ----------------------------------------------------------------- helpers
-    def _vergence(self, altitude: float | np.ndarray) -> float | np.ndarray:
-        """κ_ref = 1 / the schedule's focus at ``altitude`` [m] (above the director): the
-        table built once (:meth:`_vergence_table`), interpolated."""
-        return np.interp(altitude, self._h_table, self._kappa_table)
 
     def _vergence_table(self, top: float = 400.0, step: float = 0.25) -> None:
         """The schedule's vergence every ``step`` m up to ``top`` m (linear.focus
