@@ -37,6 +37,7 @@ from collections.abc import Callable
 from dataclasses import replace
 
 import pytest
+from support.models import coarse_optic
 from support.paths import MODELS
 
 from lightcraft_opt.control.closed_loop import closed_loop
@@ -48,7 +49,7 @@ from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import STATE, RcsProfile, initial_state
 from lightcraft_opt.linear.operating_points import pulse_map_jacobian
-from lightcraft_opt.model import BeamSizeModel, Model
+from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
@@ -74,11 +75,6 @@ _MALLINFO2 = getattr(_LIBC, "mallinfo2", None)
 pytestmark = pytest.mark.skipif(_MALLINFO2 is None, reason="needs glibc 2.33+ (mallinfo2)")
 
 
-def _coarse(model: Model) -> Model:
-    engine = replace(model.craft.engine, quadrature_radial=2, quadrature_azimuthal=8)
-    return replace(model, craft=replace(model.craft, engine=engine))
-
-
 def _malloc_in_use() -> int:
     """Bytes malloc has handed out and not had back: heap chunks and mmapped ones."""
     assert _MALLINFO2 is not None
@@ -89,7 +85,7 @@ def _malloc_in_use() -> int:
 
 def _mpc_flight() -> tuple[Callable[[], ClosedLoopResult], MpcController | DirectorController]:
     """The nutation MPC on Flight 5 with RCS, from 3 degrees of coning on the pad."""
-    model = _coarse(load_model(MODELS / "flight5-rcs.toml"))
+    model = coarse_optic(load_model(MODELS / "flight5-rcs.toml"))
     options = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED, substeps=4, dense=2)
     phi = build_pulse_map(model, options)
     spin = model.craft.spin
@@ -104,7 +100,7 @@ def _mpc_flight() -> tuple[Callable[[], ClosedLoopResult], MpcController | Direc
 
 def _director_flight() -> tuple[Callable[[], ClosedLoopResult], MpcController | DirectorController]:
     """The director on Flight 5 under the waist beam, launched 3 cm off the pad axis."""
-    model = _coarse(load_model(MODELS / "flight5.toml"))
+    model = coarse_optic(load_model(MODELS / "flight5.toml"))
     model = replace(model, laser=replace(model.laser, size_model=BeamSizeModel.WAIST))
     phi = build_pulse_map(model, PulseMapOptions(substeps=4, dense=2))
     director = DirectorController(

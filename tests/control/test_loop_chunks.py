@@ -17,6 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from support.models import RCS_PHASE_LOCKED_MAP, coarse_optic
 from support.paths import MODELS
 
 from lightcraft_opt.control.closed_loop import closed_loop
@@ -33,19 +34,14 @@ from lightcraft_opt.control.prediction_model import coning_model
 from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import RcsProfile, initial_state
+from lightcraft_opt.layout import initial_state
 from lightcraft_opt.linear.operating_points import pulse_map_jacobian
-from lightcraft_opt.model import BeamSizeModel, Model
+from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 NOISE = MeasurementNoise(position=1e-3, velocity=5e-3, attitude=1e-3, rate=0.1, spin=1.0)
 SMALL_NOISE = MeasurementNoise(position=1e-3, velocity=5e-3)
-
-
-def _coarse(model: Model) -> Model:
-    engine = replace(model.craft.engine, quadrature_radial=2, quadrature_azimuthal=8)
-    return replace(model, craft=replace(model.craft, engine=engine))
 
 
 def _both(fly) -> tuple[ClosedLoopResult, ClosedLoopResult]:  # type: ignore[no-untyped-def]
@@ -64,7 +60,7 @@ def _assert_same(a: ClosedLoopResult, b: ClosedLoopResult) -> None:
 
 @pytest.fixture(scope="module")
 def director_loop():
-    model = _coarse(load_model(MODELS / "flight5.toml"))
+    model = coarse_optic(load_model(MODELS / "flight5.toml"))
     model = replace(model, laser=replace(model.laser, size_model=BeamSizeModel.WAIST))
     plant = build_pulse_map(model, PulseMapOptions(substeps=4, dense=2))
     options = DirectorOptions(horizon=4, quadrature=(2, 4), time_budget=None)
@@ -108,9 +104,8 @@ def test_a_flight_that_ends_inside_a_chunk_ends_at_the_same_pulse(director_loop)
 def test_the_mpc_flies_the_same_when_a_solve_fails_inside_a_chunk():
     """HPIPM capped at 11 iterations fails on some pulses of a 3-degree coning start: the
     chunk holding one raises and is flown pulse by pulse, the fallback flying there."""
-    model = _coarse(load_model(MODELS / "flight5-rcs.toml"))
-    options = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED, substeps=4, dense=2)
-    plant = build_pulse_map(model, options)
+    model = coarse_optic(load_model(MODELS / "flight5-rcs.toml"))
+    plant = build_pulse_map(model, RCS_PHASE_LOCKED_MAP)
     spin = model.craft.spin
     grid = dict(spins=[0.9 * spin, spin], altitudes=[0.0, 2.0, 10.0], speeds=[0.0, 5.0, 8.0])
     prediction = coning_model(model, pulse_map=pulse_map_jacobian(plant), **grid)

@@ -28,6 +28,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from support.jacobian_check import assert_jacobians_match_finite_differences
+from support.models import RCS_PHASE_LOCKED_MAP, coarse_optic
 from support.paths import MODELS, REPO_ROOT
 from support.reference_mpc import ReferenceMpc
 
@@ -42,29 +43,19 @@ from lightcraft_opt.control.result import ControllerStatus, StepStats
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import RcsProfile
 from lightcraft_opt.linear.operating_points import pulse_map_jacobian
-from lightcraft_opt.model import Model
-from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 
 PROBLEM = load_closed_loop(REPO_ROOT / "problems" / "nutation_suppression.toml")
 RAISE, NON_FINITE, LATE = ControllerFault.RAISE, ControllerFault.NON_FINITE, ControllerFault.LATE
 
 
-def _coarse(model: Model) -> Model:
-    engine = replace(model.craft.engine, quadrature_radial=2, quadrature_azimuthal=8)
-    return replace(model, craft=replace(model.craft, engine=engine))
-
-
-MODEL = _coarse(load_model(MODELS / "flight5-rcs.toml"))
+MODEL = coarse_optic(load_model(MODELS / "flight5-rcs.toml"))
 
 
 @pytest.fixture(scope="module")
 def plant() -> PulseMap:
-    return build_pulse_map(
-        MODEL, PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED, substeps=4, dense=2)
-    )
+    return build_pulse_map(MODEL, RCS_PHASE_LOCKED_MAP)
 
 
 @pytest.fixture(scope="module")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support.models import RCS_PHASE_LOCKED_MAP, coarse_optic
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
@@ -41,7 +42,7 @@ from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.controller_export import export_controller
 from lightcraft_opt.files.controller_replay import read_replay, write_replay_csv
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import STATE, RcsProfile, initial_state
+from lightcraft_opt.layout import STATE, initial_state
 from lightcraft_opt.linear.operating_points import pulse_map_jacobian
 from lightcraft_opt.model import BeamSizeModel
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -166,11 +167,8 @@ def test_the_exported_mpc_replays_its_flights_to_1e9(tmp_path):
     replayed by the C to 1e-9, then 10,000 more steps with flat memory (the director's test
     above takes 100,000)."""
     problem = load_closed_loop(REPO_ROOT / "problems" / "nutation_suppression.toml")
-    model = load_model(REPO_ROOT / "models" / "flight5-rcs.toml")
-    engine = replace(model.craft.engine, quadrature_radial=2, quadrature_azimuthal=8)
-    model = replace(model, craft=replace(model.craft, engine=engine))
-    options = PulseMapOptions(rcs_profile=RcsProfile.PHASE_LOCKED, substeps=4, dense=2)
-    plant = build_pulse_map(model, options)
+    model = coarse_optic(load_model(REPO_ROOT / "models" / "flight5-rcs.toml"))
+    plant = build_pulse_map(model, RCS_PHASE_LOCKED_MAP)
     spin = model.craft.spin
     grid = dict(spins=[0.9 * spin, spin], altitudes=[0.0, 2.0, 10.0], speeds=[0.0, 5.0, 8.0])
     prediction = coning_model(model, pulse_map=pulse_map_jacobian(plant), **grid)

@@ -66,6 +66,14 @@ def torque_free(model: Model, carrier: Carrier | None = None) -> Model:
 COARSE_OPTIC = Engine(quadrature_radial=2, quadrature_azimuthal=8)
 
 
+def coarse_optic(model: Model) -> Model:
+    """``model`` with its own engine at a 2 x 8 optic quadrature (the rest of the engine as
+    its file gives it): cheap closed loops of the controllers, whose tests compare two
+    flights of the same model."""
+    engine = replace(model.craft.engine, quadrature_radial=2, quadrature_azimuthal=8)
+    return replace(model, craft=replace(model.craft, engine=engine))
+
+
 def flight5_rcs_coarse() -> Model:
     """models/flight5-rcs.toml (Flight 5 with its four rim thrusters) with :data:`COARSE_OPTIC`."""
     model = load_model(MODELS / "flight5-rcs.toml")
