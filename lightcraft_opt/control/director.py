@@ -55,6 +55,7 @@ import numpy as np
 
 from lightcraft_opt.compiled import compile_by_default, reduced_derivatives_for
 from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
+from lightcraft_opt.control.buffered_calls import BufferedCalls
 from lightcraft_opt.control.controllers import Controller
 from lightcraft_opt.control.director_qp import DirectorQp
 from lightcraft_opt.control.director_step import (
@@ -312,6 +313,7 @@ class DirectorController:
             allocation_hessian=None if alloc is None else alloc.hessian,
         )
         self._pieces = pieces
+        self._calls = BufferedCalls()
         want = compile_by_default() if compiled is None else bool(compiled)
         self._psi_options = psi.options
         self.functions = self._step_functions(
@@ -353,19 +355,19 @@ class DirectorController:
         x = np.asarray(x, dtype=float)
         f = self.functions
         if fault in (ControllerFault.RAISE, ControllerFault.NON_FINITE):
-            u, memory, _ = f.fallback(x, t, self.memory)
+            u, memory, _ = self._calls(f.fallback, x, t, self.memory)
             status, message, call_time = ControllerStatus.FALLBACK_FAILED, f"injected {fault}", 0.0
         else:
             try:
-                u, memory, diag, u_late, memory_late = f.step(x, t, self.memory)
+                u, memory, diag, u_late, memory_late = self._calls(f.step, x, t, self.memory)
                 failed = None
             except RuntimeError as err:
                 failed = str(err).strip().splitlines()[-1] if str(err).strip() else "failed"
             call_time = time.perf_counter() - start
             if failed is not None:
-                u, memory, _ = f.fallback(x, t, self.memory)
+                u, memory, _ = self._calls(f.fallback, x, t, self.memory)
                 status, message = ControllerStatus.FALLBACK_FAILED, f"{opts.solver.value}: {failed}"
-            elif not DIRECTOR_DIAGNOSTICS.get("solved", np.asarray(diag).ravel()):
+            elif not DIRECTOR_DIAGNOSTICS.get("solved", diag):
                 status, message = ControllerStatus.FALLBACK_FAILED, "non-finite solution"
             elif fault is ControllerFault.LATE or (
                 opts.time_budget is not None
@@ -377,8 +379,7 @@ class DirectorController:
                 message = f"late: {call_time * 1e3:.3f} ms > budget"
             else:
                 status, message = ControllerStatus.SOLVED, f"{opts.solver.value}: solved"
-        self.memory = np.asarray(memory, dtype=float).ravel()
-        u = np.asarray(u, dtype=float).ravel()  # a new array: the caller may keep it
+        self.memory = memory  # the calls' outputs are copies: the caller may keep them
         if self.nutation is not None and self.options.rcs is DirectorRcs.NUTATION:
             u_rcs = self.nutation.step(x, t, fault=fault)
             u[PULSE_INPUT.size :] = np.asarray(u_rcs, dtype=float)[PULSE_INPUT.size :]

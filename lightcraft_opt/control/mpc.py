@@ -54,9 +54,7 @@ radius of the optic (inscribed 2P-gons, so they hold in L at any yaw).
 from __future__ import annotations
 
 import contextlib
-import io
 import math
-import sys
 import time
 from dataclasses import replace
 from typing import Any
@@ -66,6 +64,7 @@ import numpy as np
 
 from lightcraft_opt.compiled import compile_by_default
 from lightcraft_opt.compiled.cache import DEFAULT_FLAGS, compile_all
+from lightcraft_opt.control.buffered_calls import BufferedCalls
 from lightcraft_opt.control.controllers import ConingFrame, stage_weights
 from lightcraft_opt.control.mpc_qp import NutationQp, QpData, QpSolution, QpStatus
 from lightcraft_opt.control.mpc_step import MpcStepFunctions, build_mpc_step
@@ -267,7 +266,7 @@ class MpcController:
         want = compile_by_default() if compiled is None else compiled
         if want and opts.solver is not MpcSolver.IPOPT:
             self.functions = _compiled(self.functions)
-        self._callers: dict[int, _Buffered] = {}
+        self._calls = BufferedCalls()
         # the first call allocates the solver's memory (milliseconds; figures:
         # bench/README.md#mpcpy-the-nutation-mpcs-solve-time-against-ipopt-on-the-same-qp):
         # pay it here, not in flight
@@ -402,66 +401,13 @@ class MpcController:
     def solver_stats(self) -> dict[str, Any]:
         """casadi's stats of the latest call of the step Function: its first QP solver's
         (``iter_count``, ``return_status`` ...) when interpreted, none when compiled."""
-        caller = self._callers.get(id(self.functions.step))
-        return {} if caller is None else caller.stats()
+        return self._calls.stats(self.functions.step)
 
     def _call(
         self, function: ca.Function, x: np.ndarray, memory: np.ndarray, t: float = 0.0
     ) -> list[np.ndarray]:
-        """``function(x, t, memory)``'s outputs as flat arrays, through its buffers
-        (:class:`_Buffered`, one per Function)."""
-        caller = self._callers.get(id(function))
-        if caller is None or caller.function is not function:
-            caller = _Buffered(function)
-            self._callers[id(function)] = caller
-        return caller(x, t, memory)
-
-
-class _Buffered:
-    """A Function of (x, t, memory) called through casadi's buffers: its inputs copied
-    into arrays it owns, its outputs written into others (no conversion to and from DM,
-    a tenth of a millisecond a step). casadi prints the inputs of a solver that failed
-    inside a Function to stderr (kilobytes); that print is dropped with the error the call
-    raises, anything else the call prints passes through. A stand-in that is no casadi
-    Function (a test's) is called as it is."""
-
-    def __init__(self, function: ca.Function) -> None:
-        self.function = function
-        self._buffered = isinstance(function, ca.Function)
-        if self._buffered:
-            n_in, n_out = function.n_in(), function.n_out()
-            self._args = [np.zeros(function.nnz_in(i)) for i in range(n_in)]
-            self._res = [np.zeros(function.nnz_out(i)) for i in range(n_out)]
-            self._buffer, self._trigger = function.buffer()
-            for i, a in enumerate(self._args):
-                self._buffer.set_arg(i, a.data.cast("B"))
-            for i, r in enumerate(self._res):
-                self._buffer.set_res(i, r.data.cast("B"))
-
-    def __call__(self, x: np.ndarray, t: float, memory: np.ndarray) -> list[np.ndarray]:
-        printed = io.StringIO()
-        with contextlib.redirect_stderr(printed):
-            if self._buffered:
-                self._args[0][:] = x
-                self._args[1][0] = t
-                self._args[2][:] = memory
-                self._trigger()
-                if self._buffer.ret() != 0:
-                    raise RuntimeError(f"{self.function.name()}: evaluation failed")
-                out = [r.copy() for r in self._res]
-            else:
-                out = [np.asarray(v, dtype=float).ravel() for v in self.function(x, t, memory)]
-        if printed.getvalue():
-            sys.stderr.write(printed.getvalue())
-        return out
-
-    def stats(self) -> dict[str, Any]:
-        """The Function's stats of the latest call (the solver's, when it calls one
-        directly)."""
-        try:
-            return dict(self._buffer.stats() if self._buffered else self.function.stats())
-        except RuntimeError:  # a compiled Function keeps none
-            return {}
+        """``function(x, t, memory)``'s outputs as flat arrays, through its buffers."""
+        return self._calls(function, x, t, memory)
 
 
 def _compiled(functions: MpcStepFunctions) -> MpcStepFunctions:
