@@ -46,6 +46,7 @@ from lightcraft_opt.compiled.cache import (
     structure_key,
 )
 from lightcraft_opt.errors import ParameterError
+from lightcraft_opt.symbolic.maps import jump_derivatives
 from lightcraft_opt.symbolic.maps import pulse_map_derivatives as derivative_chain
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
@@ -73,7 +74,9 @@ __all__ = [
 #: Derivative pieces above this many SX instructions stay interpreted: gcc's time and memory
 #: grow faster than the code (the Hessian of one Yoshida substep, 553k instructions, is 13 MB
 #: of C that takes 3.3 GB and over a minute even at -O0). The OCP's Strang map (2 substeps,
-#: 4 x 16 optic; substep Hessian 241k) compiles whole.
+#: 4 x 16 optic; substep Hessian 241k) compiles whole, and so does the jump's Hessian at the
+#: model files' 8 x 32 optic, taken through the quadrature (symbolic/maps/jump_derivatives.py:
+#: 231k instructions under the waist beam, where casadi's AD of the whole jump gives 542k).
 DERIVATIVE_INSTRUCTION_LIMIT = 250_000
 
 #: The limit for the pieces of a chain also in designed entries of p (a design, ocp/design.py):
@@ -286,6 +289,6 @@ def derivatives_key(
         repr((numbers, pieces.substep_inputs, phi.options, phi.inputs, phi.period)),
         version,
         repr((DEFAULT_FLAGS, DERIVATIVE_FLAGS, max_instructions)),
-        source_digest(derivative_chain, _THIS_MODULE),
+        source_digest(derivative_chain, jump_derivatives, _THIS_MODULE),
         *designed,
     )

@@ -257,17 +257,20 @@ def test_a_stalled_infeasible_problem_ends_early_and_names_terminal_altitude(cap
 
 
 def test_without_the_rule_ipopt_says_it_itself_and_the_same_constraint_is_named(capped):
-    """10 pulses to 5 m with the rule off: IPOPT itself detects the infeasibility before
-    the rule could have (55 iterations < 2W - 1). Its iterate comes near the terminal
-    altitude by lifting x_0 off the pad (an open gap at node 0): terminal_altitude is named."""
-    path = capped_flight16(capped.source.with_name("low.toml"), energy_cap_J=20.0, minimum_m=5.0)
+    """10 pulses to 6 m with the rule off: IPOPT itself detects the infeasibility before
+    the rule could have (44 iterations < 2W - 1), and the message names terminal_altitude
+    and the open gaps. (At 5 m whether IPOPT's own detection fires depends on the last bits
+    of the derivatives: 55 iterations with the jump's derivatives by casadi's AD of the
+    whole jump, none in 600 with the same derivatives through the optic's quadrature, equal
+    to 1e-15; at 4, 6 and 7 m both routes detect it alike.)"""
+    path = capped_flight16(capped.source.with_name("low.toml"), energy_cap_J=20.0, minimum_m=6.0)
     pf = load_problem(path, horizon=10, max_iter=MAX_ITER)
     options = dataclasses.replace(pf.options, stall_iterations=None)
     result = CompiledOcp(pf.problem, options).solve(initial_guess=pf.initial_guess())
-    assert result.status is OcpStatus.INFEASIBLE and result.iterations < MAX_ITER
+    assert result.status is OcpStatus.INFEASIBLE and result.iterations < 2 * 30 - 1
     assert result.message.startswith("ipopt: Infeasible_Problem_Detected; infeasible: ")
-    assert "terminal_altitude (at least 5 m at node 10) cannot be met" in result.message
-    assert "(r_L[up] at node 0;" in result.message and not result.dynamics_closed
+    assert "terminal_altitude (at least 6 m at node 10) cannot be met" in result.message
+    assert "the dynamics gaps stay open" in result.message and not result.dynamics_closed
 
 
 def test_the_feasible_twin_with_the_same_options_is_solved_not_stopped(capped):

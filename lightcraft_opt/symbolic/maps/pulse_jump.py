@@ -30,7 +30,13 @@ from lightcraft_opt.symbolic.terms.rotation import dcm
 __all__ = ["pulse_jump"]
 
 
-def pulse_jump(x: ca.SX, pulse: ca.SX, p: ca.SX, model: Model) -> tuple[ca.SX, dict[str, ca.SX]]:
+def pulse_jump(
+    x: ca.SX,
+    pulse: ca.SX,
+    p: ca.SX,
+    model: Model,
+    energies: tuple[ca.SX, ca.SX] | None = None,
+) -> tuple[ca.SX, dict[str, ca.SX]]:
     """State just after a pulse, and the engine quantities of that pulse.
 
     Parameters
@@ -38,6 +44,8 @@ def pulse_jump(x: ca.SX, pulse: ca.SX, p: ca.SX, model: Model) -> tuple[ca.SX, d
     x : state just before the pulse (layout STATE).
     pulse : per-pulse input (layout PULSE_INPUT: pointing [m, L], focus [m], energy [J]).
     p : parameters.
+    energies : the engine's sector and reference energies given, not computed
+        (:func:`~lightcraft_opt.symbolic.terms.engine.engine_impulse`).
 
     Returns
     -------
@@ -45,7 +53,7 @@ def pulse_jump(x: ca.SX, pulse: ca.SX, p: ca.SX, model: Model) -> tuple[ca.SX, d
     engine : the engine model's outputs (energy_captured [J], impulse_B [N s, B],
         angular_impulse_B [N m s, B, about S*], offset_L [m], liner_loss [kg], health).
     """
-    eng = engine_impulse(x, pulse, p, model)
+    eng = engine_impulse(x, pulse, p, model, energies)
     mp = mass_properties(x, p)
     G_F, G_M = eng["impulse_B"], eng["angular_impulse_B"]
     dv_L = ca.mtimes(dcm(STATE.get("q_LB", x)), G_F) / mp.mass

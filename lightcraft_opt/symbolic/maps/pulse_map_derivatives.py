@@ -47,6 +47,7 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import ENGINE, PARAMETERS, PULSE_INPUT, STATE, RcsProfile
+from lightcraft_opt.symbolic.maps.jump_derivatives import structured_jump_derivatives
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, substep_inputs
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import PulseMapPieces
 
@@ -170,11 +171,17 @@ def build_derivative_pieces(
 ) -> DerivativePieces:
     """The derivative Functions of Φ's pieces (casadi's SX AD on each piece alone), those
     that take p also with respect to its entries ``design`` (sorted indices into
-    PARAMETERS); the Hessians only with ``hessians``."""
+    PARAMETERS); the Hessians only with ``hessians``. The jump of a model with the SECTOR
+    impulse model and no design is differentiated through its optic's quadrature point by
+    point (symbolic/maps/jump_derivatives.py): the same derivatives, a fraction of the
+    instructions."""
     design = check_design(design)
+    jump = None
+    if not design and pieces.model is not None:  # through the optic's quadrature
+        jump = structured_jump_derivatives(pieces.model, hessian=hessians)
     return DerivativePieces(
         *_piece_derivatives(pieces.normalise, (0,), hessians),
-        *_piece_derivatives(pieces.jump, (0, 1), hessians, design),
+        *(jump or _piece_derivatives(pieces.jump, (0, 1), hessians, design)),
         *_piece_derivatives(pieces.substep, (0, 1), hessians, design),
         *_piece_derivatives(pieces.coning_rate, (0,), hessians, design),
     )

@@ -66,6 +66,8 @@ class PulseMapPieces:
     substep_inputs : layout of the substep's w.
     n_thrusters : RCS thrusters of the craft (0: none).
     has_carrier : whether the craft has a despun carrier (a motor torque input).
+    model : the model the jump was built from, whose structure the jump's derivatives
+        use (symbolic/maps/jump_derivatives.py); None for pieces of another jump (Ψ's).
     """
 
     normalise: ca.Function
@@ -77,6 +79,7 @@ class PulseMapPieces:
     substep_inputs: VectorLayout
     n_thrusters: int
     has_carrier: bool
+    model: Model | None = None
 
 
 def build_pulse_map_pieces(model: Model, options: PulseMapOptions) -> PulseMapPieces:
@@ -126,7 +129,16 @@ def build_pulse_map_pieces(model: Model, options: PulseMapOptions) -> PulseMapPi
         "coning_rate", [x, p], [coning_rate_B(x, p)], ["x", "p"], ["omega"], _SX_OPTIONS
     )
     return PulseMapPieces(
-        normalise, jump, substep, coning_rate, options.substeps, h, wlay, n_thr, craft.has_carrier
+        normalise,
+        jump,
+        substep,
+        coning_rate,
+        options.substeps,
+        h,
+        wlay,
+        n_thr,
+        craft.has_carrier,
+        model,
     )
 
 

@@ -83,18 +83,30 @@ magnitudes k_L I_ax0 and k_M I_ax0 R_f.
 from __future__ import annotations
 
 import math
-from typing import TypeVar
+from dataclasses import dataclass
+from typing import Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
+from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE
 from lightcraft_opt.model import Engine, ImpulseModel, Model, Propellant
 from lightcraft_opt.symbolic.terms.beam import beam_side, fluence, logistic
 from lightcraft_opt.symbolic.terms.mass_properties import mass_properties
 from lightcraft_opt.symbolic.terms.rotation import cross, dcm
 
-__all__ = ["ENGINE_OUTPUT_NAMES", "PROJECTION_EPS", "build_engine", "engine_impulse", "health"]
+__all__ = [
+    "ENGINE_OUTPUT_NAMES",
+    "PROJECTION_EPS",
+    "OpticPose",
+    "build_engine",
+    "engine_impulse",
+    "health",
+    "optic_pose",
+    "optic_quadrature",
+    "point_fluence",
+]
 
 # Symbolic type of one call: all SX, all MX, or all DM (numeric evaluation).
 Expr = TypeVar("Expr", ca.SX, ca.MX, ca.DM)
@@ -136,6 +148,29 @@ def _quadrature(engine: Engine) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return nodes, weights, phi
 
 
+def optic_quadrature(engine: Engine, p: Expr) -> tuple[Expr, Expr, np.ndarray]:
+    """The optic's polar quadrature (module docstring): the radii r_j (n_r, 1) [m] and the
+    weights of r dr (n_r, 1) [m^2] (expressions of p's ``shadow_radius`` and
+    ``capture_radius``), and the sector azimuths phi_k (N,) [rad]; sector k's energy is
+    ``(2 pi / N) |b1 . z_L| sum_j w_j F(r_j, phi_k)``."""
+    nodes, weights, phi = _quadrature(engine)
+    r_in = PARAMETERS.get("shadow_radius", p)
+    r_out = PARAMETERS.get("capture_radius", p)
+    half = 0.5 * (r_out - r_in)
+    r = 0.5 * (r_out + r_in) + half * ca.DM(nodes)  # (n_r, 1) [m]
+    return r, half * ca.DM(weights) * r, phi
+
+
+def point_fluence(
+    xi: Expr, eta: Expr, z: Expr, focus: Expr, energy: Expr, p: Expr, model: Model
+) -> Expr:
+    """Fluence [J/m^2] at beam-plane coordinates (xi, eta) [m] from the beam axis and range
+    z [m], for a pulse of ``focus`` [m] and ``energy`` [J]: what each quadrature point
+    receives."""
+    a = beam_side(z, focus, p, model.laser)
+    return fluence(xi, eta, a, energy, p, model.laser)
+
+
 def _sector_energies(
     centre: tuple[Expr, Expr, Expr],
     b2_L: Expr,
@@ -155,21 +190,15 @@ def _sector_energies(
     projection : |b1 . z_L|, projected-area factor [-].
     pulse, p : per-pulse input (focus, energy) and parameters.
     """
-    nodes, weights, phi = _quadrature(model.craft.engine)
-    r_in = PARAMETERS.get("shadow_radius", p)
-    r_out = PARAMETERS.get("capture_radius", p)
-    half = 0.5 * (r_out - r_in)
-    r = 0.5 * (r_out + r_in) + half * ca.DM(nodes)  # (n_r, 1) [m]
-    w_r = half * ca.DM(weights) * r  # Gauss weights of r dr [m^2]
+    r, w_r, phi = optic_quadrature(model.craft.engine, p)
     cos_phi = ca.DM(np.cos(phi)).T  # (1, N)
     sin_phi = ca.DM(np.sin(phi)).T
     xi0, eta0, z0 = centre
     xi = xi0 + ca.mtimes(r, b2_L[0] * cos_phi + b3_L[0] * sin_phi)  # (n_r, N) [m]
     eta = eta0 + ca.mtimes(r, b2_L[1] * cos_phi + b3_L[1] * sin_phi)
     z = z0 + ca.mtimes(r, b2_L[2] * cos_phi + b3_L[2] * sin_phi)
-    focus = PULSE_INPUT.get("focus", pulse)
-    a = beam_side(z, focus, p, model.laser)
-    F = fluence(xi, eta, a, PULSE_INPUT.get("energy", pulse), p, model.laser)  # [J/m^2]
+    focus, energy = PULSE_INPUT.get("focus", pulse), PULSE_INPUT.get("energy", pulse)
+    F = point_fluence(xi, eta, z, focus, energy, p, model)  # [J/m^2]
     return (2 * math.pi / len(phi)) * projection * ca.mtimes(w_r.T, F)
 
 
@@ -186,7 +215,51 @@ def _reference_energy(pulse: Expr, p: Expr, model: Model) -> Expr:
     return ca.sum2(_sector_energies(centre, east, north, upright, ref_pulse, p, model))
 
 
-def engine_impulse(x: Expr, pulse: Expr, p: Expr, model: Model) -> dict[str, Expr]:
+@dataclass(frozen=True)
+class OpticPose:
+    """Where the optic sits in the beam at a pulse (expressions of x, pulse and p).
+
+    Attributes
+    ----------
+    R_LB : (3, 3) attitude, B to L.
+    arm_B : (3,) from the mass centre S* to the optic centre, B [m].
+    centre_L : (3,) optic centre, L [m].
+    offset_L : (2,) east/north offset of the optic centre from the beam axis, L [m].
+    projection : |b1 . z_L| regularised (PROJECTION_EPS) [-].
+    """
+
+    R_LB: Any
+    arm_B: Any
+    centre_L: Any
+    offset_L: Any
+    projection: Any
+
+    @property
+    def centre(self) -> tuple[Any, Any, Any]:
+        """(xi, eta, z): the optic centre's beam-plane coordinates and range [m]."""
+        return (self.offset_L[0], self.offset_L[1], self.centre_L[2])
+
+
+def optic_pose(x: Expr, pulse: Expr, p: Expr) -> OpticPose:
+    """The optic's pose at the pulse (:class:`OpticPose`); x (STATE.size,) reads r_L [m, L],
+    q_LB and the mass centre (liner mass), pulse (PULSE_INPUT.size,) its pointing_L [m,
+    L east/north]."""
+    R_LB = dcm(STATE.get("q_LB", x))
+    b1_B = ca.DM([1.0, 0.0, 0.0])
+    arm_B = PARAMETERS.get("ring_height", p) * b1_B - mass_properties(x, p).cm_B  # from S*
+    centre_L = STATE.get("r_L", x) + ca.mtimes(R_LB, arm_B)
+    offset_L = centre_L[0:2] - PULSE_INPUT.get("pointing_L", pulse)
+    projection = ca.sqrt(R_LB[2, 0] ** 2 + PROJECTION_EPS**2)
+    return OpticPose(R_LB, arm_B, centre_L, offset_L, projection)
+
+
+def engine_impulse(
+    x: Expr,
+    pulse: Expr,
+    p: Expr,
+    model: Model,
+    energies: tuple[Expr, Expr] | None = None,
+) -> dict[str, Expr]:
     """Captured energy and impulses of one pulse (module docstring).
 
     Parameters
@@ -197,6 +270,9 @@ def engine_impulse(x: Expr, pulse: Expr, p: Expr, model: Model) -> dict[str, Exp
     p : (PARAMETERS.size,) parameters (beam, engine and mass properties).
     model : structure: beam profile and size model, impulse model, quadrature,
         propellant.
+    energies : (E_k (1, N) [J], E_ref [J]): the sector energies and the reference energy
+        given instead of computed by the quadrature (SECTOR model only: how the jump's
+        structured derivatives, symbolic/maps/jump_derivatives.py, cut the graph).
 
     Returns
     -------
@@ -209,19 +285,21 @@ def engine_impulse(x: Expr, pulse: Expr, p: Expr, model: Model) -> dict[str, Exp
         ``health`` : thrust fraction of the engine [-] (1 with a Delrin liner left).
     """
     engine = model.craft.engine
-    R_LB = dcm(STATE.get("q_LB", x))
-    b1_L, b2_L, b3_L = R_LB[:, 0], R_LB[:, 1], R_LB[:, 2]
+    pose = optic_pose(x, pulse, p)
+    b2_L, b3_L = pose.R_LB[:, 1], pose.R_LB[:, 2]
     b1_B = ca.DM([1.0, 0.0, 0.0])
-    arm_B = PARAMETERS.get("ring_height", p) * b1_B - mass_properties(x, p).cm_B  # from S*
-    centre_L = STATE.get("r_L", x) + ca.mtimes(R_LB, arm_B)
-    offset_L = centre_L[0:2] - PULSE_INPUT.get("pointing_L", pulse)
-    projection = ca.sqrt(b1_L[2] ** 2 + PROJECTION_EPS**2)
+    arm_B, centre_L, offset_L = pose.arm_B, pose.centre_L, pose.offset_L
+    projection = pose.projection
 
-    E_k = _sector_energies(
-        (offset_L[0], offset_L[1], centre_L[2]), b2_L, b3_L, projection, pulse, p, model
-    )
+    if energies is None:
+        E_k = _sector_energies(pose.centre, b2_L, b3_L, projection, pulse, p, model)
+        E_ref = _reference_energy(pulse, p, model)
+    elif engine.impulse_model is ImpulseModel.SECTOR:
+        E_k, E_ref = energies
+    else:
+        raise ParameterError("energies", "given sector energies need the SECTOR impulse model")
     E_cap = ca.sum2(E_k)
-    coupling = PARAMETERS.get("impulse_per_pulse", p) / _reference_energy(pulse, p, model)
+    coupling = PARAMETERS.get("impulse_per_pulse", p) / E_ref
 
     g_air = health(STATE.get("engine_load", x), p)
     if model.craft.propellant is Propellant.AIR:

@@ -1,0 +1,274 @@
+"""The pulse jump's derivatives through the optic's quadrature, point by point.
+
+casadi's SX Hessian of the whole jump (pulse_map_derivatives.py) differentiates each of the
+optic's n_r x N quadrature points in every direction of v = (x, pulse): with the model
+files' 8 x 32 optic that is 542k instructions, over what gcc compiles in reasonable time,
+and 1.9 ms a call interpreted. Yet a point's fluence F depends on five numbers only,
+s = (xi, eta, z, focus, energy), and those are affine in the optic's pose
+
+    y = (xi0, eta0, z0, b2_L, b3_L, focus, energy, |b1 . z_L|)        (12 numbers)
+
+(engine.py :func:`~lightcraft_opt.symbolic.terms.engine.optic_pose`): s_jk = A_jk y with
+xi = xi0 + r_j (cos φ_k b2_L[0] + sin φ_k b3_L[0]) and likewise eta, z (A_jk's entries 1,
+r_j cos φ_k, r_j sin φ_k). So the jump is cut in three,
+
+    y(v),   E_k(y) = c |b1 . z_L| Σ_j w_j F(A_jk y)  (c = 2π/N),   E_ref(focus),
+    K(v, E, E_ref): the rest of the jump given the energies (engine_impulse's ``energies``),
+
+and differentiated by the chain rule, ρ the outputs' adjoint:
+
+    ∂out/∂v = K_v + K_E E_y Y + K_r E_ref' e_f
+    ∇²(ρᵀ out) = Gᵀ ∇²(ρᵀ K) G + Yᵀ Σ_k β_k ∇²E_k Y + ∇²(γᵀ y(v)) + β_r E_ref'' e_f e_fᵀ
+
+with Y = ∂y/∂v, G = [I; E_y Y; E_ref' e_fᵀ], β = K_Eᵀ ρ, β_r = K_rᵀ ρ, γ = E_yᵀ β (held
+fixed in ∇²(γᵀ y)), e_f the focus's column of v and, from each point's gradient g_jk and
+Hessian H_jk of F in s (casadi's AD of one point),
+
+    ∂S_k/∂y = Σ_j w_j A_jkᵀ g_jk,   ∇²S_k = Σ_j w_j A_jkᵀ H_jk A_jk    (S_k = Σ_j w_j F_jk)
+    E_k = c π S_k,  ∂E_k/∂y = c (π ∂S_k/∂y + S_k e_π),
+    ∇²E_k = c (π ∇²S_k + ∂S_k/∂y e_πᵀ + e_π ∂S_k/∂yᵀ)            (π = |b1 . z_L|)
+
+E_ref, the same quadrature for a centred upright craft, depends on v through the focus
+alone. Nothing is derived by hand but the cut: every derivative is casadi's AD of a piece.
+The Functions have the names, inputs and outputs of the plain pieces, and equal them to
+rounding (tests/symbolic/test_jump_derivatives.py); for 8 x 32 the Hessian is about a
+sixth of the size. The SECTOR impulse model only (the KERNEL model evaluates the quadrature
+twice, at the craft and on the axis) and no designed entries of p (those may move the
+quadrature's radii); otherwise :func:`structured_jump_derivatives` returns None.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from lightcraft_opt.layout import ENGINE, PARAMETERS, PULSE_INPUT, STATE
+from lightcraft_opt.model import ImpulseModel, Model
+from lightcraft_opt.symbolic.maps.pulse_jump import pulse_jump
+from lightcraft_opt.symbolic.terms.beam import beam_side, fluence
+from lightcraft_opt.symbolic.terms.engine import (
+    PROJECTION_EPS,
+    optic_pose,
+    optic_quadrature,
+    point_fluence,
+)
+
+__all__ = ["structured_jump_derivatives"]
+
+_SX_OPTIONS = {"cse": True}
+#: The pose y's entries: (xi0, eta0, z0) 0-2, b2_L 3-5, b3_L 6-8, focus 9, energy 10,
+#: the projection 11.
+_FOCUS, _ENERGY, _PROJECTION, _NY = 9, 10, 11, 12
+
+
+def _point_derivatives(model: Model) -> ca.Function:
+    """``optic_point(s, p) -> (F, g, H)``: the fluence [J/m^2] at s = (xi, eta, z, focus,
+    energy) and its gradient and Hessian in s."""
+    s = ca.SX.sym("s", 5)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    F = point_fluence(s[0], s[1], s[2], s[3], s[4], p, model)
+    H, g = ca.hessian(F, s)
+    return ca.Function("optic_point", [s, p], [F, g, H], ["s", "p"], ["F", "g", "H"], _SX_OPTIONS)
+
+
+def _pose_index(i: int, a: int) -> int:
+    """Index in y of the coefficient i of s's spatial entry a (i: 0 the centre, 1 b2_L,
+    2 b3_L; a: 0 xi, 1 eta, 2 z)."""
+    return 3 * i + a
+
+
+def _accumulate_point(
+    hess: list[list[ca.SX]],
+    grad: list[ca.SX],
+    coef: tuple[ca.SX, ca.SX, ca.SX],
+    alpha: ca.SX,
+    weight: ca.SX,
+    g: ca.SX,
+    H: ca.SX,
+) -> None:
+    """Add a point's alpha A_jkᵀ H A_jk to ``hess`` (the upper triangle, 12 x 12 nested
+    lists) and weight A_jkᵀ g to ``grad`` (12 entries): A_jk's spatial rows hold ``coef`` =
+    (1, r cos φ, r sin φ) at the columns :func:`_pose_index` (A_jkᵀ H A_jk's entry of
+    (i, a), (j, b) is coef_i coef_j H_ab), its focus and energy rows 1 at theirs."""
+    aH = alpha * H
+    for i in range(3):
+        for a in range(3):
+            grad[_pose_index(i, a)] += weight * coef[i] * g[a]
+    grad[_FOCUS] += weight * g[3]
+    grad[_ENERGY] += weight * g[4]
+    spatial = [(i, a) for i in range(3) for a in range(3)]
+    for m, (i, a) in enumerate(spatial):
+        row = _pose_index(i, a)
+        for j, b in spatial[m:]:
+            col = _pose_index(j, b)
+            lo, hi = min(row, col), max(row, col)
+            hess[lo][hi] += coef[i] * coef[j] * aH[a, b]
+        for extra, e in ((_FOCUS, 3), (_ENERGY, 4)):
+            hess[row][extra] += coef[i] * aH[a, e]
+    hess[_FOCUS][_FOCUS] += aH[3, 3]
+    hess[_FOCUS][_ENERGY] += aH[3, 4]
+    hess[_ENERGY][_ENERGY] += aH[4, 4]
+
+
+def _symmetric(upper: list[list[ca.SX]]) -> ca.SX:
+    """The symmetric matrix whose upper triangle ``upper`` holds."""
+    n = len(upper)
+    M = ca.SX.zeros(n, n)
+    for i in range(n):
+        for j in range(i, n):
+            M[i, j] = upper[i][j]
+            M[j, i] = upper[i][j]
+    return M
+
+
+def structured_jump_derivatives(
+    model: Model, *, hessian: bool = True
+) -> tuple[ca.Function, ca.Function | None] | None:
+    """``pulse_jump_jacobian(x, pulse, p) -> jac`` and (with ``hessian``)
+    ``pulse_jump_hessian(x, pulse, p, adjoint) -> (jac, hess)`` of the jump in v = (x,
+    pulse) (module docstring), as the plain pieces of pulse_map_derivatives.py; None for a
+    model whose impulse model is not SECTOR."""
+    engine = model.craft.engine
+    if engine.impulse_model is not ImpulseModel.SECTOR:
+        return None
+    x = ca.SX.sym("x", STATE.size)
+    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    v = ca.vertcat(x, pulse)
+    n_v = v.numel()
+    i_focus = STATE.size + PULSE_INPUT.slot("focus").start
+
+    # the pose y(v) and its Jacobian
+    pose = optic_pose(x, pulse, p)
+    focus, energy = PULSE_INPUT.get("focus", pulse), PULSE_INPUT.get("energy", pulse)
+    y_of_v = ca.vertcat(*pose.centre, pose.R_LB[:, 1], pose.R_LB[:, 2], focus, energy)
+    y_of_v = ca.vertcat(y_of_v, pose.projection)
+    Y = ca.jacobian(y_of_v, v)
+
+    # the quadrature, point by point, in y held as a symbol, cut at its three moments
+    y = ca.SX.sym("y", _NY)
+    r, w_r, phi = optic_quadrature(engine, p)
+    c = 2 * math.pi / len(phi)
+    point = _point_derivatives(model)
+    beta = ca.SX.sym("beta", 3)  # K_Mᵀ ρ, a symbol until the end
+    S, dS = [], []
+    upper = [[ca.SX(0) for _ in range(_NY)] for _ in range(_NY)]  # Σ_k β̃_k ∇²S_k
+    for angle in phi:
+        harmonics = (1.0, math.cos(angle), math.sin(angle))
+        beta_k = sum(h * beta[i] for i, h in enumerate(harmonics))
+        S_k, grad = ca.SX(0), [ca.SX(0) for _ in range(_NY)]
+        for j in range(r.shape[0]):
+            coef = (ca.SX(1), r[j] * harmonics[1], r[j] * harmonics[2])
+            s_jk = ca.vertcat(
+                *(sum(coef[i] * y[_pose_index(i, a)] for i in range(3)) for a in range(3)),
+                y[_FOCUS],
+                y[_ENERGY],
+            )
+            F, g, H = point(s_jk, p)
+            S_k += w_r[j] * F
+            _accumulate_point(upper, grad, coef, beta_k * w_r[j], w_r[j], g, H)
+        S.append(S_k)
+        dS.append(ca.vertcat(*grad))
+    harmonic = ca.DM(np.vstack([np.ones(len(phi)), np.cos(phi), np.sin(phi)]))  # (3, N)
+    S_row, dS_cols = ca.horzcat(*S), ca.horzcat(*dS)  # (1, N), (12, N)
+    projection = y[_PROJECTION]
+    M = c * projection * ca.mtimes(harmonic, S_row.T)  # (3,): E_cap, D_b2, D_b3 [J]
+    e_pi = ca.DM.zeros(_NY)
+    e_pi[_PROJECTION] = 1
+    M_y = c * (  # (3, 12)
+        projection * ca.mtimes(harmonic, dS_cols.T)
+        + ca.mtimes(ca.mtimes(harmonic, S_row.T), e_pi.T)
+    )
+    weighted_dS = ca.mtimes(dS_cols, ca.mtimes(harmonic.T, beta))  # Σ_k β̃_k ∂S_k/∂y
+    hess_M = c * (  # Σ_i β_i ∇²M_i
+        projection * _symmetric(upper)
+        + ca.mtimes(weighted_dS, e_pi.T)
+        + ca.mtimes(e_pi, weighted_dS.T)
+    )
+
+    # E_ref: a centred, upright craft at the pulse's focus and the reference energy; its
+    # points share the range h, so E_ref depends on the focus through the beam's size there
+    upright = math.sqrt(1 + PROJECTION_EPS**2)
+    size = ca.SX.sym("a")
+    e0 = PARAMETERS.get("reference_pulse_energy", p)
+    cos_phi, sin_phi = ca.DM(np.cos(phi)).T, ca.DM(np.sin(phi)).T
+    F_ref = fluence(ca.mtimes(r, cos_phi), ca.mtimes(r, sin_phi), size, e0, p, model.laser)
+    ref_of_size = c * upright * ca.sum2(ca.mtimes(w_r.T, F_ref))
+    ref_dd_size, ref_d_size = ca.hessian(ref_of_size, size)
+    f_sym = ca.SX.sym("focus")
+    size_of_focus = beam_side(PARAMETERS.get("ring_height", p), f_sym, p, model.laser)
+    size_dd, size_d = ca.hessian(size_of_focus, f_sym)
+    E_ref, dE_ref, ddE_ref = (
+        ca.substitute(
+            ca.substitute(q, size, size_of_focus),
+            f_sym,
+            focus,
+        )
+        for q in (
+            ref_of_size,
+            ref_d_size * size_d,
+            ref_dd_size * size_d**2 + ref_d_size * size_dd,
+        )
+    )
+
+    # K: the rest of the jump, given the moments. The SECTOR model reads the sector
+    # energies through E_cap = Σ E_k and the dipole Σ E_k (cos φ_k, sin φ_k) only, and
+    # E_k = (M_0 + 2 M_1 cos φ_k + 2 M_2 sin φ_k) / N has exactly these sums (N >= 3)
+    M_sym = ca.SX.sym("M", 3)
+    E_of_M = ca.mtimes(M_sym.T, harmonic * ca.DM([[1.0], [2.0], [2.0]])) / len(phi)
+    E_ref_sym = ca.SX.sym("E_ref")
+    x_plus, eng = pulse_jump(x, pulse, p, model, (E_of_M, E_ref_sym))
+    out = ca.vertcat(x_plus, *(ca.vec(eng[name]) for name in ENGINE.names))
+    K_v = ca.jacobian(out, v)
+    K_M = ca.jacobian(out, M_sym)
+    K_r = ca.jacobian(out, E_ref_sym)
+    e_f = ca.DM.zeros(1, n_v)
+    e_f[i_focus] = 1
+    M_v = ca.mtimes(M_y, Y)  # (3, n_v)
+    ref_v = dE_ref * e_f  # (1, n_v)
+    jac = K_v + ca.mtimes(K_M, M_v) + ca.mtimes(K_r, ref_v)
+
+    def substituted(expr: ca.SX) -> ca.SX:
+        """``expr`` at the point: M = M(y), E_ref = E_ref(focus), then y = y(v)."""
+        at_y = ca.substitute([expr], [M_sym, E_ref_sym], [M, E_ref])[0]
+        return ca.substitute(at_y, y, y_of_v)
+
+    jacobian = ca.Function(
+        "pulse_jump_jacobian",
+        [x, pulse, p],
+        [ca.densify(substituted(jac))],
+        ["x", "pulse", "p"],
+        ["jac"],
+        _SX_OPTIONS,
+    )
+    if not hessian:
+        return jacobian, None
+
+    rho = ca.SX.sym("adjoint", out.numel())
+    w = ca.vertcat(v, M_sym, E_ref_sym)
+    hess_K, _ = ca.hessian(ca.dot(rho, out), w)
+    G = ca.vertcat(ca.DM.eye(n_v), M_v, ref_v)
+    beta_of = ca.mtimes(K_M.T, rho)
+    beta_ref = ca.dot(K_r, rho)
+    gamma = ca.SX.sym("gamma", _NY)
+    hess_y, _ = ca.hessian(ca.dot(gamma, y_of_v), v)
+    gamma_of = ca.mtimes(M_y.T, beta)
+    hess = (
+        ca.mtimes(G.T, ca.mtimes(hess_K, G))
+        + ca.mtimes(Y.T, ca.mtimes(hess_M, Y))
+        + hess_y
+        + beta_ref * ddE_ref * ca.mtimes(e_f.T, e_f)
+    )
+    hess = ca.substitute(hess, gamma, gamma_of)
+    hess = ca.substitute(hess, beta, beta_of)
+    second = ca.Function(
+        "pulse_jump_hessian",
+        [x, pulse, p, rho],
+        [ca.densify(substituted(jac)), ca.densify(substituted(hess))],
+        ["x", "pulse", "p", "adjoint"],
+        ["jac", "hess"],
+        _SX_OPTIONS,
+    )
+    return jacobian, second
