@@ -52,8 +52,11 @@ def camera() -> ca.Function:
     return ca.Function("camera", [x, p, dt], [y], ["x", "p", "dt"], ["y"])
 
 
-def estimators(model: PsiEstimationModel, scale: float, names: list[str]) -> dict:
-    """The estimators named, each with the same prior (the EKF's defaults times ``scale``)."""
+def estimators(
+    model: PsiEstimationModel, scale: float, names: list[str], relinearize: int | None = None
+) -> dict:
+    """The estimators named, each with the same prior (the EKF's defaults times ``scale``);
+    the MHE relinearises ``relinearize`` stages a pulse (None: all, :class:`MheOptions`)."""
     ekf = EkfOptions()
     prior = tuple((n, scale * s) for n, s in ekf.prior)
     made: dict = {}
@@ -62,7 +65,9 @@ def estimators(model: PsiEstimationModel, scale: float, names: list[str]) -> dic
             options = EkfOptions(prior=prior, prior_default=scale * ekf.prior_default)
             made[name] = ExtendedKalmanFilter(model, options)
         elif name == "mhe":
-            options = MheOptions(prior_sigma=scale * ekf.prior_default, prior_sigmas=prior)
+            options = MheOptions(
+                prior_sigma=scale * ekf.prior_default, prior_sigmas=prior, relinearize=relinearize
+            )
             made[name] = MovingHorizonEstimator(model, options)
         else:
             raise SystemExit(f"unknown estimator {name!r}; known: ekf, mhe")
@@ -81,6 +86,12 @@ def main() -> None:
         default="follow",
         help="follow: each pulse points at the craft (a perfect tracker); pad: on the pad axis",
     )
+    parser.add_argument(
+        "--relinearize",
+        type=int,
+        default=None,
+        help="the MHE's MheOptions.relinearize (default: every stage each pulse)",
+    )
     args = parser.parse_args()
     model = estimation_model(lc.load_model(ROOT / "models" / "flight5.toml"))
     camera_R = (args.scale * 0.005) ** 2 * np.eye(3)
@@ -91,7 +102,9 @@ def main() -> None:
     u = nominal_inputs(model, psi.psi.inputs)
     L_q = np.linalg.cholesky(psi.process_noise(psi.start(x0), u, 0.0))
     sigma0 = args.scale * EkfOptions().prior_sigmas(psi.names)  # the prior both start from
-    for name, est in estimators(psi, args.scale, args.estimators.split(",")).items():
+    for name, est in estimators(
+        psi, args.scale, args.estimators.split(","), args.relinearize
+    ).items():
         times, nees, nis, errors = [], [], [], []
         blocks = {
             "r_L, v_L": [i for i, n in enumerate(psi.names) if n[:3] in ("r_L", "v_L")],
