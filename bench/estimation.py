@@ -31,6 +31,7 @@ from scipy.stats import chi2
 import lightcraft_opt as lc
 from lightcraft_opt.control.estimation import Reading
 from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter
+from lightcraft_opt.control.estimation.kalman import prior_sigmas
 from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
 from lightcraft_opt.control.estimation.mhe_options import MheOptions
 from lightcraft_opt.control.estimation.psi_model import (
@@ -58,7 +59,8 @@ def estimators(
     """The estimators named, each with the same prior (the EKF's defaults times ``scale``);
     the MHE relinearises ``relinearize`` stages a pulse (None: all, :class:`MheOptions`)."""
     ekf = EkfOptions()
-    prior = tuple((n, scale * s) for n, s in ekf.prior)
+    unmatched = prior_sigmas(ekf.prior, model.names, 1.0)[1]  # the MHE refuses those
+    prior = tuple((n, scale * s) for n, s in ekf.prior if n not in unmatched)
     made: dict = {}
     for name in names:
         if name == "ekf":

@@ -31,9 +31,10 @@ piece that also differentiates in the two wind entries of p; the coupling column
 from the energy column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
 through their product only, and the energy also counts the engine's load (pulse_jump.py),
 so ∂Ψ/∂C = (E / C) (∂Ψ/∂E − e_load / E_ref). This holds where nothing ablates (the air mode,
-or a liner with ``ablation`` 0); elsewhere the coupling is refused. The moments' columns are
-forward differences of Ψ's compiled values (relative step 1e-7), checked against central
-differences of the whole prediction (tests/control/estimation/test_psi_estimation_model.py).
+or a liner with ``ablation`` 0); elsewhere the coupling is refused. The moments' columns
+chain the pieces' Jacobians in the two moments' entries of p, the jump's included (it sees
+them; psi_chain.py), checked against central differences of the whole prediction
+(tests/control/estimation/test_psi_estimation_model.py).
 
 A sensor is a casadi Function ``h(x, p, dt) -> y`` on the FULL state x (STATE) and its noise
 covariance R; the model composes it with Ψ's ``lift`` and differentiates the composition
@@ -49,12 +50,18 @@ from dataclasses import dataclass, fields
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import compile_by_default, reduced_derivatives_for
+from lightcraft_opt.compiled import (
+    DERIVATIVE_INSTRUCTION_LIMIT,
+    compile_by_default,
+    reduced_derivatives_for,
+)
+from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
 from lightcraft_opt.control.estimation.psi_chain import (
     Evaluator,
+    parameter_jump,
+    parameter_substep,
     stage_packed,
-    stage_with_wind,
-    wind_substep,
+    stage_with_parameters,
 )
 from lightcraft_opt.control.options import DirectorOptions
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -80,7 +87,6 @@ _REFERENCE_ENERGY = PARAMETERS.slot("reference_pulse_energy").start
 _INERTIA = tuple(
     PARAMETERS.slot(n).start for n in ("rotor_transverse_inertia_dry", "rotor_axial_inertia_dry")
 )
-_INERTIA_STEP = 1e-7  # relative step of the inertia columns' forward differences
 _ENERGY = PULSE_INPUT.slot("energy").start
 _LOAD = REDUCED_STATE.slot("engine_load").start
 _NZ = REDUCED_STATE.size
@@ -218,14 +224,17 @@ class PsiEstimationModel:
         self.psi = psi = build_reduced_map(model)
         self.period = psi.period
         d = reduced_derivatives_for(model, psi.options, compiled=compiled)
-        self._stage = Evaluator(stage_packed(d.stage))
         self._nu = psi.inputs.size
-        if "wind" in self.slow:
+        # the entries of p the slow states move, each a column S_p of the parameter stage
+        entries = (_SPEED, _DIRECTION) * ("wind" in self.slow) + _INERTIA * ("inertia" in self.slow)
+        if entries:
             want = compile_by_default() if compiled is None else bool(compiled)
-            sub = wind_substep(model, psi.options.substeps, psi.options.dense, want)
-            self._wind_stage: Evaluator | None = Evaluator(stage_with_wind(psi, d.jump, sub))
+            shape = (model, psi.options.substeps, psi.options.dense, entries, want)
+            jump = parameter_jump(*shape) if "inertia" in self.slow else d.jump
+            stage = stage_with_parameters(psi, jump, parameter_substep(*shape))
+            self._stage = Evaluator(stage)
         else:
-            self._wind_stage = None
+            self._stage = Evaluator(stage_packed(d.stage))
         self._lift = Evaluator(psi.lift)
         self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
             n for s in self.slow for n in SLOW_STATES[s]
@@ -235,10 +244,9 @@ class PsiEstimationModel:
         self._wind = _NZ if "wind" in self.slow else None
         self._coupling = self.names.index("coupling") if "coupling" in self.slow else None
         self._inertia = self.names.index("inertia[transverse]") if "inertia" in self.slow else None
-        self._value = Evaluator(d.value) if "inertia" in self.slow else None
         self._Q = np.diag(np.square(self._sigmas()))
         self._transverse = float(model.craft.inertia_transverse)  # A [kg m²]
-        self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {}
+        noises, measures = [], []
         for name, (h, R) in sensors.items():
             R = np.atleast_2d(np.asarray(R, dtype=float))
             m = h.size1_out(0)
@@ -246,7 +254,19 @@ class PsiEstimationModel:
                 raise ParameterError(
                     f"sensors[{name!r}]", f"R must be ({m}, {m}) and positive definite"
                 )
-            self._sensors[name] = (Evaluator(self._measurement(name, h)), R)
+            noises.append(R)
+            measures.append(self._measurement(name, h))
+        if measures and (compile_by_default() if compiled is None else bool(compiled)):
+            # a camera's h carries its frame back over dt: thousands of instructions, some
+            # 45 µs a call interpreted, a few compiled (bench/README.md#estimation)
+            measures, _ = compile_all(
+                [(f, DERIVATIVE_FLAGS) for f in measures],
+                max_instructions=DERIVATIVE_INSTRUCTION_LIMIT,
+                what="the sensors' measurements",
+            )
+        self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {
+            name: (Evaluator(f), R) for name, f, R in zip(sensors, measures, noises, strict=True)
+        }
 
     # -- the slow states in p ---------------------------------------------------------------
 
@@ -339,9 +359,12 @@ class PsiEstimationModel:
         z = s[:_NZ]
         F = np.eye(self.n)
         nu = self._nu
-        if self._wind_stage is not None and self._wind is not None:
-            out = self._wind_stage(z, u, p, t)
-            S = out[:, 1 + _NZ + nu :]
+        col = 1 + _NZ + nu  # the first column of S_p in the parameter stage's output
+        out = self._stage(z, u, p, t)
+        z_next, A, B = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ : col]
+        F[:_NZ, :_NZ] = A
+        if self._wind is not None:
+            S = out[:, col : col + 2]
             speed = float(p[_SPEED])
             if speed > _CALM:
                 frm = float(p[_DIRECTION])
@@ -354,24 +377,16 @@ class PsiEstimationModel:
                 for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
                     q = p.copy()
                     q[_DIRECTION] = frm
-                    F[:_NZ, self._wind + j] = self._wind_stage(z, u, q, t)[:, -2]
-        else:
-            out = self._stage(z, u, p, t)
-        z_next, A, B = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ : 1 + _NZ + nu]
-        F[:_NZ, :_NZ] = A
+                    F[:_NZ, self._wind + j] = self._stage(z, u, q, t)[:, col]
+            col += 2
         if self._coupling is not None:
             C, energy = float(s[self._coupling]), float(u[_ENERGY])
             column = B[:, _ENERGY].copy()
             column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
             F[:_NZ, self._coupling] = column * energy / C
-        if self._inertia is not None and self._value is not None:
-            for j, i in enumerate(_INERTIA):  # forward differences of Ψ's values in p[i]
-                h = _INERTIA_STEP * self.p[i]
-                up = p.copy()
-                up[i] += h
-                F[:_NZ, self._inertia + j] = (
-                    (self._value(z, u, up, t)[:, 0] - z_next) / h * self.p[i]
-                )
+        if self._inertia is not None:  # p[i] = p_model[i] x the scale in s
+            for j, i in enumerate(_INERTIA):
+                F[:_NZ, self._inertia + j] = out[:, col + j] * self.p[i]
         s_next = s.copy()
         s_next[:_NZ] = z_next
         return s_next, F
