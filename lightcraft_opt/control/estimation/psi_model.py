@@ -364,15 +364,9 @@ class PsiEstimationModel:
         z_next, A, B = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ : col]
         F[:_NZ, :_NZ] = A
         if self._wind is not None:
-            S = out[:, col : col + 2]
-            speed = float(p[_SPEED])
-            if speed > _CALM:
-                frm = float(p[_DIRECTION])
-                along = np.array([-math.sin(frm), -math.cos(frm)])
-                across = np.array([-math.cos(frm), math.sin(frm)])
-                F[:_NZ, self._wind : self._wind + 2] = np.outer(S[:, 0], along) + np.outer(
-                    S[:, 1] / speed, across
-                )
+            chart = _wind_chart(p)
+            if chart is not None:
+                F[:_NZ, self._wind : self._wind + 2] = out[:, col : col + 2] @ chart
             else:  # calm: each column is ∂/∂speed with the wind blowing along its axis
                 for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
                     q = p.copy()
@@ -429,25 +423,21 @@ class PsiEstimationModel:
         s = np.asarray(s, dtype=float).ravel()
         p = self.parameters(s)
         out = f(s[:_NZ], p, dt)
-        y, H_z, H_p = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ :]
-        H = np.zeros((H_z.shape[0], self.n))
-        H[:, :_NZ] = H_z
-        if self._wind is not None and np.any(H_p[:, :2]):
-            speed, frm = float(p[_SPEED]), float(p[_DIRECTION])
-            if speed > _CALM:
-                along = np.array([-math.sin(frm), -math.cos(frm)])
-                across = np.array([-math.cos(frm), math.sin(frm)])
-                H[:, self._wind : self._wind + 2] = np.outer(H_p[:, 0], along) + np.outer(
-                    H_p[:, 1] / speed, across
-                )
-            else:
+        H_p = out[:, 1 + _NZ :]
+        H = np.zeros((out.shape[0], self.n))
+        H[:, :_NZ] = out[:, 1 : 1 + _NZ]
+        if self._wind is not None:
+            chart = _wind_chart(p)
+            if chart is not None:
+                H[:, self._wind : self._wind + 2] = H_p[:, :2] @ chart
+            elif np.any(H_p[:, :2]):  # calm: ∂/∂speed with the wind along each axis
                 for j, d in enumerate((-0.5 * math.pi, math.pi)):
                     q = p.copy()
                     q[_DIRECTION] = d
                     H[:, self._wind + j] = f(s[:_NZ], q, dt)[:, 1 + _NZ]
         if self._coupling is not None:
             H[:, self._coupling] = H_p[:, 2] * p[_REFERENCE_ENERGY]
-        return y.copy(), H
+        return out[:, 0].copy(), H
 
     def measurement_noise(self, sensor: str) -> np.ndarray:
         """R (m, m) of ``sensor``."""
@@ -456,3 +446,19 @@ class PsiEstimationModel:
                 "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
             )
         return self._sensors[sensor][1].copy()
+
+
+def _wind_chart(p: np.ndarray) -> np.ndarray | None:
+    """(2, 2) ∂(speed, direction from)/∂(east, north) of p's wind, the rows of a Jacobian
+    in (speed, direction) that make it one in the wind's east and north [m/s] (L); None in
+    calm air, where the direction is undefined."""
+    speed = float(p[_SPEED])
+    if speed <= _CALM:
+        return None
+    frm = float(p[_DIRECTION])
+    return np.array(
+        [
+            [-math.sin(frm), -math.cos(frm)],
+            [-math.cos(frm) / speed, math.sin(frm) / speed],
+        ]
+    )
