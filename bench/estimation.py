@@ -54,10 +54,11 @@ def camera() -> ca.Function:
 
 
 def estimators(
-    model: PsiEstimationModel, scale: float, names: list[str], relinearize: int | None = None
+    model: PsiEstimationModel, scale: float, names: list[str], relinearize: str = "default"
 ) -> dict:
     """The estimators named, each with the same prior (the EKF's defaults times ``scale``);
-    the MHE relinearises ``relinearize`` stages a pulse (None: all, :class:`MheOptions`)."""
+    the MHE relinearises ``relinearize`` stages a pulse ("all", a number, or "default":
+    :class:`MheOptions`')."""
     ekf = EkfOptions()
     unmatched = prior_sigmas(ekf.prior, model.names, 1.0)[1]  # the MHE refuses those
     prior = tuple((n, scale * s) for n, s in ekf.prior if n not in unmatched)
@@ -67,8 +68,11 @@ def estimators(
             options = EkfOptions(prior=prior, prior_default=scale * ekf.prior_default)
             made[name] = ExtendedKalmanFilter(model, options)
         elif name == "mhe":
+            stages = {"default": MheOptions().relinearize, "all": None}.get(relinearize)
             options = MheOptions(
-                prior_sigma=scale * ekf.prior_default, prior_sigmas=prior, relinearize=relinearize
+                prior_sigma=scale * ekf.prior_default,
+                prior_sigmas=prior,
+                relinearize=int(relinearize) if relinearize.isdigit() else stages,
             )
             made[name] = MovingHorizonEstimator(model, options)
         else:
@@ -90,9 +94,8 @@ def main() -> None:
     )
     parser.add_argument(
         "--relinearize",
-        type=int,
-        default=None,
-        help="the MHE's MheOptions.relinearize (default: every stage each pulse)",
+        default="default",
+        help="the MHE's stages evaluated afresh a pulse: a number, all, or default (MheOptions')",
     )
     args = parser.parse_args()
     model = estimation_model(lc.load_model(ROOT / "models" / "flight5.toml"))

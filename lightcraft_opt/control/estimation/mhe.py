@@ -306,7 +306,7 @@ class MovingHorizonEstimator:
     def _to_relinearize(self) -> list[int]:
         """The stages whose f, F are evaluated afresh this pulse: those without any, and
         of those moved to first order, the ``relinearize`` evaluated longest ago (the
-        newest first among equals); all of them by default."""
+        newest first among equals); all of them when ``relinearize`` is None."""
         stages = self._nodes[:-1]
         missing = [i for i, node in enumerate(stages) if node.linear is None]
         moved = [i for i, node in enumerate(stages) if node.linear is not None and node.age]
