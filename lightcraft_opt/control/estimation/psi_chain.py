@@ -1,11 +1,18 @@
-"""Ψ's chains for the estimator: its value and Jacobians in z, u and the entries of p the
-slow states move (the wind's speed and direction, the rotor's moments), called through
-casadi's buffers (psi_model.py).
+"""Ψ's chain for the estimator: its value and the Jacobians an estimator needs, called
+through casadi's buffers (psi_model.py).
 
-- :func:`parameter_substep`, :func:`parameter_jump`: Ψ's pieces differentiated also in
-  chosen entries of p, compiled once per structure;
-- :func:`stage_with_parameters`, :func:`stage_packed`: the chains over the pieces (as
-  symbolic/maps/reduced_map_derivatives.py), their outputs side by side;
+An estimator needs of Ψ (z⁺ = jump(z, pulse), then ``substeps`` coast substeps with the RCS
+levels w held) ∂z_next/∂z, the column of the pulse's energy (the coupling's column is
+exact from it, psi_model.py), and the columns of the entries of p the slow states move
+(the wind's speed and direction, the rotor's moments); not the pointing's, the focus's or
+the RCS levels' columns the director plans with. Its pieces differentiate in those alone
+(19 columns of the jump's Jacobian instead of 22, 18 of a substep's instead of 22, and one
+matrix product fewer a substep than Ψ's full chain, symbolic/maps/reduced_map_derivatives.py,
+with the slow states' columns added: 7 % off the EKF's step in the closed loop):
+
+- :func:`estimator_jump`, :func:`estimator_substep`: the pieces, SX with ``cse``,
+  compiled once per structure;
+- :func:`estimator_stage`: their chain, its outputs side by side;
 - :class:`Evaluator`: a one-output Function called through its buffers.
 """
 
@@ -26,25 +33,50 @@ from lightcraft_opt.symbolic.maps.reduced_map import (
     build_reduced_map,
 )
 
-__all__ = [
-    "Evaluator",
-    "parameter_jump",
-    "parameter_substep",
-    "stage_packed",
-    "stage_with_parameters",
-]
+__all__ = ["Evaluator", "estimator_jump", "estimator_stage", "estimator_substep"]
 
 _NZ = REDUCED_STATE.size
+_ENERGY = PULSE_INPUT.slot("energy").start
 
 
 @functools.lru_cache(maxsize=8)
-def parameter_substep(
+def estimator_jump(
     psi_model: Model, substeps: int, dense: int, entries: tuple[int, ...], compiled: bool
 ) -> ca.Function:
-    """Ψ's coast substep with its Jacobians in z, the held RCS levels w and the entries
-    ``entries`` of p (``reduced_substep_p_jacobian(z, w, p, t) -> (z_next, S_z, S_w, S_p)``,
-    S_p (14, len(entries))), compiled unless ``compiled`` is False (once per structure:
-    disk cache)."""
+    """Ψ's pulse jump with its Jacobians in z, the pulse's energy and the entries
+    ``entries`` of p (``reduced_jump_estimator(z, pulse, p) -> (z_plus, J_z, J_energy,
+    J_p)``, J_energy (14, 1), J_p (14, len(entries))), compiled unless ``compiled`` is
+    False (once per structure: disk cache)."""
+    psi = build_reduced_map(psi_model, ReducedMapOptions(substeps, dense))
+    z = ca.SX.sym("z", _NZ)
+    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    z_plus, _ = psi.jump(z, pulse, p)
+    chosen = ca.vertcat(*(p[i] for i in entries))
+    f = ca.Function(
+        "reduced_jump_estimator",
+        [z, pulse, p],
+        [
+            z_plus,
+            ca.jacobian(z_plus, z),
+            ca.jacobian(z_plus, pulse[_ENERGY]),
+            ca.jacobian(z_plus, chosen),
+        ],
+        ["z", "pulse", "p"],
+        ["z_plus", "J_z", "J_energy", "J_p"],
+        {"cse": True},
+    )
+    return _compiled(f, compiled, "Ψ's jump for the estimator")
+
+
+@functools.lru_cache(maxsize=8)
+def estimator_substep(
+    psi_model: Model, substeps: int, dense: int, entries: tuple[int, ...], compiled: bool
+) -> ca.Function:
+    """Ψ's coast substep with its Jacobians in z and the entries ``entries`` of p
+    (``reduced_substep_estimator(z, w, p, t) -> (z_next, S_z, S_p)``, S_p (14,
+    len(entries)); w, the RCS levels, held), compiled unless ``compiled`` is False (once
+    per structure: disk cache)."""
     psi = build_reduced_map(psi_model, ReducedMapOptions(substeps, dense))
     nw = psi.inputs.size - PULSE_INPUT.size
     z = ca.SX.sym("z", _NZ)
@@ -54,44 +86,14 @@ def parameter_substep(
     z_next = psi.substep(z, w, p, t)
     chosen = ca.vertcat(*(p[i] for i in entries))
     f = ca.Function(
-        "reduced_substep_p_jacobian",
+        "reduced_substep_estimator",
         [z, w, p, t],
-        [z_next, ca.jacobian(z_next, z), ca.jacobian(z_next, w), ca.jacobian(z_next, chosen)],
+        [z_next, ca.jacobian(z_next, z), ca.jacobian(z_next, chosen)],
         ["z", "w", "p", "t"],
-        ["z_next", "S_z", "S_w", "S_p"],
+        ["z_next", "S_z", "S_p"],
         {"cse": True},
     )
-    return _compiled(f, compiled, "Ψ's substep in p")
-
-
-@functools.lru_cache(maxsize=8)
-def parameter_jump(
-    psi_model: Model, substeps: int, dense: int, entries: tuple[int, ...], compiled: bool
-) -> ca.Function:
-    """Ψ's pulse jump with its Jacobians in z, the pulse and the entries ``entries`` of p
-    (``reduced_jump_p_jacobian(z, pulse, p) -> (z_plus, engine, J_z, J_pulse, J_p)``),
-    compiled unless ``compiled`` is False (once per structure: disk cache)."""
-    psi = build_reduced_map(psi_model, ReducedMapOptions(substeps, dense))
-    z = ca.SX.sym("z", _NZ)
-    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
-    p = ca.SX.sym("p", PARAMETERS.size)
-    z_plus, engine = psi.jump(z, pulse, p)
-    chosen = ca.vertcat(*(p[i] for i in entries))
-    f = ca.Function(
-        "reduced_jump_p_jacobian",
-        [z, pulse, p],
-        [
-            z_plus,
-            engine,
-            ca.jacobian(z_plus, z),
-            ca.jacobian(z_plus, pulse),
-            ca.jacobian(z_plus, chosen),
-        ],
-        ["z", "pulse", "p"],
-        ["z_plus", "engine", "J_z", "J_pulse", "J_p"],
-        {"cse": True},
-    )
-    return _compiled(f, compiled, "Ψ's jump in p")
+    return _compiled(f, compiled, "Ψ's substep for the estimator")
 
 
 def _compiled(f: ca.Function, compiled: bool, what: str) -> ca.Function:
@@ -103,44 +105,30 @@ def _compiled(f: ca.Function, compiled: bool, what: str) -> ca.Function:
     return done[0]
 
 
-def stage_with_parameters(psi: ReducedMap, jump: ca.Function, substep: ca.Function) -> ca.Function:
-    """``psi_p_stage(z, u, p, t) -> [z_next A B S_p]``: Ψ's value and Jacobians in z, u
-    and the entries of p that ``substep`` (:func:`parameter_substep`) differentiates in,
-    side by side, chained over the pieces (as reduced_map_derivatives.py). ``jump`` is
-    :func:`parameter_jump` in the same entries, or Ψ's ``reduced_jump_jacobian`` (four
-    outputs) where the jump does not see them (the wind)."""
+def estimator_stage(psi: ReducedMap, jump: ca.Function, substep: ca.Function) -> ca.Function:
+    """``psi_estimator_stage(z, u, p, t) -> [z_next A b_energy S_p]``: Ψ's value and its
+    Jacobians in z (A, 14 x 14), the pulse's energy (b_energy, 14 x 1) and the entries of
+    p the pieces (:func:`estimator_jump`, :func:`estimator_substep`) differentiate in
+    (S_p), side by side, chained over the pieces:
+
+        A = S_n ... S_1 J_z,  b_energy = S_n ... S_1 J_energy,
+        S_p = S_n ... S_1 J_p + Σ_i S_n ... S_{i+1} S_p,i
+    """
     n_pulse = PULSE_INPUT.size
     nw = psi.inputs.size - n_pulse
-    n_p = substep.size2_out(3)
     h = psi.period / psi.options.substeps
     zm, um = ca.MX.sym("z", _NZ), ca.MX.sym("u", n_pulse + nw)
     pm, tm = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
-    out = jump(zm, um[:n_pulse], pm)
-    z_i, A, B_pulse = out[0], out[2], out[3]
-    S_par = out[4] if len(out) == 5 else ca.MX.zeros(_NZ, n_p)
-    B_w = ca.MX.zeros(_NZ, nw)
+    z_i, A, b, S = jump(zm, um[:n_pulse], pm)
     for i in range(psi.options.substeps):
-        z_i, S_z, S_w, S_p = substep(z_i, um[n_pulse:], pm, tm + float(h * i))
-        A, B_pulse = ca.mtimes(S_z, A), ca.mtimes(S_z, B_pulse)
-        B_w = ca.mtimes(S_z, B_w) + S_w if nw else B_w
-        S_par = ca.mtimes(S_z, S_par) + S_p
+        z_i, S_z, S_p = substep(z_i, um[n_pulse:], pm, tm + float(h * i))
+        A, b, S = ca.mtimes(S_z, A), ca.mtimes(S_z, b), ca.mtimes(S_z, S) + S_p
     return ca.Function(
-        "psi_p_stage",
+        "psi_estimator_stage",
         [zm, um, pm, tm],
-        [ca.horzcat(z_i, A, B_pulse, B_w, S_par)],
+        [ca.horzcat(z_i, A, b, S)],
         ["z", "u", "p", "t"],
-        ["z_A_B_S"],
-    )
-
-
-def stage_packed(stage: ca.Function) -> ca.Function:
-    """``psi_stage(z, u, p, t) -> [z_next A B]``: Ψ's chain with its outputs side by side
-    (one conversion a call)."""
-    zm, um = ca.MX.sym("z", _NZ), ca.MX.sym("u", stage.size1_in(1))
-    pm, tm = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
-    z_next, _, A, B = stage(zm, um, pm, tm)
-    return ca.Function(
-        "psi_stage", [zm, um, pm, tm], [ca.horzcat(z_next, A, B)], ["z", "u", "p", "t"], ["z_A_B"]
+        ["z_A_b_S"],
     )
 
 

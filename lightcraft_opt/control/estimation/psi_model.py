@@ -24,11 +24,12 @@ its Jacobian is
 
     F = [[∂Ψ/∂z, ∂Ψ/∂p · ∂p/∂σ], [0, I]]
 
-from Ψ's explicit chain over compiled pieces (symbolic/maps/reduced_map_derivatives.py), the
-same map the director plans with (:func:`estimation_model` builds its model the director's
-way, with the optic quadrature of ``DirectorOptions``). The wind columns chain a substep
-piece that also differentiates in the two wind entries of p; the coupling column is exact
-from the energy column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
+from Ψ's explicit chain over compiled pieces (psi_chain.py: the chain of
+symbolic/maps/reduced_map_derivatives.py in the columns an estimator needs), the same map
+the director plans with (:func:`estimation_model` builds its model the director's
+way, with the optic quadrature of ``DirectorOptions``). The wind columns chain the pieces'
+Jacobians in the two wind entries of p; the coupling column is exact from the energy
+column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
 through their product only, and the energy also counts the engine's load (pulse_jump.py),
 so ∂Ψ/∂C = (E / C) (∂Ψ/∂E − e_load / E_ref). This holds where nothing ablates (the air mode,
 or a liner with ``ablation`` 0); elsewhere the coupling is refused. The moments' columns
@@ -50,18 +51,13 @@ from dataclasses import dataclass, fields
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import (
-    DERIVATIVE_INSTRUCTION_LIMIT,
-    compile_by_default,
-    reduced_derivatives_for,
-)
+from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT, compile_by_default
 from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
 from lightcraft_opt.control.estimation.psi_chain import (
     Evaluator,
-    parameter_jump,
-    parameter_substep,
-    stage_packed,
-    stage_with_parameters,
+    estimator_jump,
+    estimator_stage,
+    estimator_substep,
 )
 from lightcraft_opt.control.options import DirectorOptions
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -223,18 +219,13 @@ class PsiEstimationModel:
             )
         self.psi = psi = build_reduced_map(model)
         self.period = psi.period
-        d = reduced_derivatives_for(model, psi.options, compiled=compiled)
-        self._nu = psi.inputs.size
-        # the entries of p the slow states move, each a column S_p of the parameter stage
+        want = compile_by_default() if compiled is None else bool(compiled)
+        # the entries of p the slow states move, each a column S_p of the stage
         entries = (_SPEED, _DIRECTION) * ("wind" in self.slow) + _INERTIA * ("inertia" in self.slow)
-        if entries:
-            want = compile_by_default() if compiled is None else bool(compiled)
-            shape = (model, psi.options.substeps, psi.options.dense, entries, want)
-            jump = parameter_jump(*shape) if "inertia" in self.slow else d.jump
-            stage = stage_with_parameters(psi, jump, parameter_substep(*shape))
-            self._stage = Evaluator(stage)
-        else:
-            self._stage = Evaluator(stage_packed(d.stage))
+        shape = (model, psi.options.substeps, psi.options.dense, entries, want)
+        self._stage = Evaluator(
+            estimator_stage(psi, estimator_jump(*shape), estimator_substep(*shape))
+        )
         self._lift = Evaluator(psi.lift)
         self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
             n for s in self.slow for n in SLOW_STATES[s]
@@ -358,11 +349,10 @@ class PsiEstimationModel:
         p = self.parameters(s)
         z = s[:_NZ]
         F = np.eye(self.n)
-        nu = self._nu
-        col = 1 + _NZ + nu  # the first column of S_p in the parameter stage's output
+        col = 2 + _NZ  # the first column of S_p in the stage's output [z_next A b_energy S_p]
         out = self._stage(z, u, p, t)
-        z_next, A, B = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ : col]
-        F[:_NZ, :_NZ] = A
+        z_next = out[:, 0]
+        F[:_NZ, :_NZ] = out[:, 1 : 1 + _NZ]
         if self._wind is not None:
             chart = _wind_chart(p)
             if chart is not None:
@@ -375,7 +365,7 @@ class PsiEstimationModel:
             col += 2
         if self._coupling is not None:
             C, energy = float(s[self._coupling]), float(u[_ENERGY])
-            column = B[:, _ENERGY].copy()
+            column = out[:, 1 + _NZ].copy()
             column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
             F[:_NZ, self._coupling] = column * energy / C
         if self._inertia is not None:  # p[i] = p_model[i] x the scale in s
