@@ -50,7 +50,8 @@ class Timed:
     """Wall time [s] of each call of a callable, kept in ``self.times``."""
 
     def __init__(self, f: Callable[..., Any]) -> None:
-        self.f, self.times = f, []
+        self.f = f
+        self.times: list[float] = []
 
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
         clock = time.perf_counter()
@@ -86,8 +87,10 @@ def _estimator(problem: Any, model: Any, spec: str) -> tuple[Any, Any]:
     kind, _, relinearize = spec.partition(":")
     estimator_spec = dataclasses.replace(problem.estimator, kind=EstimatorKind(kind))
     sensors, estimator = build_tracker(estimator_spec, model, problem.sensors)
+    assert estimator is not None
     if relinearize:
-        estimator.options = dataclasses.replace(estimator.options, relinearize=int(relinearize))
+        options = dataclasses.replace(estimator.options, relinearize=int(relinearize))  # type: ignore[attr-defined]
+        estimator.options = options  # type: ignore[attr-defined]
     return sensors, estimator
 
 
@@ -98,7 +101,7 @@ def _split(estimator: Any) -> dict[str, Timed]:
     timers["lift"] = Timed(model.parts)
     model._stage, model.measure, model.parts = timers["Ψ's stage"], timers["h, H"], timers["lift"]
     timers["Joseph"] = Timed(ekf_module.joseph_update)
-    ekf_module.joseph_update = timers["Joseph"]  # type: ignore[attr-defined]
+    ekf_module.joseph_update = timers["Joseph"]
     return timers
 
 
@@ -142,10 +145,10 @@ def main() -> None:
         pulses = len(log.seconds)
         director_s = np.asarray(result.log.solve_time)[:pulses]
         seconds = {feeding_spec: both.seconds.pop(""), **both.seconds}
-        for spec, s in seconds.items():
-            s = np.asarray(s)
-            times[spec] += list(s)
-            totals[spec] += list(s + director_s[: s.size])
+        for spec, got in seconds.items():
+            step_s = np.asarray(got)
+            times[spec] += list(step_s)
+            totals[spec] += list(step_s + director_s[: step_s.size])
         for name, timer in timers.items():
             per_step = np.array(timer.times).sum() / max(pulses, 1)
             split.setdefault(name, []).append(per_step)

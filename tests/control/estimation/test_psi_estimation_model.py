@@ -204,3 +204,24 @@ def test_the_moments_columns_are_exact() -> None:
     big, small = error(1e-4), error(1e-5)
     assert small <= 1e-7 * np.abs(column).max()
     assert 50.0 <= big / small <= 200.0
+
+
+def test_the_estimator_chain_is_the_directors_in_its_columns(model: PsiEstimationModel) -> None:
+    """The estimator's chain (psi_chain.py: its pieces differentiate in z, the energy and
+    the wind's entries of p only) against Ψ's full chain (reduced_map_derivatives.py, the
+    director's): the same z_next, ∂z_next/∂z and energy column, to 1e-12 of each one's
+    largest entry (the same derivatives, summed in another order)."""
+    from lightcraft_opt.layout import PULSE_INPUT
+    from lightcraft_opt.symbolic.maps.reduced_map_derivatives import (
+        build_reduced_map_derivatives,
+    )
+
+    s = _state(model, (3.0, 0.5))
+    u = nominal_inputs(model.model, model.psi.inputs)
+    p, z = model.parameters(s), s[:14]
+    ours = model._stage(z, u, p, 0.1)
+    z_next, _, A, B = build_reduced_map_derivatives(model.psi).stage(z, u, p, 0.1)
+    energy = PULSE_INPUT.slot("energy").start
+    for got, want in ((ours[:, 0], z_next), (ours[:, 1:15], A), (ours[:, 15], B[:, energy])):
+        want = np.asarray(want).reshape(np.shape(got))
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
