@@ -19,8 +19,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.buffered import Evaluator
 from lightcraft_opt.control.estimation.estimate import Estimate
-from lightcraft_opt.control.estimation.kalman import joseph_update, prior_sigmas, symmetric
+from lightcraft_opt.control.estimation.kalman import (
+    joseph_function,
+    joseph_update,
+    prior_sigmas,
+    symmetric,
+)
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -140,6 +146,7 @@ class ExtendedKalmanFilter:
         self.dropped = 0
         self._nodes: list[_Node] = []
         self._k0 = 0
+        self._joseph: dict[int, Evaluator] = {}  # by the reading's size
         self.s = np.zeros(len(model.names))
         self.P = self._P0.copy()
 
@@ -166,8 +173,14 @@ class ExtendedKalmanFilter:
         y_hat, H = self.model.measure(reading.sensor, s, dt)
         R = self.model.measurement_noise(reading.sensor)
         nu = np.asarray(reading.y, dtype=float).ravel() - y_hat
-        s, P, S = joseph_update(s, P, nu, H, R)
-        return s, P, Innovation(reading, nu, S)
+        n, m = P.shape[0], nu.size
+        if m > n + 1:  # the Function packs S beside the mean
+            s, P, S = joseph_update(s, P, nu, H, R)
+            return s, P, Innovation(reading, nu, S)
+        if m not in self._joseph:
+            self._joseph[m] = Evaluator(joseph_function(n, m))
+        out = self._joseph[m](s, P, nu, H, R)
+        return out[:n, 0], out[:n, 1:], Innovation(reading, nu, out[n:, :m])
 
     def _filtered(self, node: _Node, record: set[int]) -> tuple[np.ndarray, np.ndarray]:
         """The node's posterior: its prior updated with its readings in order, from the

@@ -13,7 +13,6 @@ with the slow states' columns added: 7 % off the EKF's step in the closed loop):
 - :func:`estimator_jump`, :func:`estimator_substep`: the pieces, SX with ``cse``,
   compiled once per structure;
 - :func:`estimator_stage`: their chain, its outputs side by side;
-- :class:`Evaluator`: a one-output Function called through its buffers.
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ from __future__ import annotations
 import functools
 
 import casadi as ca
-import numpy as np
 
 from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT
 from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
@@ -33,7 +31,7 @@ from lightcraft_opt.symbolic.maps.reduced_map import (
     build_reduced_map,
 )
 
-__all__ = ["Evaluator", "estimator_jump", "estimator_stage", "estimator_substep"]
+__all__ = ["estimator_jump", "estimator_stage", "estimator_substep"]
 
 _NZ = REDUCED_STATE.size
 _ENERGY = PULSE_INPUT.slot("energy").start
@@ -130,33 +128,3 @@ def estimator_stage(psi: ReducedMap, jump: ca.Function, substep: ca.Function) ->
         ["z", "u", "p", "t"],
         ["z_A_b_S"],
     )
-
-
-class Evaluator:
-    """The first output of a casadi Function, called through its buffers
-    (``Function.buffer``): the inputs copied into arrays it owns, the output (densified)
-    read in place; the other outputs are not computed. A call costs well under a
-    microsecond beyond the Function's own work, against some 20 µs for a call from Python
-    with its conversions (what keeps the EKF's step inside its 0.3 ms)."""
-
-    def __init__(self, f: ca.Function) -> None:
-        rows, cols = f.size_out(0)
-        ins = [ca.MX.sym(f.name_in(i), f.size_in(i)) for i in range(f.n_in())]
-        first = f.call(ins)[0]
-        self.function = ca.Function(
-            f.name(), ins, [ca.densify(first)], f.name_in(), [f.name_out(0)]
-        )
-        self._buffer, self._trigger = self.function.buffer()
-        self._args = [np.zeros(f.numel_in(i)) for i in range(f.n_in())]
-        for i, a in enumerate(self._args):
-            self._buffer.set_arg(i, a.data)
-        self._out = np.zeros(rows * cols)
-        self._buffer.set_res(0, self._out.data)
-        self._shape = (cols, rows)
-
-    def __call__(self, *args: np.ndarray | float) -> np.ndarray:
-        """The output (rows, cols), a fresh array."""
-        for a, v in zip(self._args, args, strict=True):
-            a[...] = np.ravel(v)
-        self._trigger()
-        return self._out.reshape(self._shape).T.copy()

@@ -53,8 +53,8 @@ import numpy as np
 
 from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT, compile_by_default
 from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
+from lightcraft_opt.control.estimation.buffered import Evaluator
 from lightcraft_opt.control.estimation.psi_chain import (
-    Evaluator,
     estimator_jump,
     estimator_stage,
     estimator_substep,

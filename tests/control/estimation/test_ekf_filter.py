@@ -221,11 +221,13 @@ def test_the_history_equals_filtering_every_reading_from_the_start() -> None:
     gyro at each node, a camera frame taken 0.3 T before its node arriving one pulse late
     (two pulses for every fourth, so a late frame refilters two nodes), frames lost: the
     EKF's estimate at every step equals a filter run again from the first node over every
-    reading that has arrived, each at its node in the order it arrived (to 1e-12 relative;
-    the history only saves that filter's repeated work: the posteriors it keeps)."""
+    reading that has arrived, each at its node in the order it arrived, with the same
+    update (kalman.joseph_function), to 1e-12 relative: the history only saves that
+    filter's repeated work (the posteriors it keeps)."""
     from test_psi_estimation_model import gyro
 
-    from lightcraft_opt.control.estimation.kalman import joseph_update, symmetric
+    from lightcraft_opt.control.estimation.buffered import Evaluator
+    from lightcraft_opt.control.estimation.kalman import joseph_function, symmetric
 
     sensors = {"camera": (camera(), 0.005**2 * np.eye(3)), "gyro": (gyro(), 0.01**2 * np.eye(2))}
     model = PsiEstimationModel(
@@ -261,11 +263,33 @@ def test_the_history_equals_filtering_every_reading_from_the_start() -> None:
             for node, r in arrived:
                 if node == j:
                     y_hat, H = model.measure(r.sensor, s, j * T - r.t)
-                    R = model.measurement_noise(r.sensor)
-                    s, P, _ = joseph_update(s, P, r.y - y_hat, H, R)
+                    R, m = model.measurement_noise(r.sensor), len(y_hat)
+                    out = Evaluator(joseph_function(model.n, m))(s, P, r.y - y_hat, H, R)
+                    s, P = out[: model.n, 0], out[: model.n, 1:]
             if j < k:  # Q at the posterior, as the filter's
                 Q = model.process_noise(s, u, j * T)
                 s, F = model.predict(s, u, j * T)
                 P = symmetric(F @ P @ F.T + Q)
         np.testing.assert_allclose(ekf.s, s, rtol=1e-12, atol=1e-15)
         np.testing.assert_allclose(est.covariance, P, rtol=1e-12, atol=1e-12 * np.abs(P).max())
+
+
+@pytest.mark.parametrize("m", [1, 3, 20])
+def test_the_joseph_function_is_the_numpy_update(m: int) -> None:
+    """kalman.joseph_function (the EKF's, one casadi call) against joseph_update (numpy) on
+    a random positive definite P of 19 entries: the same mean, covariance and S to 1e-12
+    of each one's largest entry (the same algebra summed in another order)."""
+    from lightcraft_opt.control.estimation.buffered import Evaluator
+    from lightcraft_opt.control.estimation.kalman import joseph_function, joseph_update
+
+    rng = np.random.default_rng(m)
+    n = 19
+    A = rng.normal(size=(n, n))
+    P, H = A @ A.T + 0.1 * np.eye(n), rng.normal(size=(m, n))
+    B = rng.normal(size=(m, m))
+    R, mean, nu = B @ B.T + np.eye(m), rng.normal(size=n), rng.normal(size=m)
+    out = Evaluator(joseph_function(n, m))(mean, P, nu, H, R)
+    for got, want in zip(
+        (out[:n, 0], out[:n, 1:], out[n:, :m]), joseph_update(mean, P, nu, H, R), strict=True
+    ):
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
