@@ -13,11 +13,14 @@ with the slow states' columns added: 7 % off the EKF's step in the closed loop):
 - :func:`estimator_jump`, :func:`estimator_substep`: the pieces, SX with ``cse``,
   compiled once per structure;
 - :func:`estimator_stage`: their chain, its outputs side by side;
+- :func:`prediction_function`, :func:`measurement_function`: F's rows and a sensor's H in
+  s (the slow states' columns through their charts), one call each a step;
 """
 
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import casadi as ca
 
@@ -31,10 +34,18 @@ from lightcraft_opt.symbolic.maps.reduced_map import (
     build_reduced_map,
 )
 
-__all__ = ["estimator_jump", "estimator_stage", "estimator_substep"]
+__all__ = [
+    "SlowColumns",
+    "estimator_jump",
+    "estimator_stage",
+    "estimator_substep",
+    "measurement_function",
+    "prediction_function",
+]
 
 _NZ = REDUCED_STATE.size
 _ENERGY = PULSE_INPUT.slot("energy").start
+_LOAD = REDUCED_STATE.slot("engine_load").start
 
 
 @functools.lru_cache(maxsize=8)
@@ -127,4 +138,74 @@ def estimator_stage(psi: ReducedMap, jump: ca.Function, substep: ca.Function) ->
         [ca.horzcat(z_i, A, b, S)],
         ["z", "u", "p", "t"],
         ["z_A_b_S"],
+    )
+
+
+@dataclass(frozen=True)
+class SlowColumns:
+    """Where the slow states sit in s (psi_model.py; None: not estimated), in the order
+    wind (east, north), coupling, moments (transverse, axial), and the constants their
+    columns of F and H take: the reference pulse energy E_ref [J] and the model's
+    rotor moments [kg m²] the ``inertia`` states scale."""
+
+    n: int
+    wind: int | None
+    coupling: int | None
+    inertia: int | None
+    reference_energy: float
+    moments: tuple[float, float]
+
+
+def prediction_function(stage: ca.Function, slow: SlowColumns) -> ca.Function:
+    """``psi_prediction(z, u, p, t, chart, gain) -> [z_next F_z]``: Ψ's value and the rows
+    of F (14 x n) in s's order (psi_model.py's module docstring), from the stage's
+    (:func:`estimator_stage`) [z_next A b_energy S_p]: A; the wind's columns S_p[:, :2]
+    ``chart`` (2 x 2, ∂(speed, direction)/∂(east, north)); the coupling's (b_energy - e_load /
+    E_ref) ``gain`` (E / C); the moments' S_p times the model's moments. One call where
+    numpy took a dozen."""
+    z, u = ca.MX.sym("z", _NZ), ca.MX.sym("u", stage.size1_in(1))
+    p, t = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
+    chart, gain = ca.MX.sym("chart", 2, 2), ca.MX.sym("gain")
+    out = stage(z, u, p, t)
+    columns, k = [out[:, 1 : 1 + _NZ]], 2 + _NZ  # k: the next column of S_p
+    if slow.wind is not None:
+        columns.append(ca.mtimes(out[:, k : k + 2], chart))
+        k += 2
+    if slow.coupling is not None:
+        load = ca.DM.zeros(_NZ)
+        load[_LOAD] = 1.0 / slow.reference_energy
+        columns.append((out[:, 1 + _NZ] - load) * gain)
+    if slow.inertia is not None:
+        columns += [out[:, k + j] * slow.moments[j] for j in range(2)]
+    return ca.Function(
+        "psi_prediction",
+        [z, u, p, t, chart, gain],
+        [ca.horzcat(out[:, 0], *columns)],
+        ["z", "u", "p", "t", "chart", "gain"],
+        ["z_F"],
+    )
+
+
+def measurement_function(measure: ca.Function, slow: SlowColumns) -> ca.Function:
+    """``<name>_in_s(z, p, dt, chart) -> [y H]``: a sensor's reading and its Jacobian in s
+    (m x n), from ``measure(z, p, dt) -> [y H_z H_p]`` (H_p in p's wind speed, direction
+    and impulse a pulse): H_z; the wind's columns H_p[:, :2] ``chart``; the coupling's
+    H_p[:, 2] E_ref; zero in the moments (h reads them through the lift only: left out)."""
+    z, p, dt = ca.MX.sym("z", _NZ), ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("dt")
+    chart = ca.MX.sym("chart", 2, 2)
+    out = measure(z, p, dt)
+    m = out.size1()
+    columns = [out[:, 1 : 1 + _NZ]]
+    if slow.wind is not None:
+        columns.append(ca.mtimes(out[:, 1 + _NZ : 3 + _NZ], chart))
+    if slow.coupling is not None:
+        columns.append(out[:, 3 + _NZ] * slow.reference_energy)
+    if slow.inertia is not None:
+        columns.append(ca.MX.zeros(m, 2))
+    return ca.Function(
+        f"{measure.name()}_in_s",
+        [z, p, dt, chart],
+        [ca.horzcat(out[:, 0], *columns)],
+        ["z", "p", "dt", "chart"],
+        ["y_H"],
     )

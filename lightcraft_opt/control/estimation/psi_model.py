@@ -55,9 +55,12 @@ from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT, compile_by_def
 from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
 from lightcraft_opt.control.estimation.buffered import Evaluator
 from lightcraft_opt.control.estimation.psi_chain import (
+    SlowColumns,
     estimator_jump,
     estimator_stage,
     estimator_substep,
+    measurement_function,
+    prediction_function,
 )
 from lightcraft_opt.control.options import DirectorOptions
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -84,11 +87,11 @@ _INERTIA = tuple(
     PARAMETERS.slot(n).start for n in ("rotor_transverse_inertia_dry", "rotor_axial_inertia_dry")
 )
 _ENERGY = PULSE_INPUT.slot("energy").start
-_LOAD = REDUCED_STATE.slot("engine_load").start
 _NZ = REDUCED_STATE.size
 _H = REDUCED_STATE.index("H_L")
 _CONE = REDUCED_STATE.index("coning")
 _CALM = 1e-9  # m/s: below this the wind's direction is undefined (module docstring)
+_NO_CHART = np.zeros((2, 2))  # the wind chart's stand-in without wind, or in calm air
 
 
 @dataclass(frozen=True)
@@ -223,9 +226,8 @@ class PsiEstimationModel:
         # the entries of p the slow states move, each a column S_p of the stage
         entries = (_SPEED, _DIRECTION) * ("wind" in self.slow) + _INERTIA * ("inertia" in self.slow)
         shape = (model, psi.options.substeps, psi.options.dense, entries, want)
-        self._stage = Evaluator(
-            estimator_stage(psi, estimator_jump(*shape), estimator_substep(*shape))
-        )
+        stage = estimator_stage(psi, estimator_jump(*shape), estimator_substep(*shape))
+        self._stage = Evaluator(stage)  # the calm wind's columns
         self._lift = Evaluator(psi.lift)
         self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
             n for s in self.slow for n in SLOW_STATES[s]
@@ -257,6 +259,19 @@ class PsiEstimationModel:
             )
         self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {
             name: (Evaluator(f), R) for name, f, R in zip(sensors, measures, noises, strict=True)
+        }
+        columns = SlowColumns(
+            self.n,
+            self._wind,
+            self._coupling,
+            self._inertia,
+            float(self.p[_REFERENCE_ENERGY]),
+            (float(self.p[_INERTIA[0]]), float(self.p[_INERTIA[1]])),
+        )
+        self._prediction = Evaluator(prediction_function(stage, columns))
+        self._in_s = {
+            name: Evaluator(measurement_function(f, columns))
+            for name, f in zip(sensors, measures, strict=True)
         }
 
     # -- the slow states in p ---------------------------------------------------------------
@@ -348,29 +363,18 @@ class PsiEstimationModel:
         u = self._input(u)
         p = self.parameters(s)
         z = s[:_NZ]
-        F = np.eye(self.n)
-        col = 2 + _NZ  # the first column of S_p in the stage's output [z_next A b_energy S_p]
-        out = self._stage(z, u, p, t)
+        chart = _wind_chart(p) if self._wind is not None else _NO_CHART
+        gain = float(u[_ENERGY]) / s[self._coupling] if self._coupling is not None else 0.0
+        out = self._prediction(z, u, p, t, _NO_CHART if chart is None else chart, gain)
         z_next = out[:, 0]
-        F[:_NZ, :_NZ] = out[:, 1 : 1 + _NZ]
-        if self._wind is not None:
-            chart = _wind_chart(p)
-            if chart is not None:
-                F[:_NZ, self._wind : self._wind + 2] = out[:, col : col + 2] @ chart
-            else:  # calm: each column is ∂/∂speed with the wind blowing along its axis
-                for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
-                    q = p.copy()
-                    q[_DIRECTION] = frm
-                    F[:_NZ, self._wind + j] = self._stage(z, u, q, t)[:, col]
-            col += 2
-        if self._coupling is not None:
-            C, energy = float(s[self._coupling]), float(u[_ENERGY])
-            column = out[:, 1 + _NZ].copy()
-            column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
-            F[:_NZ, self._coupling] = column * energy / C
-        if self._inertia is not None:  # p[i] = p_model[i] x the scale in s
-            for j, i in enumerate(_INERTIA):
-                F[:_NZ, self._inertia + j] = out[:, col + j] * self.p[i]
+        F = np.eye(self.n)
+        F[:_NZ] = out[:, 1:]
+        if chart is None and self._wind is not None:  # calm: the wind's columns are each
+            col = 2 + _NZ  # ∂/∂speed with the wind along its axis (the stage's S_p[:, 0])
+            for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
+                q = p.copy()
+                q[_DIRECTION] = frm
+                F[:_NZ, self._wind + j] = self._stage(z, u, q, t)[:, col]
         s_next = s.copy()
         s_next[:_NZ] = z_next
         return s_next, F
@@ -409,24 +413,17 @@ class PsiEstimationModel:
             raise ParameterError(
                 "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
             )
-        f = self._sensors[sensor][0]
+        f, in_s = self._sensors[sensor][0], self._in_s[sensor]
         s = np.asarray(s, dtype=float).ravel()
         p = self.parameters(s)
-        out = f(s[:_NZ], p, dt)
-        H_p = out[:, 1 + _NZ :]
-        H = np.zeros((out.shape[0], self.n))
-        H[:, :_NZ] = out[:, 1 : 1 + _NZ]
-        if self._wind is not None:
-            chart = _wind_chart(p)
-            if chart is not None:
-                H[:, self._wind : self._wind + 2] = H_p[:, :2] @ chart
-            elif np.any(H_p[:, :2]):  # calm: ∂/∂speed with the wind along each axis
-                for j, d in enumerate((-0.5 * math.pi, math.pi)):
-                    q = p.copy()
-                    q[_DIRECTION] = d
-                    H[:, self._wind + j] = f(s[:_NZ], q, dt)[:, 1 + _NZ]
-        if self._coupling is not None:
-            H[:, self._coupling] = H_p[:, 2] * p[_REFERENCE_ENERGY]
+        chart = _wind_chart(p) if self._wind is not None else _NO_CHART
+        out = in_s(s[:_NZ], p, dt, _NO_CHART if chart is None else chart)
+        H = out[:, 1:]
+        if chart is None and self._wind is not None:  # calm: ∂/∂speed, the wind along each axis
+            for j, d in enumerate((-0.5 * math.pi, math.pi)):
+                q = p.copy()
+                q[_DIRECTION] = d
+                H[:, self._wind + j] = f(s[:_NZ], q, dt)[:, 1 + _NZ]
         return out[:, 0].copy(), H
 
     def measurement_noise(self, sensor: str) -> np.ndarray:
