@@ -12,9 +12,10 @@ estimator on the same flight.
 
 Printed per estimator over all flights: its step median and 99th percentile, and the
 99th percentile of the director's step plus its own a pulse (the pulse leaves 38 ms).
-``--split`` adds where the feeding estimator's steps go (Ψ's stage, the sensors' h and H,
-the Joseph updates, the lift to a full state, the rest), each the median over pulses
-of its sum a step. Targets (issue 30): step median <= 0.3 ms (EKF), <= 3 ms (MHE).
+``--split`` adds where the feeding EKF's steps go (Ψ's value and F, Q, the covariance's
+prediction, the sensors' h and H, the Joseph updates, the lift to a full state, the rest),
+each the median over flights of its mean a step. Targets (issue 30): step median <= 0.3 ms
+(EKF), <= 3 ms (MHE).
 
 In the loop a step runs with the director's 1.4 MB of compiled code between it and the
 last: Ψ's stage (two 0.5 MB libraries) takes 130-160 µs there against 75 µs called in a
@@ -35,7 +36,6 @@ from typing import Any
 
 import numpy as np
 
-import lightcraft_opt.control.estimation.ekf as ekf_module
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
 from lightcraft_opt.control.estimation import Estimate, Reading
 from lightcraft_opt.control.factory import build_controller, build_tracker
@@ -95,13 +95,19 @@ def _estimator(problem: Any, model: Any, spec: str) -> tuple[Any, Any]:
 
 
 def _split(estimator: Any) -> dict[str, Timed]:
-    """Timers on the feeding estimator's model and algebra (instance and module patches)."""
+    """Timers on the feeding EKF's halves and its model's calls (instance patches)."""
     model = estimator.model
-    timers = {"Ψ's stage": Timed(model._stage), "h, H": Timed(model.measure)}
-    timers["lift"] = Timed(model.parts)
-    model._stage, model.measure, model.parts = timers["Ψ's stage"], timers["h, H"], timers["lift"]
-    timers["Joseph"] = Timed(ekf_module.joseph_update)
-    ekf_module.joseph_update = timers["Joseph"]
+    timers = {}
+    for name, owner, attr in (
+        ("prediction", estimator, "_predict"),
+        ("Ψ and F", model, "predict"),
+        ("Q", model, "process_noise"),
+        ("update", estimator, "_update"),
+        ("h, H", model, "measure"),
+        ("lift", model, "parts"),
+    ):
+        timers[name] = Timed(getattr(owner, attr))
+        setattr(owner, attr, timers[name])
     return timers
 
 
@@ -127,7 +133,7 @@ def main() -> None:
     for run in range(args.repeat):
         sensors, feeding = _estimator(problem, model, feeding_spec)
         shadows = {s: _estimator(problem, model, s)[1] for s in shadow_specs}
-        timers = _split(feeding) if args.split else {}
+        timers = _split(feeding) if args.split and feeding_spec == "ekf" else {}
         both = WithShadows(feeding, shadows)
         result = closed_loop(
             model,
@@ -167,11 +173,16 @@ def main() -> None:
             f"{np.percentile(t, 99):.3f} ms; director + it, p99 {np.percentile(total, 99):.2f} ms"
         )
     if split:
-        step = 1e6 * np.median(split.pop("step"))
-        parts = {name: 1e6 * np.median(v) for name, v in split.items()}
-        rest = step - sum(parts.values())
-        shown = ", ".join(f"{name} {v:.0f}" for name, v in parts.items())
-        print(f"a {feeding_spec} step, mean {step:.0f} µs: {shown}, the rest {rest:.0f} (µs)")
+        us = {name: 1e6 * float(np.median(v)) for name, v in split.items()}
+        covariance = us["prediction"] - us["Ψ and F"] - us["Q"]
+        joseph = us["update"] - us["h, H"]
+        rest = us["step"] - us["prediction"] - us["update"] - us["lift"]
+        print(
+            f"a {feeding_spec} step, mean {us['step']:.0f} µs: Ψ and F {us['Ψ and F']:.0f}, "
+            f"Q {us['Q']:.0f}, F P Fᵀ + Q {covariance:.0f}, h and H {us['h, H']:.0f}, "
+            f"Joseph {joseph:.0f}, lift {us['lift']:.0f}, the rest {rest:.0f} (µs, each the "
+            "median over flights of its mean a step)"
+        )
 
 
 if __name__ == "__main__":

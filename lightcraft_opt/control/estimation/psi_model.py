@@ -384,10 +384,14 @@ class PsiEstimationModel:
         noise along J c (``ProcessNoise.inertia``: |H| T / A turns c a pulse)."""
         Q = self._Q.copy()
         s = np.asarray(s, dtype=float).ravel()
-        c = s[_CONE]
-        phase = float(np.linalg.norm(s[_H])) * self.period / self._transverse
-        turn = np.array([-c[1], c[0]]) * phase * self.noise.inertia
-        Q[_CONE, _CONE] += np.outer(turn, turn)
+        H = s[_H]
+        phase = math.sqrt(float(H @ H)) * self.period / self._transverse  # |H| as numpy's norm
+        sigma = self.noise.inertia
+        turn = (-float(s[_CONE.start + 1]) * phase * sigma, float(s[_CONE.start]) * phase * sigma)
+        i = _CONE.start  # the block += turn turnᵀ, in Python floats (numpy's dozen calls cost
+        for a in range(2):  # more than the arithmetic)
+            for b in range(2):
+                Q[i + a, i + b] += turn[a] * turn[b]
         return Q
 
     def _measurement(self, name: str, h: ca.Function) -> ca.Function:
