@@ -269,6 +269,7 @@ class PsiEstimationModel:
             (float(self.p[_INERTIA[0]]), float(self.p[_INERTIA[1]])),
         )
         self._prediction = Evaluator(prediction_function(stage, columns))
+        self._mapped: dict[tuple[str, int], Evaluator] = {}  # (sensor, rows): measure_many's
         self._in_s = {
             name: Evaluator(measurement_function(f, columns))
             for name, f in zip(sensors, measures, strict=True)
@@ -429,6 +430,36 @@ class PsiEstimationModel:
                 q[_DIRECTION] = d
                 H[:, self._wind + j] = f(s[:_NZ], q, dt)[:, 1 + _NZ]
         return out[:, 0].copy(), H
+
+    def measure_many(
+        self, sensor: str, S: np.ndarray, dts: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(Y (k, m), H (k, m, n)): :meth:`measure` of each row of S (k, n) with its dt
+        (k,) [s], by one call of the sensor's Function mapped over the rows (a row in calm
+        air by :meth:`measure`): the same numbers, one call instead of k."""
+        if sensor not in self._sensors:
+            raise ParameterError(
+                "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
+            )
+        S = np.atleast_2d(np.asarray(S, dtype=float))
+        k = S.shape[0]
+        P = np.array([self.parameters(row) for row in S])
+        charts = [_wind_chart(p) if self._wind is not None else _NO_CHART for p in P]
+        key = (sensor, k)
+        if key not in self._mapped:
+            self._mapped[key] = Evaluator(self._in_s[sensor].function.map(k))
+        out = self._mapped[key](
+            S[:, :_NZ].T,
+            P.T,
+            np.asarray(dts, dtype=float).reshape(1, k),
+            np.hstack([_NO_CHART if c is None else c for c in charts]),
+        )
+        blocks = out.reshape(out.shape[0], k, 1 + self.n).transpose(1, 0, 2)
+        Y, H = blocks[:, :, 0].copy(), blocks[:, :, 1:].copy()
+        for i, chart in enumerate(charts):
+            if chart is None:  # calm air: the wind's columns as measure has them
+                Y[i], H[i] = self.measure(sensor, S[i], float(np.ravel(dts)[i]))
+        return Y, H
 
     def measurement_noise(self, sensor: str) -> np.ndarray:
         """R (m, m) of ``sensor``."""

@@ -225,3 +225,19 @@ def test_the_estimator_chain_is_the_directors_in_its_columns(model: PsiEstimatio
     for got, want in ((ours[:, 0], z_next), (ours[:, 1:15], A), (ours[:, 15], B[:, energy])):
         want = np.asarray(want).reshape(np.shape(got))
         assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+
+
+@pytest.mark.parametrize("sensor", ["camera", "gyro"])
+def test_measure_many_is_measure_row_by_row(model: PsiEstimationModel, sensor: str) -> None:
+    """measure_many (the sensor's Function mapped over the rows, what the MHE reads its
+    window with) gives each row's measure bit for bit, a row in calm air included."""
+    rng = np.random.default_rng(5)
+    s = _state(model, (3.0, 0.5))
+    S = s + 1e-3 * np.abs(s).max() * rng.normal(size=(4, model.n)) * (s != 0)
+    S[2, model.names.index("wind_L[east]") :][:2] = 0.0  # calm
+    dts = np.array([0.0, 0.01, 0.02, 0.03])
+    Y, H = model.measure_many(sensor, S, dts)
+    for i in range(4):
+        y, h = model.measure(sensor, S[i], dts[i])
+        np.testing.assert_array_equal(Y[i], y)
+        np.testing.assert_array_equal(H[i], h)
