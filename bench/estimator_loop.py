@@ -18,8 +18,8 @@ each the median over the steps of its time a step. Targets (issue 30): step medi
 (EKF), <= 3 ms (MHE).
 
 In the loop a step runs with the director's 1.4 MB of compiled code between it and the
-last: Ψ's stage (two 0.5 MB libraries) takes 130-160 µs there against 75 µs called in a
-row (bench/README.md#estimator_looppy). Timing on a loaded machine is not a measurement
+last: Ψ's stage (two libraries of 0.43 and 0.46 MB) takes 100-150 µs there against 65-75
+µs called in a row (bench/README.md, estimator_loop.py). Timing on a loaded machine is not a measurement
 of the code: repeat, take medians, compare in the same run.
 
 Run: ``python bench/estimator_loop.py --shadow mhe,mhe:1 --repeat 3`` (``--help``).
