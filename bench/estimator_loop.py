@@ -19,8 +19,8 @@ each the median over the steps of its time a step. Targets (issue 30): step medi
 
 In the loop a step runs with the director's 1.4 MB of compiled code between it and the
 last: Ψ's stage (two libraries of 0.43 and 0.46 MB) takes 100-150 µs there against 65-75
-µs called in a row (bench/README.md, estimator_loop.py). Timing on a loaded machine is not a measurement
-of the code: repeat, take medians, compare in the same run.
+µs called in a row (bench/README.md, estimator_loop.py). Timing on a loaded machine is not a
+measurement of the code: repeat, take medians, compare in the same run.
 
 Run: ``python bench/estimator_loop.py --shadow mhe,mhe:1 --repeat 3`` (``--help``).
 """
@@ -93,8 +93,8 @@ def _estimator(problem: Any, model: Any, spec: str) -> tuple[Any, Any]:
     sensors, estimator = build_tracker(estimator_spec, model, problem.sensors)
     assert estimator is not None
     if relinearize:
-        options = dataclasses.replace(estimator.options, relinearize=int(relinearize))  # type: ignore[attr-defined]
-        estimator.options = options  # type: ignore[attr-defined]
+        old = estimator.options  # type: ignore[attr-defined]
+        estimator.options = dataclasses.replace(old, relinearize=int(relinearize))  # type: ignore[attr-defined]
     return sensors, estimator
 
 
