@@ -148,7 +148,6 @@ class SlowColumns:
     columns of F and H take: the reference pulse energy E_ref [J] and the model's
     rotor moments [kg m²] the ``inertia`` states scale."""
 
-    n: int
     wind: int | None
     coupling: int | None
     inertia: int | None

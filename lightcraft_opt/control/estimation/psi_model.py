@@ -261,7 +261,6 @@ class PsiEstimationModel:
             name: (Evaluator(f), R) for name, f, R in zip(sensors, measures, noises, strict=True)
         }
         columns = SlowColumns(
-            self.n,
             self._wind,
             self._coupling,
             self._inertia,
