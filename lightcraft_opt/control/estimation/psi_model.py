@@ -228,7 +228,6 @@ class PsiEstimationModel:
         shape = (model, psi.options.substeps, psi.options.dense, entries, want)
         stage = estimator_stage(psi, estimator_jump(*shape), estimator_substep(*shape))
         self._stage = Evaluator(stage)  # the calm wind's columns
-        self._lift = Evaluator(psi.lift)
         self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
             n for s in self.slow for n in SLOW_STATES[s]
         )
@@ -249,14 +248,16 @@ class PsiEstimationModel:
                 )
             noises.append(R)
             measures.append(self._measurement(name, h))
-        if measures and (compile_by_default() if compiled is None else bool(compiled)):
+        lift = psi.lift
+        if want:
             # a camera's h carries its frame back over dt: thousands of instructions, some
-            # 45 µs a call interpreted, a few compiled (bench/README.md#estimation)
-            measures, _ = compile_all(
-                [(f, DERIVATIVE_FLAGS) for f in measures],
+            # 45 µs a call interpreted, 6 compiled (bench/README.md, estimation.py)
+            *measures, lift = compile_all(
+                [(f, DERIVATIVE_FLAGS) for f in [*measures, lift]],
                 max_instructions=DERIVATIVE_INSTRUCTION_LIMIT,
-                what="the sensors' measurements",
-            )
+                what="the sensors' measurements and Ψ's lift",
+            )[0]
+        self._lift = Evaluator(lift)
         self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {
             name: (Evaluator(f), R) for name, f, R in zip(sensors, measures, noises, strict=True)
         }
