@@ -31,6 +31,7 @@ from scipy.stats import chi2
 import lightcraft_opt as lc
 from lightcraft_opt.control.estimation import Reading
 from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter
+from lightcraft_opt.control.estimation.kalman import prior_sigmas
 from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
 from lightcraft_opt.control.estimation.mhe_options import MheOptions
 from lightcraft_opt.control.estimation.psi_model import (
@@ -52,17 +53,27 @@ def camera() -> ca.Function:
     return ca.Function("camera", [x, p, dt], [y], ["x", "p", "dt"], ["y"])
 
 
-def estimators(model: PsiEstimationModel, scale: float, names: list[str]) -> dict:
-    """The estimators named, each with the same prior (the EKF's defaults times ``scale``)."""
+def estimators(
+    model: PsiEstimationModel, scale: float, names: list[str], relinearize: str = "default"
+) -> dict:
+    """The estimators named, each with the same prior (the EKF's defaults times ``scale``);
+    the MHE relinearises ``relinearize`` stages a pulse ("all", a number, or "default":
+    :class:`MheOptions`')."""
     ekf = EkfOptions()
-    prior = tuple((n, scale * s) for n, s in ekf.prior)
+    unmatched = prior_sigmas(ekf.prior, model.names, 1.0)[1]  # the MHE refuses those
+    prior = tuple((n, scale * s) for n, s in ekf.prior if n not in unmatched)
     made: dict = {}
     for name in names:
         if name == "ekf":
             options = EkfOptions(prior=prior, prior_default=scale * ekf.prior_default)
             made[name] = ExtendedKalmanFilter(model, options)
         elif name == "mhe":
-            options = MheOptions(prior_sigma=scale * ekf.prior_default, prior_sigmas=prior)
+            stages = {"default": MheOptions().relinearize, "all": None}.get(relinearize)
+            options = MheOptions(
+                prior_sigma=scale * ekf.prior_default,
+                prior_sigmas=prior,
+                relinearize=int(relinearize) if relinearize.isdigit() else stages,
+            )
             made[name] = MovingHorizonEstimator(model, options)
         else:
             raise SystemExit(f"unknown estimator {name!r}; known: ekf, mhe")
@@ -81,6 +92,11 @@ def main() -> None:
         default="follow",
         help="follow: each pulse points at the craft (a perfect tracker); pad: on the pad axis",
     )
+    parser.add_argument(
+        "--relinearize",
+        default="default",
+        help="the MHE's stages evaluated afresh a pulse: a number, all, or default (MheOptions')",
+    )
     args = parser.parse_args()
     model = estimation_model(lc.load_model(ROOT / "models" / "flight5.toml"))
     camera_R = (args.scale * 0.005) ** 2 * np.eye(3)
@@ -91,7 +107,9 @@ def main() -> None:
     u = nominal_inputs(model, psi.psi.inputs)
     L_q = np.linalg.cholesky(psi.process_noise(psi.start(x0), u, 0.0))
     sigma0 = args.scale * EkfOptions().prior_sigmas(psi.names)  # the prior both start from
-    for name, est in estimators(psi, args.scale, args.estimators.split(",")).items():
+    for name, est in estimators(
+        psi, args.scale, args.estimators.split(","), args.relinearize
+    ).items():
         times, nees, nis, errors = [], [], [], []
         blocks = {
             "r_L, v_L": [i for i, n in enumerate(psi.names) if n[:3] in ("r_L", "v_L")],

@@ -156,11 +156,13 @@ def build_estimator(
         return ExtendedKalmanFilter(psi, EkfOptions(prior=prior, noise_scale=scale))
     # the MHE starts from the filter's priors: one belief about the launch
     mhe = MheOptions()
+    horizon = int(spec.options.get("horizon", mhe.horizon))
     return MovingHorizonEstimator(
         psi,
         MheOptions(
-            horizon=int(spec.options.get("horizon", mhe.horizon)),
+            horizon=horizon,
             max_iter=int(spec.options.get("max_iter", mhe.max_iter)),
+            relinearize=int(spec.options.get("relinearize", mhe.relinearize or horizon)),
             prior_sigma=ekf.prior_default,
             prior_sigmas=prior,
         ),

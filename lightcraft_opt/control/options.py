@@ -513,6 +513,7 @@ ESTIMATOR_OPTIONS: Mapping[str, tuple[str, tuple[EstimatorKind, ...]]] = {
     "noise_scale": ("-", (EstimatorKind.EKF,)),
     "horizon": ("pulses", (EstimatorKind.MHE,)),
     "max_iter": ("-", (EstimatorKind.MHE,)),
+    "relinearize": ("stages", (EstimatorKind.MHE,)),
 }
 #: The prior options and the entries of the estimated state s (Ψ's z and the slow states:
 #: docs/estimation.md) whose prior standard deviation each sets, every axis of the slot.
@@ -523,7 +524,11 @@ PRIOR_SLOTS: Mapping[str, str] = {
     "prior_wind": "wind_L",
 }
 #: The options that count (pulses, iterations): integers in [low, high].
-_COUNTS = {"horizon": (1, MAX_CONTROL_HORIZON), "max_iter": (1, None)}
+_COUNTS = {
+    "horizon": (1, MAX_CONTROL_HORIZON),
+    "max_iter": (1, None),
+    "relinearize": (1, MAX_CONTROL_HORIZON),
+}
 
 
 @dataclass(frozen=True)
@@ -541,8 +546,9 @@ class EstimatorSpec:
         ``prior_velocity`` [m/s], of Ψ's coning offset, ``prior_coning`` [rad], and of the
         wind, ``prior_wind`` [m/s], each > 0 (:meth:`prior_sigmas`); the EKF's
         ``noise_scale`` (its process noise times this, > 0); the moving-horizon
-        estimator's window ``horizon`` [pulses] (an integer in [1, 260]) and its solver's
-        ``max_iter`` (>= 1).
+        estimator's window ``horizon`` [pulses] (an integer in [1, 260]), its solver's
+        ``max_iter`` (>= 1) and ``relinearize`` (stages evaluated afresh a pulse, in [1,
+        the horizon]; the horizon: every stage; :class:`MheOptions`).
     """
 
     kind: EstimatorKind = EstimatorKind.TRUTH

@@ -152,6 +152,7 @@ _ESTIMATOR: dict[str, Spec] = {
     "noise_scale": NUMBER,
     "horizon_pulses": INTEGER,
     "max_iter": INTEGER,
+    "relinearize": INTEGER,
 }
 #: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
 #: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).

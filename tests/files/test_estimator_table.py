@@ -70,6 +70,7 @@ def test_the_table_reads_into_si(tmp_path):
 kind = "mhe"
 horizon_pulses = 12
 max_iter = 5
+relinearize = 12
 prior_position_mm = 5.0
 prior_velocity_cm_per_s = 2.0
 prior_coning_deg = 1.0
@@ -81,6 +82,7 @@ prior_wind_kmh = 3.6
         {
             "horizon": 12,
             "max_iter": 5,
+            "relinearize": 12,
             "prior_position": 5e-3,
             "prior_velocity": 2e-2,
             "prior_coning": math.radians(1.0),
@@ -100,6 +102,8 @@ prior_wind_kmh = 3.6
         ('kind = "ekf"\nprior_position_mm = -1.0', "estimator.prior_position_mm", r"> 0"),
         ('kind = "ekf"\nhorizon_pulses = 10', "estimator.horizon_pulses", r"kind 'mhe', not"),
         ('kind = "mhe"\nhorizon_pulses = 0', "estimator.horizon_pulses", r">= 1"),
+        ('kind = "ekf"\nrelinearize = 2', "estimator.relinearize", r"kind 'mhe', not"),
+        ('kind = "mhe"\nrelinearize = 0', "estimator.relinearize", r">= 1"),
         ('kind = "mhe"\nnoise_scale = 0.5', "estimator.noise_scale", r"kind 'ekf', not"),
         ('kind = "ekf"\nnoise_scale = 0.0', "estimator.noise_scale", r"> 0"),
         ("prior_wind_mps = 1.0", "estimator.prior_wind_mps", r"not 'truth'"),

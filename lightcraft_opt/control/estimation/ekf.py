@@ -19,8 +19,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.buffered import Evaluator
 from lightcraft_opt.control.estimation.estimate import Estimate
-from lightcraft_opt.control.estimation.kalman import joseph_update, prior_sigmas, symmetric
+from lightcraft_opt.control.estimation.kalman import (
+    joseph_function,
+    joseph_update,
+    prior_sigmas,
+    symmetric,
+)
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -98,14 +104,17 @@ class Innovation:
 
 @dataclass
 class _Node:
-    """A pulse of the history: the prior at it, its readings, the input fired after it."""
+    """A pulse of the history: the prior at it, its readings (in the order they joined),
+    the input fired after it, and (s, P) after each of its first readings: a reading that
+    joins later starts from the last of them, the same arithmetic as from the prior (a
+    frame a pulse late no longer repeats the gyro's update before it)."""
 
     t: float
     s: np.ndarray
     P: np.ndarray
     readings: list[Reading] = field(default_factory=list)
     u: np.ndarray | None = None
-    post: tuple[np.ndarray, np.ndarray] | None = None  # (s, P) after the readings
+    posts: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
 
 
 class ExtendedKalmanFilter:
@@ -137,6 +146,7 @@ class ExtendedKalmanFilter:
         self.dropped = 0
         self._nodes: list[_Node] = []
         self._k0 = 0
+        self._joseph: dict[int, Evaluator] = {}  # by the reading's size
         self.s = np.zeros(len(model.names))
         self.P = self._P0.copy()
 
@@ -163,20 +173,25 @@ class ExtendedKalmanFilter:
         y_hat, H = self.model.measure(reading.sensor, s, dt)
         R = self.model.measurement_noise(reading.sensor)
         nu = np.asarray(reading.y, dtype=float).ravel() - y_hat
-        s, P, S = joseph_update(s, P, nu, H, R)
-        return s, P, Innovation(reading, nu, S)
+        n, m = P.shape[0], nu.size
+        if m > n + 1:  # the Function packs S beside the mean
+            s, P, S = joseph_update(s, P, nu, H, R)
+            return s, P, Innovation(reading, nu, S)
+        if m not in self._joseph:
+            self._joseph[m] = Evaluator(joseph_function(n, m))
+        out = self._joseph[m](s, P, nu, H, R)
+        return out[:n, 0], out[:n, 1:], Innovation(reading, nu, out[n:, :m])
 
     def _filtered(self, node: _Node, record: set[int]) -> tuple[np.ndarray, np.ndarray]:
-        """The node's posterior: its prior updated with its readings (kept until a reading
-        joins it or its prior changes)."""
-        if node.post is None:
-            s, P = node.s, node.P
-            for reading in node.readings:
-                s, P, innovation = self._update(s, P, node.t, reading)
-                if id(reading) in record:
-                    self.innovations.append(innovation)
-            node.post = (s, P)
-        return node.post
+        """The node's posterior: its prior updated with its readings in order, from the
+        last posterior kept (``_Node.posts``, emptied when its prior changes)."""
+        s, P = node.posts[-1] if node.posts else (node.s, node.P)
+        for reading in node.readings[len(node.posts) :]:
+            s, P, innovation = self._update(s, P, node.t, reading)
+            node.posts.append((s, P))
+            if id(reading) in record:
+                self.innovations.append(innovation)
+        return s, P
 
     def _predict(
         self, s: np.ndarray, P: np.ndarray, u: np.ndarray, t: float
@@ -230,7 +245,7 @@ class ExtendedKalmanFilter:
             s, P = self._filtered(node, record)
             assert node.u is not None
             nxt.s, nxt.P = self._predict(s, P, node.u, node.t)
-            nxt.post = None
+            nxt.posts = []
         if u_fired is not None:
             last = nodes[-1]
             last.u = np.asarray(u_fired, dtype=float).ravel()
@@ -253,7 +268,6 @@ class ExtendedKalmanFilter:
                 continue
             i = self._node_of(reading.t)
             nodes[i].readings.append(reading)
-            nodes[i].post = None
             record.add(id(reading))
             earliest = min(earliest, i)
         return earliest

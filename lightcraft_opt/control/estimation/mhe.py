@@ -257,13 +257,14 @@ class MovingHorizonEstimator:
             node = nodes[i]
             assert node.u is not None
             node.linear, node.age = self._predict(node.s, node.u, node.t), 0
+        linear = self._linearised_readings()
         for i, node in enumerate(nodes):
             j = pad + i
             if node.readings:
                 # the readings' Gauss-Newton terms: Hᵀ R⁻¹ H and -Hᵀ R⁻¹ (y - h)
                 information, gradient = np.zeros((n, n)), np.zeros(n)
-                for sensor, y, dt in node.readings:
-                    h, Hm = self._measure(sensor, node.s, dt)
+                for r, (sensor, y, _) in enumerate(node.readings):
+                    h, Hm = linear[i, r]
                     weighted = Hm.T @ self._noise_of(sensor)[1]
                     information += weighted @ Hm
                     gradient -= weighted @ (y - h)
@@ -306,7 +307,7 @@ class MovingHorizonEstimator:
     def _to_relinearize(self) -> list[int]:
         """The stages whose f, F are evaluated afresh this pulse: those without any, and
         of those moved to first order, the ``relinearize`` evaluated longest ago (the
-        newest first among equals); all of them by default."""
+        newest first among equals); all of them when ``relinearize`` is None."""
         stages = self._nodes[:-1]
         missing = [i for i, node in enumerate(stages) if node.linear is None]
         moved = [i for i, node in enumerate(stages) if node.linear is not None and node.age]
@@ -339,6 +340,31 @@ class MovingHorizonEstimator:
     def _measure(self, sensor: str, s: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         h, Hm = self.model.measure(sensor, s, dt)
         return np.asarray(h, dtype=float).ravel(), np.atleast_2d(np.asarray(Hm, dtype=float))
+
+    def _linearised_readings(self) -> dict[tuple[int, int], tuple[np.ndarray, np.ndarray]]:
+        """{(node, reading): (h, H)} of every reading of the window at its node's guess:
+        by the model's ``measure_many``, one call a sensor, where it has one (model.py),
+        else by ``measure`` a reading."""
+        nodes = self._nodes
+        many = getattr(self.model, "measure_many", None)
+        if many is None:
+            return {
+                (i, r): self._measure(sensor, node.s, dt)
+                for i, node in enumerate(nodes)
+                for r, (sensor, _, dt) in enumerate(node.readings)
+            }
+        by_sensor: dict[str, list[tuple[int, int]]] = {}
+        for i, node in enumerate(nodes):
+            for r, (sensor, _, _) in enumerate(node.readings):
+                by_sensor.setdefault(sensor, []).append((i, r))
+        linear = {}
+        for sensor, keys in by_sensor.items():
+            S = np.array([nodes[i].s for i, _ in keys])
+            dts = np.array([nodes[i].readings[r][2] for i, r in keys])
+            ys, Hs = many(sensor, S, dts)
+            for key, h, Hm in zip(keys, ys, Hs, strict=True):
+                linear[key] = (np.asarray(h, dtype=float).ravel(), np.atleast_2d(Hm))
+        return linear
 
     def _noise_of(self, sensor: str) -> tuple[np.ndarray, np.ndarray]:
         """(R, R⁻¹) of a sensor, asked of the model once."""

@@ -32,11 +32,14 @@ class MheOptions:
         (``"r_L"``: all three).
     max_iter : HPIPM's iteration cap, >= 1 (the QP has no bounds: it takes one or two).
     tol : HPIPM's tolerance on the absolute residuals, in (0, 1).
-    relinearize : None (default): every stage's f and F evaluated afresh at the guess each
-        pulse, the plain real-time iteration; a number in [1, horizon]: that many stages
-        (those evaluated longest ago), the others' f moved to the new guess to first order
-        (f + F δs) with their F kept: fewer model calls (Ψ's Jacobian costs 0.2-0.3 ms a
-        stage compiled), the same answer on a linear model.
+    relinearize : a number in [1, horizon] (default 1): that many stages (those evaluated
+        longest ago; a new stage is evaluated when it joins) have their f and F evaluated
+        afresh at the guess each pulse, the others' f moved to the new guess to first order
+        (f + F δs) with their F kept: fewer model calls (Ψ's Jacobian costs 0.1-0.2 ms a
+        stage compiled), the same answer on a linear model; None, or the horizon: every
+        stage, the plain real-time iteration. On 50 flights of Ψ 1 raised the NEES from
+        25.5 to 27.4 (default noises; 17.5 to 17.8 at a tenth) and left the RMSE within 6 %
+        either way, for a step 1.6 times faster (docs/estimation.md, the step times).
     """
 
     horizon: int = 15
@@ -44,7 +47,7 @@ class MheOptions:
     prior_sigmas: tuple[tuple[str, float], ...] = ()
     max_iter: int = 20
     tol: float = 1e-8
-    relinearize: int | None = None
+    relinearize: int | None = 1
 
     def __post_init__(self) -> None:
         checked_int("MheOptions", "horizon", self.horizon, 1, MAX_WINDOW, "10 s of pulses")

@@ -39,7 +39,11 @@ class EstimationModel(Protocol):
     - ``start(x0) -> s0``: the vector s of a full state x0 (STATE), the prior mean an
       estimator's ``reset`` starts from; without it s0 = x0;
     - ``parts(s) -> (z, x, slow)``: what an :class:`Estimate` holds (Ψ's z, its ``lift``
-      x, the slow states by name); without it z = x = s and no slow states.
+      x, the slow states by name); without it z = x = s and no slow states;
+    - ``measure_many(sensor, S, dts) -> (Y, H)``: ``measure`` of each row of S (k, n) with
+      its dt (k,), Y (k, m) and H (k, m, n), as ``measure`` gives them; the moving-horizon
+      estimator reads its window's readings with one call a sensor (without it, one a
+      reading).
     """
 
     names: tuple[str, ...]

@@ -1,19 +1,28 @@
-"""Ψ's chains for the estimator: its value and Jacobians in z, u and the wind entries of p,
-called through casadi's buffers (psi_model.py).
+"""Ψ's chain for the estimator: its value and the Jacobians an estimator needs, called
+through casadi's buffers (psi_model.py).
 
-- :func:`wind_substep`: Ψ's coast substep differentiated also in p's wind speed and
-  direction, compiled once per structure;
-- :func:`stage_with_wind`, :func:`stage_packed`: the chains over the pieces (as
-  symbolic/maps/reduced_map_derivatives.py), their outputs side by side;
-- :class:`Evaluator`: a one-output Function called through its buffers.
+An estimator needs of Ψ (z⁺ = jump(z, pulse), then ``substeps`` coast substeps with the RCS
+levels w held) ∂z_next/∂z, the column of the pulse's energy (the coupling's column is
+exact from it, psi_model.py), and the columns of the entries of p the slow states move
+(the wind's speed and direction, the rotor's moments); not the pointing's, the focus's or
+the RCS levels' columns the director plans with. Its pieces differentiate in those alone
+(19 columns of the jump's Jacobian instead of 22, 18 of a substep's instead of 22, and one
+matrix product fewer a substep than Ψ's full chain, symbolic/maps/reduced_map_derivatives.py,
+with the slow states' columns added: 7 % off the EKF's step in the closed loop):
+
+- :func:`estimator_jump`, :func:`estimator_substep`: the pieces, SX with ``cse``,
+  compiled once per structure;
+- :func:`estimator_stage`: their chain, its outputs side by side;
+- :func:`prediction_function`, :func:`measurement_function`: F's rows and a sensor's H in
+  s (the slow states' columns through their charts), one call each a step;
 """
 
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import casadi as ca
-import numpy as np
 
 from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT
 from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
@@ -25,17 +34,58 @@ from lightcraft_opt.symbolic.maps.reduced_map import (
     build_reduced_map,
 )
 
-__all__ = ["Evaluator", "stage_packed", "stage_with_wind", "wind_substep"]
+__all__ = [
+    "SlowColumns",
+    "estimator_jump",
+    "estimator_stage",
+    "estimator_substep",
+    "measurement_function",
+    "prediction_function",
+]
 
 _NZ = REDUCED_STATE.size
-_SPEED, _DIRECTION = (PARAMETERS.slot(n).start for n in ("wind_speed_ref", "wind_direction_from"))
+_ENERGY = PULSE_INPUT.slot("energy").start
+_LOAD = REDUCED_STATE.slot("engine_load").start
 
 
-@functools.lru_cache(maxsize=4)
-def wind_substep(psi_model: Model, substeps: int, dense: int, compiled: bool) -> ca.Function:
-    """Ψ's coast substep with its Jacobians in z, the held RCS levels w and the two wind
-    entries of p (``reduced_substep_wind_jacobian(z, w, p, t) -> (z_next, S_z, S_w,
-    S_wind)``), compiled unless ``compiled`` is False (once per structure: disk cache)."""
+@functools.lru_cache(maxsize=8)
+def estimator_jump(
+    psi_model: Model, substeps: int, dense: int, entries: tuple[int, ...], compiled: bool
+) -> ca.Function:
+    """Ψ's pulse jump with its Jacobians in z, the pulse's energy and the entries
+    ``entries`` of p (``reduced_jump_estimator(z, pulse, p) -> (z_plus, J_z, J_energy,
+    J_p)``, J_energy (14, 1), J_p (14, len(entries))), compiled unless ``compiled`` is
+    False (once per structure: disk cache)."""
+    psi = build_reduced_map(psi_model, ReducedMapOptions(substeps, dense))
+    z = ca.SX.sym("z", _NZ)
+    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    z_plus, _ = psi.jump(z, pulse, p)
+    chosen = ca.vertcat(*(p[i] for i in entries))
+    f = ca.Function(
+        "reduced_jump_estimator",
+        [z, pulse, p],
+        [
+            z_plus,
+            ca.jacobian(z_plus, z),
+            ca.jacobian(z_plus, pulse[_ENERGY]),
+            ca.jacobian(z_plus, chosen),
+        ],
+        ["z", "pulse", "p"],
+        ["z_plus", "J_z", "J_energy", "J_p"],
+        {"cse": True},
+    )
+    return _compiled(f, compiled, "Ψ's jump for the estimator")
+
+
+@functools.lru_cache(maxsize=8)
+def estimator_substep(
+    psi_model: Model, substeps: int, dense: int, entries: tuple[int, ...], compiled: bool
+) -> ca.Function:
+    """Ψ's coast substep with its Jacobians in z and the entries ``entries`` of p
+    (``reduced_substep_estimator(z, w, p, t) -> (z_next, S_z, S_p)``, S_p (14,
+    len(entries)); w, the RCS levels, held), compiled unless ``compiled`` is False (once
+    per structure: disk cache)."""
     psi = build_reduced_map(psi_model, ReducedMapOptions(substeps, dense))
     nw = psi.inputs.size - PULSE_INPUT.size
     z = ca.SX.sym("z", _NZ)
@@ -43,86 +93,118 @@ def wind_substep(psi_model: Model, substeps: int, dense: int, compiled: bool) ->
     p = ca.SX.sym("p", PARAMETERS.size)
     t = ca.SX.sym("t")
     z_next = psi.substep(z, w, p, t)
-    wind = ca.vertcat(p[_SPEED], p[_DIRECTION])
+    chosen = ca.vertcat(*(p[i] for i in entries))
     f = ca.Function(
-        "reduced_substep_wind_jacobian",
+        "reduced_substep_estimator",
         [z, w, p, t],
-        [z_next, ca.jacobian(z_next, z), ca.jacobian(z_next, w), ca.jacobian(z_next, wind)],
+        [z_next, ca.jacobian(z_next, z), ca.jacobian(z_next, chosen)],
         ["z", "w", "p", "t"],
-        ["z_next", "S_z", "S_w", "S_wind"],
+        ["z_next", "S_z", "S_p"],
         {"cse": True},
     )
+    return _compiled(f, compiled, "Ψ's substep for the estimator")
+
+
+def _compiled(f: ca.Function, compiled: bool, what: str) -> ca.Function:
     if not compiled:
         return f
     done, _ = compile_all(
-        [(f, DERIVATIVE_FLAGS)],
-        max_instructions=DERIVATIVE_INSTRUCTION_LIMIT,
-        what="Ψ's wind substep",
+        [(f, DERIVATIVE_FLAGS)], max_instructions=DERIVATIVE_INSTRUCTION_LIMIT, what=what
     )
     return done[0]
 
 
-def stage_with_wind(psi: ReducedMap, jump: ca.Function, substep: ca.Function) -> ca.Function:
-    """``psi_wind_stage(z, u, p, t) -> [z_next A B S_wind]``: Ψ's value and Jacobians in z,
-    u and the wind entries of p (speed, direction), side by side, chained over the pieces
-    (as reduced_map_derivatives.py: the jump does not see the wind)."""
+def estimator_stage(psi: ReducedMap, jump: ca.Function, substep: ca.Function) -> ca.Function:
+    """``psi_estimator_stage(z, u, p, t) -> [z_next A b_energy S_p]``: Ψ's value and its
+    Jacobians in z (A, 14 x 14), the pulse's energy (b_energy, 14 x 1) and the entries of
+    p the pieces (:func:`estimator_jump`, :func:`estimator_substep`) differentiate in
+    (S_p), side by side, chained over the pieces:
+
+        A = S_n ... S_1 J_z,  b_energy = S_n ... S_1 J_energy,
+        S_p = S_n ... S_1 J_p + Σ_i S_n ... S_{i+1} S_p,i
+    """
     n_pulse = PULSE_INPUT.size
     nw = psi.inputs.size - n_pulse
     h = psi.period / psi.options.substeps
     zm, um = ca.MX.sym("z", _NZ), ca.MX.sym("u", n_pulse + nw)
     pm, tm = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
-    z_i, _, A, B_pulse = jump(zm, um[:n_pulse], pm)
-    B_w, S_wind = ca.MX.zeros(_NZ, nw), ca.MX.zeros(_NZ, 2)
+    z_i, A, b, S = jump(zm, um[:n_pulse], pm)
     for i in range(psi.options.substeps):
-        z_i, S_z, S_w, S_p = substep(z_i, um[n_pulse:], pm, tm + float(h * i))
-        A, B_pulse = ca.mtimes(S_z, A), ca.mtimes(S_z, B_pulse)
-        B_w = ca.mtimes(S_z, B_w) + S_w if nw else B_w
-        S_wind = ca.mtimes(S_z, S_wind) + S_p
+        z_i, S_z, S_p = substep(z_i, um[n_pulse:], pm, tm + float(h * i))
+        A, b, S = ca.mtimes(S_z, A), ca.mtimes(S_z, b), ca.mtimes(S_z, S) + S_p
     return ca.Function(
-        "psi_wind_stage",
+        "psi_estimator_stage",
         [zm, um, pm, tm],
-        [ca.horzcat(z_i, A, B_pulse, B_w, S_wind)],
+        [ca.horzcat(z_i, A, b, S)],
         ["z", "u", "p", "t"],
-        ["z_A_B_S"],
+        ["z_A_b_S"],
     )
 
 
-def stage_packed(stage: ca.Function) -> ca.Function:
-    """``psi_stage(z, u, p, t) -> [z_next A B]``: Ψ's chain with its outputs side by side
-    (one conversion a call)."""
-    zm, um = ca.MX.sym("z", _NZ), ca.MX.sym("u", stage.size1_in(1))
-    pm, tm = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
-    z_next, _, A, B = stage(zm, um, pm, tm)
+@dataclass(frozen=True)
+class SlowColumns:
+    """Where the slow states sit in s (psi_model.py; None: not estimated), in the order
+    wind (east, north), coupling, moments (transverse, axial), and the constants their
+    columns of F and H take: the reference pulse energy E_ref [J] and the model's
+    rotor moments [kg m²] the ``inertia`` states scale."""
+
+    wind: int | None
+    coupling: int | None
+    inertia: int | None
+    reference_energy: float
+    moments: tuple[float, float]
+
+
+def prediction_function(stage: ca.Function, slow: SlowColumns) -> ca.Function:
+    """``psi_prediction(z, u, p, t, chart, gain) -> [z_next F_z]``: Ψ's value and the rows
+    of F (14 x n) in s's order (psi_model.py's module docstring), from the stage's
+    (:func:`estimator_stage`) [z_next A b_energy S_p]: A; the wind's columns S_p[:, :2]
+    ``chart`` (2 x 2, ∂(speed, direction)/∂(east, north)); the coupling's (b_energy - e_load /
+    E_ref) ``gain`` (E / C); the moments' S_p times the model's moments. One call where
+    numpy took a dozen."""
+    z, u = ca.MX.sym("z", _NZ), ca.MX.sym("u", stage.size1_in(1))
+    p, t = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
+    chart, gain = ca.MX.sym("chart", 2, 2), ca.MX.sym("gain")
+    out = stage(z, u, p, t)
+    columns, k = [out[:, 1 : 1 + _NZ]], 2 + _NZ  # k: the next column of S_p
+    if slow.wind is not None:
+        columns.append(ca.mtimes(out[:, k : k + 2], chart))
+        k += 2
+    if slow.coupling is not None:
+        load = ca.DM.zeros(_NZ)
+        load[_LOAD] = 1.0 / slow.reference_energy
+        columns.append((out[:, 1 + _NZ] - load) * gain)
+    if slow.inertia is not None:
+        columns += [out[:, k + j] * slow.moments[j] for j in range(2)]
     return ca.Function(
-        "psi_stage", [zm, um, pm, tm], [ca.horzcat(z_next, A, B)], ["z", "u", "p", "t"], ["z_A_B"]
+        "psi_prediction",
+        [z, u, p, t, chart, gain],
+        [ca.horzcat(out[:, 0], *columns)],
+        ["z", "u", "p", "t", "chart", "gain"],
+        ["z_F"],
     )
 
 
-class Evaluator:
-    """The first output of a casadi Function, called through its buffers
-    (``Function.buffer``): the inputs copied into arrays it owns, the output (densified)
-    read in place; the other outputs are not computed. A call costs well under a
-    microsecond beyond the Function's own work, against some 20 µs for a call from Python
-    with its conversions (what keeps the EKF's step inside its 0.3 ms)."""
-
-    def __init__(self, f: ca.Function) -> None:
-        rows, cols = f.size_out(0)
-        ins = [ca.MX.sym(f.name_in(i), f.size_in(i)) for i in range(f.n_in())]
-        first = f.call(ins)[0]
-        self.function = ca.Function(
-            f.name(), ins, [ca.densify(first)], f.name_in(), [f.name_out(0)]
-        )
-        self._buffer, self._trigger = self.function.buffer()
-        self._args = [np.zeros(f.numel_in(i)) for i in range(f.n_in())]
-        for i, a in enumerate(self._args):
-            self._buffer.set_arg(i, a.data)
-        self._out = np.zeros(rows * cols)
-        self._buffer.set_res(0, self._out.data)
-        self._shape = (cols, rows)
-
-    def __call__(self, *args: np.ndarray | float) -> np.ndarray:
-        """The output (rows, cols), a fresh array."""
-        for a, v in zip(self._args, args, strict=True):
-            a[...] = np.ravel(v)
-        self._trigger()
-        return self._out.reshape(self._shape).T.copy()
+def measurement_function(measure: ca.Function, slow: SlowColumns) -> ca.Function:
+    """``<name>_in_s(z, p, dt, chart) -> [y H]``: a sensor's reading and its Jacobian in s
+    (m x n), from ``measure(z, p, dt) -> [y H_z H_p]`` (H_p in p's wind speed, direction
+    and impulse a pulse): H_z; the wind's columns H_p[:, :2] ``chart``; the coupling's
+    H_p[:, 2] E_ref; zero in the moments (h reads them through the lift only: left out)."""
+    z, p, dt = ca.MX.sym("z", _NZ), ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("dt")
+    chart = ca.MX.sym("chart", 2, 2)
+    out = measure(z, p, dt)
+    m = out.size1()
+    columns = [out[:, 1 : 1 + _NZ]]
+    if slow.wind is not None:
+        columns.append(ca.mtimes(out[:, 1 + _NZ : 3 + _NZ], chart))
+    if slow.coupling is not None:
+        columns.append(out[:, 3 + _NZ] * slow.reference_energy)
+    if slow.inertia is not None:
+        columns.append(ca.MX.zeros(m, 2))
+    return ca.Function(
+        f"{measure.name()}_in_s",
+        [z, p, dt, chart],
+        [ca.horzcat(out[:, 0], *columns)],
+        ["z", "p", "dt", "chart"],
+        ["y_H"],
+    )

@@ -24,16 +24,18 @@ its Jacobian is
 
     F = [[∂Ψ/∂z, ∂Ψ/∂p · ∂p/∂σ], [0, I]]
 
-from Ψ's explicit chain over compiled pieces (symbolic/maps/reduced_map_derivatives.py), the
-same map the director plans with (:func:`estimation_model` builds its model the director's
-way, with the optic quadrature of ``DirectorOptions``). The wind columns chain a substep
-piece that also differentiates in the two wind entries of p; the coupling column is exact
-from the energy column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
+from Ψ's explicit chain over compiled pieces (psi_chain.py: the chain of
+symbolic/maps/reduced_map_derivatives.py in the columns an estimator needs), the same map
+the director plans with (:func:`estimation_model` builds its model the director's
+way, with the optic quadrature of ``DirectorOptions``). The wind columns chain the pieces'
+Jacobians in the two wind entries of p; the coupling column is exact from the energy
+column of ∂Ψ/∂u: the impulses depend on the coupling and the pulse energy
 through their product only, and the energy also counts the engine's load (pulse_jump.py),
 so ∂Ψ/∂C = (E / C) (∂Ψ/∂E − e_load / E_ref). This holds where nothing ablates (the air mode,
-or a liner with ``ablation`` 0); elsewhere the coupling is refused. The moments' columns are
-forward differences of Ψ's compiled values (relative step 1e-7), checked against central
-differences of the whole prediction (tests/control/estimation/test_psi_estimation_model.py).
+or a liner with ``ablation`` 0); elsewhere the coupling is refused. The moments' columns
+chain the pieces' Jacobians in the two moments' entries of p, the jump's included (it sees
+them; psi_chain.py), checked against central differences of the whole prediction
+(tests/control/estimation/test_psi_estimation_model.py).
 
 A sensor is a casadi Function ``h(x, p, dt) -> y`` on the FULL state x (STATE) and its noise
 covariance R; the model composes it with Ψ's ``lift`` and differentiates the composition
@@ -49,12 +51,16 @@ from dataclasses import dataclass, fields
 import casadi as ca
 import numpy as np
 
-from lightcraft_opt.compiled import compile_by_default, reduced_derivatives_for
+from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT, compile_by_default
+from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
+from lightcraft_opt.control.estimation.buffered import Evaluator
 from lightcraft_opt.control.estimation.psi_chain import (
-    Evaluator,
-    stage_packed,
-    stage_with_wind,
-    wind_substep,
+    SlowColumns,
+    estimator_jump,
+    estimator_stage,
+    estimator_substep,
+    measurement_function,
+    prediction_function,
 )
 from lightcraft_opt.control.options import DirectorOptions
 from lightcraft_opt.errors import OptionError, ParameterError
@@ -80,13 +86,12 @@ _REFERENCE_ENERGY = PARAMETERS.slot("reference_pulse_energy").start
 _INERTIA = tuple(
     PARAMETERS.slot(n).start for n in ("rotor_transverse_inertia_dry", "rotor_axial_inertia_dry")
 )
-_INERTIA_STEP = 1e-7  # relative step of the inertia columns' forward differences
 _ENERGY = PULSE_INPUT.slot("energy").start
-_LOAD = REDUCED_STATE.slot("engine_load").start
 _NZ = REDUCED_STATE.size
 _H = REDUCED_STATE.index("H_L")
 _CONE = REDUCED_STATE.index("coning")
 _CALM = 1e-9  # m/s: below this the wind's direction is undefined (module docstring)
+_NO_CHART = np.zeros((2, 2))  # the wind chart's stand-in without wind, or in calm air
 
 
 @dataclass(frozen=True)
@@ -217,16 +222,12 @@ class PsiEstimationModel:
             )
         self.psi = psi = build_reduced_map(model)
         self.period = psi.period
-        d = reduced_derivatives_for(model, psi.options, compiled=compiled)
-        self._stage = Evaluator(stage_packed(d.stage))
-        self._nu = psi.inputs.size
-        if "wind" in self.slow:
-            want = compile_by_default() if compiled is None else bool(compiled)
-            sub = wind_substep(model, psi.options.substeps, psi.options.dense, want)
-            self._wind_stage: Evaluator | None = Evaluator(stage_with_wind(psi, d.jump, sub))
-        else:
-            self._wind_stage = None
-        self._lift = Evaluator(psi.lift)
+        want = compile_by_default() if compiled is None else bool(compiled)
+        # the entries of p the slow states move, each a column S_p of the stage
+        entries = (_SPEED, _DIRECTION) * ("wind" in self.slow) + _INERTIA * ("inertia" in self.slow)
+        shape = (model, psi.options.substeps, psi.options.dense, entries, want)
+        stage = estimator_stage(psi, estimator_jump(*shape), estimator_substep(*shape))
+        self._stage = Evaluator(stage)  # the calm wind's columns
         self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
             n for s in self.slow for n in SLOW_STATES[s]
         )
@@ -235,10 +236,9 @@ class PsiEstimationModel:
         self._wind = _NZ if "wind" in self.slow else None
         self._coupling = self.names.index("coupling") if "coupling" in self.slow else None
         self._inertia = self.names.index("inertia[transverse]") if "inertia" in self.slow else None
-        self._value = Evaluator(d.value) if "inertia" in self.slow else None
         self._Q = np.diag(np.square(self._sigmas()))
         self._transverse = float(model.craft.inertia_transverse)  # A [kg m²]
-        self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {}
+        noises, measures = [], []
         for name, (h, R) in sensors.items():
             R = np.atleast_2d(np.asarray(R, dtype=float))
             m = h.size1_out(0)
@@ -246,7 +246,34 @@ class PsiEstimationModel:
                 raise ParameterError(
                     f"sensors[{name!r}]", f"R must be ({m}, {m}) and positive definite"
                 )
-            self._sensors[name] = (Evaluator(self._measurement(name, h)), R)
+            noises.append(R)
+            measures.append(self._measurement(name, h))
+        lift = psi.lift
+        if want:
+            # a camera's h carries its frame back over dt: thousands of instructions, some
+            # 45 µs a call interpreted, 6 compiled (bench/README.md, estimation.py)
+            *measures, lift = compile_all(
+                [(f, DERIVATIVE_FLAGS) for f in [*measures, lift]],
+                max_instructions=DERIVATIVE_INSTRUCTION_LIMIT,
+                what="the sensors' measurements and Ψ's lift",
+            )[0]
+        self._lift = Evaluator(lift)
+        self._sensors: dict[str, tuple[Evaluator, np.ndarray]] = {
+            name: (Evaluator(f), R) for name, f, R in zip(sensors, measures, noises, strict=True)
+        }
+        columns = SlowColumns(
+            self._wind,
+            self._coupling,
+            self._inertia,
+            float(self.p[_REFERENCE_ENERGY]),
+            (float(self.p[_INERTIA[0]]), float(self.p[_INERTIA[1]])),
+        )
+        self._prediction = Evaluator(prediction_function(stage, columns))
+        self._mapped: dict[tuple[str, int], Evaluator] = {}  # (sensor, rows): measure_many's
+        self._in_s = {
+            name: Evaluator(measurement_function(f, columns))
+            for name, f in zip(sensors, measures, strict=True)
+        }
 
     # -- the slow states in p ---------------------------------------------------------------
 
@@ -337,41 +364,18 @@ class PsiEstimationModel:
         u = self._input(u)
         p = self.parameters(s)
         z = s[:_NZ]
+        chart = _wind_chart(p) if self._wind is not None else _NO_CHART
+        gain = float(u[_ENERGY]) / s[self._coupling] if self._coupling is not None else 0.0
+        out = self._prediction(z, u, p, t, _NO_CHART if chart is None else chart, gain)
+        z_next = out[:, 0]
         F = np.eye(self.n)
-        nu = self._nu
-        if self._wind_stage is not None and self._wind is not None:
-            out = self._wind_stage(z, u, p, t)
-            S = out[:, 1 + _NZ + nu :]
-            speed = float(p[_SPEED])
-            if speed > _CALM:
-                frm = float(p[_DIRECTION])
-                along = np.array([-math.sin(frm), -math.cos(frm)])
-                across = np.array([-math.cos(frm), math.sin(frm)])
-                F[:_NZ, self._wind : self._wind + 2] = np.outer(S[:, 0], along) + np.outer(
-                    S[:, 1] / speed, across
-                )
-            else:  # calm: each column is ∂/∂speed with the wind blowing along its axis
-                for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
-                    q = p.copy()
-                    q[_DIRECTION] = frm
-                    F[:_NZ, self._wind + j] = self._wind_stage(z, u, q, t)[:, -2]
-        else:
-            out = self._stage(z, u, p, t)
-        z_next, A, B = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ : 1 + _NZ + nu]
-        F[:_NZ, :_NZ] = A
-        if self._coupling is not None:
-            C, energy = float(s[self._coupling]), float(u[_ENERGY])
-            column = B[:, _ENERGY].copy()
-            column[_LOAD] -= 1.0 / p[_REFERENCE_ENERGY]
-            F[:_NZ, self._coupling] = column * energy / C
-        if self._inertia is not None and self._value is not None:
-            for j, i in enumerate(_INERTIA):  # forward differences of Ψ's values in p[i]
-                h = _INERTIA_STEP * self.p[i]
-                up = p.copy()
-                up[i] += h
-                F[:_NZ, self._inertia + j] = (
-                    (self._value(z, u, up, t)[:, 0] - z_next) / h * self.p[i]
-                )
+        F[:_NZ] = out[:, 1:]
+        if chart is None and self._wind is not None:  # calm: the wind's columns are each
+            col = 2 + _NZ  # ∂/∂speed with the wind along its axis (the stage's S_p[:, 0])
+            for j, frm in enumerate((-0.5 * math.pi, math.pi)):  # from the west, the south
+                q = p.copy()
+                q[_DIRECTION] = frm
+                F[:_NZ, self._wind + j] = self._stage(z, u, q, t)[:, col]
         s_next = s.copy()
         s_next[:_NZ] = z_next
         return s_next, F
@@ -381,10 +385,14 @@ class PsiEstimationModel:
         noise along J c (``ProcessNoise.inertia``: |H| T / A turns c a pulse)."""
         Q = self._Q.copy()
         s = np.asarray(s, dtype=float).ravel()
-        c = s[_CONE]
-        phase = float(np.linalg.norm(s[_H])) * self.period / self._transverse
-        turn = np.array([-c[1], c[0]]) * phase * self.noise.inertia
-        Q[_CONE, _CONE] += np.outer(turn, turn)
+        H = s[_H]
+        phase = math.sqrt(float(H @ H)) * self.period / self._transverse  # |H| as numpy's norm
+        sigma = self.noise.inertia
+        turn = (-float(s[_CONE.start + 1]) * phase * sigma, float(s[_CONE.start]) * phase * sigma)
+        i = _CONE.start  # the block += turn turnᵀ, in Python floats (numpy's dozen calls cost
+        for a in range(2):  # more than the arithmetic)
+            for b in range(2):
+                Q[i + a, i + b] += turn[a] * turn[b]
         return Q
 
     def _measurement(self, name: str, h: ca.Function) -> ca.Function:
@@ -410,29 +418,48 @@ class PsiEstimationModel:
             raise ParameterError(
                 "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
             )
-        f = self._sensors[sensor][0]
+        f, in_s = self._sensors[sensor][0], self._in_s[sensor]
         s = np.asarray(s, dtype=float).ravel()
         p = self.parameters(s)
-        out = f(s[:_NZ], p, dt)
-        y, H_z, H_p = out[:, 0], out[:, 1 : 1 + _NZ], out[:, 1 + _NZ :]
-        H = np.zeros((H_z.shape[0], self.n))
-        H[:, :_NZ] = H_z
-        if self._wind is not None and np.any(H_p[:, :2]):
-            speed, frm = float(p[_SPEED]), float(p[_DIRECTION])
-            if speed > _CALM:
-                along = np.array([-math.sin(frm), -math.cos(frm)])
-                across = np.array([-math.cos(frm), math.sin(frm)])
-                H[:, self._wind : self._wind + 2] = np.outer(H_p[:, 0], along) + np.outer(
-                    H_p[:, 1] / speed, across
-                )
-            else:
-                for j, d in enumerate((-0.5 * math.pi, math.pi)):
-                    q = p.copy()
-                    q[_DIRECTION] = d
-                    H[:, self._wind + j] = f(s[:_NZ], q, dt)[:, 1 + _NZ]
-        if self._coupling is not None:
-            H[:, self._coupling] = H_p[:, 2] * p[_REFERENCE_ENERGY]
-        return y.copy(), H
+        chart = _wind_chart(p) if self._wind is not None else _NO_CHART
+        out = in_s(s[:_NZ], p, dt, _NO_CHART if chart is None else chart)
+        H = out[:, 1:]
+        if chart is None and self._wind is not None:  # calm: ∂/∂speed, the wind along each axis
+            for j, d in enumerate((-0.5 * math.pi, math.pi)):
+                q = p.copy()
+                q[_DIRECTION] = d
+                H[:, self._wind + j] = f(s[:_NZ], q, dt)[:, 1 + _NZ]
+        return out[:, 0].copy(), H
+
+    def measure_many(
+        self, sensor: str, S: np.ndarray, dts: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(Y (k, m), H (k, m, n)): :meth:`measure` of each row of S (k, n) with its dt
+        (k,) [s], by one call of the sensor's Function mapped over the rows (a row in calm
+        air by :meth:`measure`): the same numbers, one call instead of k."""
+        if sensor not in self._sensors:
+            raise ParameterError(
+                "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
+            )
+        S = np.atleast_2d(np.asarray(S, dtype=float))
+        k = S.shape[0]
+        P = np.array([self.parameters(row) for row in S])
+        charts = [_wind_chart(p) if self._wind is not None else _NO_CHART for p in P]
+        key = (sensor, k)
+        if key not in self._mapped:
+            self._mapped[key] = Evaluator(self._in_s[sensor].function.map(k))
+        out = self._mapped[key](
+            S[:, :_NZ].T,
+            P.T,
+            np.asarray(dts, dtype=float).reshape(1, k),
+            np.hstack([_NO_CHART if c is None else c for c in charts]),
+        )
+        blocks = out.reshape(out.shape[0], k, 1 + self.n).transpose(1, 0, 2)
+        Y, H = blocks[:, :, 0].copy(), blocks[:, :, 1:].copy()
+        for i, chart in enumerate(charts):
+            if chart is None:  # calm air: the wind's columns as measure has them
+                Y[i], H[i] = self.measure(sensor, S[i], float(np.ravel(dts)[i]))
+        return Y, H
 
     def measurement_noise(self, sensor: str) -> np.ndarray:
         """R (m, m) of ``sensor``."""
@@ -441,3 +468,19 @@ class PsiEstimationModel:
                 "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
             )
         return self._sensors[sensor][1].copy()
+
+
+def _wind_chart(p: np.ndarray) -> np.ndarray | None:
+    """(2, 2) ∂(speed, direction from)/∂(east, north) of p's wind, the rows of a Jacobian
+    in (speed, direction) that make it one in the wind's east and north [m/s] (L); None in
+    calm air, where the direction is undefined."""
+    speed = float(p[_SPEED])
+    if speed <= _CALM:
+        return None
+    frm = float(p[_DIRECTION])
+    return np.array(
+        [
+            [-math.sin(frm), -math.cos(frm)],
+            [-math.cos(frm) / speed, math.sin(frm) / speed],
+        ]
+    )

@@ -214,3 +214,82 @@ def test_model_gramian_is_the_double_integrators_closed_form() -> None:
     np.testing.assert_allclose(seen.gramian, expected, rtol=1e-12)
     scaled = model_observability(model, S, F, ["position"], scale=np.array([0.01, 0.1]))
     assert scaled.bound("v") * 0.1 == pytest.approx(seen.bound("v"), rel=1e-9)
+
+
+def test_the_history_equals_filtering_every_reading_from_the_start() -> None:
+    """On a seeded flight of Ψ with the factory's slow states (wind, coupling, moments), a
+    gyro at each node, a camera frame taken 0.3 T before its node arriving one pulse late
+    (two pulses for every fourth, so a late frame refilters two nodes), frames lost: the
+    EKF's estimate at every step equals a filter run again from the first node over every
+    reading that has arrived, each at its node in the order it arrived, with the same
+    update (kalman.joseph_function), to 1e-12 relative: the history only saves that
+    filter's repeated work (the posteriors it keeps)."""
+    from test_psi_estimation_model import gyro
+
+    from lightcraft_opt.control.estimation.buffered import Evaluator
+    from lightcraft_opt.control.estimation.kalman import joseph_function, symmetric
+
+    sensors = {"camera": (camera(), 0.005**2 * np.eye(3)), "gyro": (gyro(), 0.01**2 * np.eye(2))}
+    model = PsiEstimationModel(
+        estimation_model(table1_flight5()),
+        sensors,
+        slow=("wind", "coupling", "inertia"),
+        compiled=False,
+    )
+    ekf = ExtendedKalmanFilter(model)
+    rng = np.random.default_rng(11)
+    x0 = initial_state(model.model, r_L=(0.0, 0.0, 2.0), v_L=(0.0, 0.0, 4.0), w_B=(0, 0.3, -0.2))
+    ekf.reset(x0, 0.0)
+    s0, P0 = ekf.s.copy(), ekf.P.copy()
+    u = nominal_inputs(model.model, model.psi.inputs)
+    L = np.linalg.cholesky(model.process_noise(s0, u, 0.0))
+    T, pulses = model.period, 9
+    truth = s0 + rng.normal(size=model.n) * np.sqrt(np.diag(P0))
+    arrivals: dict[int, list[Reading]] = {k: [] for k in range(pulses + 2)}
+    for k in range(pulses):
+        y = model.measure("gyro", truth, 0.0)[0] + 0.01 * rng.normal(size=2)
+        arrivals[k].append(Reading("gyro", k * T, k, y))
+        if k and k % 5 != 2:  # frames 2 and 7 lost
+            y = model.measure("camera", truth, 0.3 * T)[0] + 0.005 * rng.normal(size=3)
+            late = 2 if k % 4 == 0 else 1
+            arrivals[k + late].append(Reading("camera", (k - 0.3) * T, k + late, y))
+        truth = model.predict(truth, u, k * T)[0] + L @ rng.normal(size=model.n)
+    arrived: list[tuple[int, Reading]] = []  # (node, reading) in the order they arrived
+    for k in range(pulses):
+        est = ekf.step(arrivals[k], u if k else None, k * T)
+        arrived += [(int(np.ceil(r.t / T - 1e-9)), r) for r in arrivals[k]]
+        s, P = s0, P0
+        for j in range(k + 1):
+            for node, r in arrived:
+                if node == j:
+                    y_hat, H = model.measure(r.sensor, s, j * T - r.t)
+                    R, m = model.measurement_noise(r.sensor), len(y_hat)
+                    out = Evaluator(joseph_function(model.n, m))(s, P, r.y - y_hat, H, R)
+                    s, P = out[: model.n, 0], out[: model.n, 1:]
+            if j < k:  # Q at the posterior, as the filter's
+                Q = model.process_noise(s, u, j * T)
+                s, F = model.predict(s, u, j * T)
+                P = symmetric(F @ P @ F.T + Q)
+        np.testing.assert_allclose(ekf.s, s, rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(est.covariance, P, rtol=1e-12, atol=1e-12 * np.abs(P).max())
+
+
+@pytest.mark.parametrize("m", [1, 3, 20])
+def test_the_joseph_function_is_the_numpy_update(m: int) -> None:
+    """kalman.joseph_function (the EKF's, one casadi call) against joseph_update (numpy) on
+    a random positive definite P of 19 entries: the same mean, covariance and S to 1e-12
+    of each one's largest entry (the same algebra summed in another order)."""
+    from lightcraft_opt.control.estimation.buffered import Evaluator
+    from lightcraft_opt.control.estimation.kalman import joseph_function, joseph_update
+
+    rng = np.random.default_rng(m)
+    n = 19
+    A = rng.normal(size=(n, n))
+    P, H = A @ A.T + 0.1 * np.eye(n), rng.normal(size=(m, n))
+    B = rng.normal(size=(m, m))
+    R, mean, nu = B @ B.T + np.eye(m), rng.normal(size=n), rng.normal(size=m)
+    out = Evaluator(joseph_function(n, m))(mean, P, nu, H, R)
+    for got, want in zip(
+        (out[:n, 0], out[:n, 1:], out[n:, :m]), joseph_update(mean, P, nu, H, R), strict=True
+    ):
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()

@@ -419,12 +419,18 @@ def test_what_the_loop_refuses_is_named(phi):
 
 
 def test_the_factory_builds_the_estimators_and_names_what_is_missing():
-    """None for the truth; the MHE with the file's window over the filter's priors; an
-    estimator without a suite, or a spec that is not one, is named."""
+    """None for the truth; the MHE with the file's window and relinearisation (one stage
+    a pulse unless told) over the filter's priors; an estimator without a suite, or a spec
+    that is not one, is named."""
     assert build_estimator(EstimatorSpec(), MODEL, None) is None
     suite = SensorSuite(MODEL, SensorOptions())
     mhe = build_estimator(EstimatorSpec(EstimatorKind.MHE, {"horizon": 8}), MODEL, suite)
     assert isinstance(mhe, MovingHorizonEstimator) and mhe.options.horizon == 8
+    assert mhe.options.relinearize == 1
+    every = build_estimator(
+        EstimatorSpec(EstimatorKind.MHE, {"horizon": 8, "relinearize": 8}), MODEL, suite
+    )
+    assert isinstance(every, MovingHorizonEstimator) and every.options.relinearize == 8
     assert mhe.options.prior_sigmas[: len(EkfOptions().prior)] == EkfOptions().prior
     for kind in (EstimatorKind.EKF, EstimatorKind.MHE):
         with pytest.raises(OptionError, match=r"build_estimator.sensors: .* needs a suite"):

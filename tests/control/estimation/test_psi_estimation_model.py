@@ -155,8 +155,8 @@ def _state_of(model: PsiEstimationModel) -> np.ndarray:
 
 def test_the_moments_columns_are_psis_derivative() -> None:
     """With the rotor's moments as slow states (the estimators the factory builds), F's
-    columns in them (forward differences inside predict, step 1e-7) against central
-    differences of f with another step (1e-5): rows to 1e-6 of their largest entry; the
+    columns in them (the pieces' Jacobians in p's moments, chained) against central
+    differences of f (step 1e-5): rows to 1e-6 of their largest entry; the
     transverse moment turns the cone (its column's coning rows are not zero; the axial
     moment enters Ψ's step only through the lift, the spin that |H| means)."""
     sensors = {"camera": (camera(), 0.005**2 * np.eye(3))}
@@ -176,3 +176,68 @@ def test_the_moments_columns_are_psis_derivative() -> None:
     assert np.all(np.abs(F - F_fd) <= 1e-6 * row + 1e-12)
     cone = [model.names.index("coning[e1]"), model.names.index("coning[e2]")]
     assert np.abs(F[cone, -2]).min() > 0.01
+
+
+def test_the_moments_columns_are_exact() -> None:
+    """The transverse moment's column of F is Ψ's derivative itself, not a difference:
+    central differences of f in it approach it at second order (a tenth of the step, a
+    hundredth of the error: 1.9e-6 at 1e-4, 1.9e-8 at 1e-5, of a column of 0.41), where
+    the forward differences it replaced (step 1e-7) were 1e-6 of the column off."""
+    model = PsiEstimationModel(
+        estimation_model(table1_flight5()),
+        {"camera": (camera(), 0.005**2 * np.eye(3))},
+        slow=("wind", "coupling", "inertia"),
+        compiled=False,
+    )
+    s = _state(model, (3.0, 0.5))
+    u = nominal_inputs(model.model, model.psi.inputs)
+    _, F = model.predict(s, u, 0.0)
+    j = model.names.index("inertia[transverse]")
+    column = F[:, j]
+
+    def error(step: float) -> float:
+        e = np.zeros(s.size)
+        e[j] = step
+        central = (model.predict(s + e, u, 0.0)[0] - model.predict(s - e, u, 0.0)[0]) / (2 * step)
+        return float(np.abs(central - column).max())
+
+    big, small = error(1e-4), error(1e-5)
+    assert small <= 1e-7 * np.abs(column).max()
+    assert 50.0 <= big / small <= 200.0
+
+
+def test_the_estimator_chain_is_the_directors_in_its_columns(model: PsiEstimationModel) -> None:
+    """The estimator's chain (psi_chain.py: its pieces differentiate in z, the energy and
+    the wind's entries of p only) against Ψ's full chain (reduced_map_derivatives.py, the
+    director's): the same z_next, ∂z_next/∂z and energy column, to 1e-12 of each one's
+    largest entry (the same derivatives, summed in another order)."""
+    from lightcraft_opt.layout import PULSE_INPUT
+    from lightcraft_opt.symbolic.maps.reduced_map_derivatives import (
+        build_reduced_map_derivatives,
+    )
+
+    s = _state(model, (3.0, 0.5))
+    u = nominal_inputs(model.model, model.psi.inputs)
+    p, z = model.parameters(s), s[:14]
+    ours = model._stage(z, u, p, 0.1)
+    z_next, _, A, B = build_reduced_map_derivatives(model.psi).stage(z, u, p, 0.1)
+    energy = PULSE_INPUT.slot("energy").start
+    for got, want in ((ours[:, 0], z_next), (ours[:, 1:15], A), (ours[:, 15], B[:, energy])):
+        want = np.asarray(want).reshape(np.shape(got))
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+
+
+@pytest.mark.parametrize("sensor", ["camera", "gyro"])
+def test_measure_many_is_measure_row_by_row(model: PsiEstimationModel, sensor: str) -> None:
+    """measure_many (the sensor's Function mapped over the rows, what the MHE reads its
+    window with) gives each row's measure bit for bit, a row in calm air included."""
+    rng = np.random.default_rng(5)
+    s = _state(model, (3.0, 0.5))
+    S = s + 1e-3 * np.abs(s).max() * rng.normal(size=(4, model.n)) * (s != 0)
+    S[2, model.names.index("wind_L[east]") :][:2] = 0.0  # calm
+    dts = np.array([0.0, 0.01, 0.02, 0.03])
+    Y, H = model.measure_many(sensor, S, dts)
+    for i in range(4):
+        y, h = model.measure(sensor, S[i], dts[i])
+        np.testing.assert_array_equal(Y[i], y)
+        np.testing.assert_array_equal(H[i], h)
