@@ -5,9 +5,10 @@ Both differentiate the same jump by different routes (the structured one cuts it
 optic's pose, its three energy moments and E_ref), so they agree to rounding: 1e-10 of the
 largest entry. Cases cover what the cut must carry: the linear beam and the waist beam
 (whose E_ref and fluence depend on the focus), the top-hat and Gaussian profiles, a Delrin
-craft (the liner's fmin and if_else read E_cap), an odd radial count, a tilted craft off
-the beam axis. The chain over the pieces is checked against AD through Φ and finite
-differences in test_pulse_map_derivatives.py, which now runs through this cut.
+craft (the liner's fmin and if_else read E_cap), an odd radial count, three sectors (the
+fewest whose energies carry the three moments), a tilted craft off the beam axis. The chain
+over the pieces is checked against AD through Φ and finite differences in
+test_pulse_map_derivatives.py, which now runs through this cut.
 """
 
 from __future__ import annotations
@@ -53,6 +54,7 @@ CASES = {
     ),
     "gaussian": lambda: _optic(_laser(_flight5(), profile=BeamProfile.GAUSSIAN), 2, 8),
     "delrin": lambda: _optic(load_model(MODELS / "flight16.toml"), 2, 8),
+    "three-sectors": lambda: _optic(_flight5(), 2, 3),  # the fewest the moments allow
 }
 
 
@@ -107,8 +109,11 @@ def test_the_cut_is_smaller_than_ad_of_the_whole_jump():
     assert built[1].n_instructions() < 0.5 * plain.n_instructions()
 
 
-def test_the_kernel_model_keeps_ad_of_the_whole_jump():
+def test_the_kernel_model_and_two_sectors_keep_ad_of_the_whole_jump():
+    """The cut needs the SECTOR model's three moments, which two sectors cannot carry."""
     model = table1_flight5(engine=Engine(impulse_model=ImpulseModel.KERNEL))
     assert structured_jump_derivatives(model) is None
+    assert structured_jump_derivatives(_optic(_flight5(), 2, 2)) is None
+    assert structured_jump_derivatives(_optic(_flight5(), 2, 3)) is not None
     pieces = build_pulse_map_pieces(model, PulseMapOptions())
     assert pieces.model is model

@@ -2,39 +2,42 @@
 
 casadi's SX Hessian of the whole jump (pulse_map_derivatives.py) differentiates each of the
 optic's n_r x N quadrature points in every direction of v = (x, pulse): with the model
-files' 8 x 32 optic that is 542k instructions, over what gcc compiles in reasonable time,
-and 1.9 ms a call interpreted. Yet a point's fluence F depends on five numbers only,
-s = (xi, eta, z, focus, energy), and those are affine in the optic's pose
+files' 8 x 32 optic under the waist beam that is 542k instructions, over what gcc compiles
+in reasonable time, and 1-3 ms a call interpreted. Yet a point's fluence F depends on five
+numbers only, s = (xi, eta, z, focus, energy), and those are affine in the optic's pose
 
-    y = (xi0, eta0, z0, b2_L, b3_L, focus, energy, |b1 . z_L|)        (12 numbers)
+    y = (xi0, eta0, z0, b2_L, b3_L, focus, energy, π),   π = |b1 . z_L|     (12 numbers)
 
-(engine.py :func:`~lightcraft_opt.symbolic.terms.engine.optic_pose`): s_jk = A_jk y with
+(:func:`~lightcraft_opt.symbolic.terms.engine.optic_pose`): s_jk = A_jk y with
 xi = xi0 + r_j (cos φ_k b2_L[0] + sin φ_k b3_L[0]) and likewise eta, z (A_jk's entries 1,
-r_j cos φ_k, r_j sin φ_k). So the jump is cut in three,
+r_j cos φ_k, r_j sin φ_k). The SECTOR model reads the sector energies E_k = c π S_k
+(S_k = Σ_j w_j F_jk, c = 2π/N) only through three moments M = c π Σ_k S_k (1, cos φ_k,
+sin φ_k): E_cap and the dipole. So the jump is cut in three,
 
-    y(v),   E_k(y) = c |b1 . z_L| Σ_j w_j F(A_jk y)  (c = 2π/N),   E_ref(focus),
-    K(v, E, E_ref): the rest of the jump given the energies (engine_impulse's ``energies``),
+    y(v),   M(y),   E_ref(focus),
+    K(v, M, E_ref): the rest of the jump, given sector energies with those moments
+                    (engine_impulse's ``energies``: E_k = (M_0 + 2 M_1 cos φ_k + 2 M_2 sin φ_k)/N),
 
 and differentiated by the chain rule, ρ the outputs' adjoint:
 
-    ∂out/∂v = K_v + K_E E_y Y + K_r E_ref' e_f
-    ∇²(ρᵀ out) = Gᵀ ∇²(ρᵀ K) G + Yᵀ Σ_k β_k ∇²E_k Y + ∇²(γᵀ y(v)) + β_r E_ref'' e_f e_fᵀ
+    ∂out/∂v = K_v + K_M M_y Y + K_r E_ref' e_f
+    ∇²(ρᵀ out) = Gᵀ ∇²(ρᵀ K) G + Yᵀ ∇²(βᵀ M) Y + ∇²(γᵀ y(v)) + β_r E_ref'' e_f e_fᵀ
 
-with Y = ∂y/∂v, G = [I; E_y Y; E_ref' e_fᵀ], β = K_Eᵀ ρ, β_r = K_rᵀ ρ, γ = E_yᵀ β (held
+with Y = ∂y/∂v, G = [I; M_y Y; E_ref' e_fᵀ], β = K_Mᵀ ρ, β_r = K_rᵀ ρ, γ = M_yᵀ β (held
 fixed in ∇²(γᵀ y)), e_f the focus's column of v and, from each point's gradient g_jk and
-Hessian H_jk of F in s (casadi's AD of one point),
+Hessian H_jk of F in s (casadi's AD of one point) and β̃_k = β_0 + β_1 cos φ_k + β_2 sin φ_k,
 
-    ∂S_k/∂y = Σ_j w_j A_jkᵀ g_jk,   ∇²S_k = Σ_j w_j A_jkᵀ H_jk A_jk    (S_k = Σ_j w_j F_jk)
-    E_k = c π S_k,  ∂E_k/∂y = c (π ∂S_k/∂y + S_k e_π),
-    ∇²E_k = c (π ∇²S_k + ∂S_k/∂y e_πᵀ + e_π ∂S_k/∂yᵀ)            (π = |b1 . z_L|)
+    ∂S_k/∂y = Σ_j w_j A_jkᵀ g_jk,   Σ_k β̃_k ∇²S_k = Σ_jk β̃_k w_j A_jkᵀ H_jk A_jk,
+    ∇²(βᵀ M) = c (π Σ_k β̃_k ∇²S_k + d e_πᵀ + e_π dᵀ),   d = Σ_k β̃_k ∂S_k/∂y.
 
-E_ref, the same quadrature for a centred upright craft, depends on v through the focus
-alone. Nothing is derived by hand but the cut: every derivative is casadi's AD of a piece.
-The Functions have the names, inputs and outputs of the plain pieces, and equal them to
-rounding (tests/symbolic/test_jump_derivatives.py); for 8 x 32 the Hessian is about a
-sixth of the size. The SECTOR impulse model only (the KERNEL model evaluates the quadrature
-twice, at the craft and on the axis) and no designed entries of p (those may move the
-quadrature's radii); otherwise :func:`structured_jump_derivatives` returns None.
+E_ref, the same quadrature for a centred upright craft, depends on v through the beam's size
+at the ring's height, a function of the focus alone. Nothing is derived by hand but the cut:
+every derivative is casadi's AD of a piece. The Functions have the names, inputs and outputs
+of the plain pieces and equal them to rounding (tests/symbolic/test_jump_derivatives.py);
+at 8 x 32 the Hessian has 43 % of the instructions (bench/README.md). The SECTOR impulse
+model only (the KERNEL model evaluates the quadrature twice, at the craft and on the axis:
+:func:`structured_jump_derivatives` returns None); the chain uses it only without designed
+entries of p, which may move the quadrature's radii (pulse_map_derivatives.py).
 """
 
 from __future__ import annotations
@@ -123,36 +126,20 @@ def _symmetric(upper: list[list[ca.SX]]) -> ca.SX:
     return M
 
 
-def structured_jump_derivatives(
-    model: Model, *, hessian: bool = True
-) -> tuple[ca.Function, ca.Function | None] | None:
-    """``pulse_jump_jacobian(x, pulse, p) -> jac`` and (with ``hessian``)
-    ``pulse_jump_hessian(x, pulse, p, adjoint) -> (jac, hess)`` of the jump in v = (x,
-    pulse) (module docstring), as the plain pieces of pulse_map_derivatives.py; None for a
-    model whose impulse model is not SECTOR."""
-    engine = model.craft.engine
-    if engine.impulse_model is not ImpulseModel.SECTOR:
-        return None
-    x = ca.SX.sym("x", STATE.size)
-    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
-    p = ca.SX.sym("p", PARAMETERS.size)
-    v = ca.vertcat(x, pulse)
-    n_v = v.numel()
-    i_focus = STATE.size + PULSE_INPUT.slot("focus").start
+def _harmonics(phi: np.ndarray) -> ca.DM:
+    """(3, N): 1, cos φ_k, sin φ_k of the sectors' azimuths ``phi`` (N,) [rad]."""
+    return ca.DM(np.vstack([np.ones(phi.size), np.cos(phi), np.sin(phi)]))
 
-    # the pose y(v) and its Jacobian
-    pose = optic_pose(x, pulse, p)
-    focus, energy = PULSE_INPUT.get("focus", pulse), PULSE_INPUT.get("energy", pulse)
-    y_of_v = ca.vertcat(*pose.centre, pose.R_LB[:, 1], pose.R_LB[:, 2], focus, energy)
-    y_of_v = ca.vertcat(y_of_v, pose.projection)
-    Y = ca.jacobian(y_of_v, v)
 
-    # the quadrature, point by point, in y held as a symbol, cut at its three moments
-    y = ca.SX.sym("y", _NY)
-    r, w_r, phi = optic_quadrature(engine, p)
+def _quadrature_moments(
+    model: Model, p: ca.SX, y: ca.SX, beta: ca.SX
+) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """(M (3,) [J], M_y (3, 12), ∇²(βᵀ M) (12, 12)) in the pose y (module docstring), point
+    by point; ``p`` the parameters (the quadrature's radii), ``beta`` (3,) the moments'
+    weights."""
+    r, w_r, phi = optic_quadrature(model.craft.engine, p)
     c = 2 * math.pi / len(phi)
     point = _point_derivatives(model)
-    beta = ca.SX.sym("beta", 3)  # K_Mᵀ ρ, a symbol until the end
     S, dS = [], []
     upper = [[ca.SX(0) for _ in range(_NY)] for _ in range(_NY)]  # Σ_k β̃_k ∇²S_k
     for angle in phi:
@@ -171,53 +158,83 @@ def structured_jump_derivatives(
             _accumulate_point(upper, grad, coef, beta_k * w_r[j], w_r[j], g, H)
         S.append(S_k)
         dS.append(ca.vertcat(*grad))
-    harmonic = ca.DM(np.vstack([np.ones(len(phi)), np.cos(phi), np.sin(phi)]))  # (3, N)
+    harmonic = _harmonics(phi)
     S_row, dS_cols = ca.horzcat(*S), ca.horzcat(*dS)  # (1, N), (12, N)
     projection = y[_PROJECTION]
-    M = c * projection * ca.mtimes(harmonic, S_row.T)  # (3,): E_cap, D_b2, D_b3 [J]
     e_pi = ca.DM.zeros(_NY)
     e_pi[_PROJECTION] = 1
-    M_y = c * (  # (3, 12)
+    M = c * projection * ca.mtimes(harmonic, S_row.T)  # E_cap, D_b2, D_b3 [J]
+    M_y = c * (
         projection * ca.mtimes(harmonic, dS_cols.T)
         + ca.mtimes(ca.mtimes(harmonic, S_row.T), e_pi.T)
     )
     weighted_dS = ca.mtimes(dS_cols, ca.mtimes(harmonic.T, beta))  # Σ_k β̃_k ∂S_k/∂y
-    hess_M = c * (  # Σ_i β_i ∇²M_i
+    hess_M = c * (
         projection * _symmetric(upper)
         + ca.mtimes(weighted_dS, e_pi.T)
         + ca.mtimes(e_pi, weighted_dS.T)
     )
+    return M, M_y, hess_M
 
-    # E_ref: a centred, upright craft at the pulse's focus and the reference energy; its
-    # points share the range h, so E_ref depends on the focus through the beam's size there
+
+def _reference_energy(model: Model, p: ca.SX, focus: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """(E_ref [J], dE_ref/dfocus, d²E_ref/dfocus²): a centred, upright craft at the pulse's
+    ``focus`` [m] and the reference energy. Its points share the range h (the ring's
+    height), so E_ref depends on the focus through the beam's size a there."""
+    r, w_r, phi = optic_quadrature(model.craft.engine, p)
+    c = 2 * math.pi / len(phi)
     upright = math.sqrt(1 + PROJECTION_EPS**2)
     size = ca.SX.sym("a")
     e0 = PARAMETERS.get("reference_pulse_energy", p)
     cos_phi, sin_phi = ca.DM(np.cos(phi)).T, ca.DM(np.sin(phi)).T
     F_ref = fluence(ca.mtimes(r, cos_phi), ca.mtimes(r, sin_phi), size, e0, p, model.laser)
-    ref_of_size = c * upright * ca.sum2(ca.mtimes(w_r.T, F_ref))
-    ref_dd_size, ref_d_size = ca.hessian(ref_of_size, size)
-    f_sym = ca.SX.sym("focus")
-    size_of_focus = beam_side(PARAMETERS.get("ring_height", p), f_sym, p, model.laser)
-    size_dd, size_d = ca.hessian(size_of_focus, f_sym)
-    E_ref, dE_ref, ddE_ref = (
-        ca.substitute(
-            ca.substitute(q, size, size_of_focus),
-            f_sym,
-            focus,
-        )
-        for q in (
-            ref_of_size,
-            ref_d_size * size_d,
-            ref_dd_size * size_d**2 + ref_d_size * size_dd,
-        )
-    )
+    of_size = c * upright * ca.sum2(ca.mtimes(w_r.T, F_ref))
+    dd_size, d_size = ca.hessian(of_size, size)
+    f = ca.SX.sym("focus")
+    size_of_focus = beam_side(PARAMETERS.get("ring_height", p), f, p, model.laser)
+    size_dd, size_d = ca.hessian(size_of_focus, f)
+    chained = (of_size, d_size * size_d, dd_size * size_d**2 + d_size * size_dd)
+    at_focus = [ca.substitute(ca.substitute(q, size, size_of_focus), f, focus) for q in chained]
+    return at_focus[0], at_focus[1], at_focus[2]
+
+
+def structured_jump_derivatives(
+    model: Model, *, hessian: bool = True
+) -> tuple[ca.Function, ca.Function | None] | None:
+    """``pulse_jump_jacobian(x, pulse, p) -> jac`` and (with ``hessian``)
+    ``pulse_jump_hessian(x, pulse, p, adjoint) -> (jac, hess)`` of the jump in v = (x,
+    pulse) (module docstring), as the plain pieces of pulse_map_derivatives.py; None for a
+    model whose impulse model is not SECTOR, or whose optic has fewer than three sectors
+    (three moments need them)."""
+    engine = model.craft.engine
+    if engine.impulse_model is not ImpulseModel.SECTOR or engine.quadrature_azimuthal < 3:
+        return None
+    x = ca.SX.sym("x", STATE.size)
+    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    v = ca.vertcat(x, pulse)
+    n_v = v.numel()
+    i_focus = STATE.size + PULSE_INPUT.slot("focus").start
+
+    # the pose y(v) and its Jacobian
+    pose = optic_pose(x, pulse, p)
+    focus, energy = PULSE_INPUT.get("focus", pulse), PULSE_INPUT.get("energy", pulse)
+    y_of_v = ca.vertcat(*pose.centre, pose.R_LB[:, 1], pose.R_LB[:, 2], focus, energy)
+    y_of_v = ca.vertcat(y_of_v, pose.projection)
+    Y = ca.jacobian(y_of_v, v)
+
+    y = ca.SX.sym("y", _NY)
+    beta = ca.SX.sym("beta", 3)  # K_Mᵀ ρ, a symbol until the end
+    M, M_y, hess_M = _quadrature_moments(model, p, y, beta)
+    E_ref, dE_ref, ddE_ref = _reference_energy(model, p, focus)
+    phi = optic_quadrature(engine, p)[2]
+    harmonic = _harmonics(phi)
 
     # K: the rest of the jump, given the moments. The SECTOR model reads the sector
     # energies through E_cap = Σ E_k and the dipole Σ E_k (cos φ_k, sin φ_k) only, and
     # E_k = (M_0 + 2 M_1 cos φ_k + 2 M_2 sin φ_k) / N has exactly these sums (N >= 3)
     M_sym = ca.SX.sym("M", 3)
-    E_of_M = ca.mtimes(M_sym.T, harmonic * ca.DM([[1.0], [2.0], [2.0]])) / len(phi)
+    E_of_M = ca.mtimes(M_sym.T, harmonic * ca.DM([[1.0], [2.0], [2.0]])) / phi.size
     E_ref_sym = ca.SX.sym("E_ref")
     x_plus, eng = pulse_jump(x, pulse, p, model, (E_of_M, E_ref_sym))
     out = ca.vertcat(x_plus, *(ca.vec(eng[name]) for name in ENGINE.names))
