@@ -37,7 +37,9 @@ of the plain pieces and equal them to rounding (tests/symbolic/test_jump_derivat
 at 8 x 32 the Hessian has 43 % of the instructions (bench/README.md). The SECTOR impulse
 model only (the KERNEL model evaluates the quadrature twice, at the craft and on the axis:
 :func:`structured_jump_derivatives` returns None); the chain uses it only without designed
-entries of p, which may move the quadrature's radii (pulse_map_derivatives.py).
+entries of p (pulse_map_derivatives.py). Designed entries can move the quadrature's radii,
+and a version in them (tried 2026-12-06: 278k instead of 662k instructions for
+problems/design_flight5.toml) changed where that problem's IPOPT path ended (docs/design.md).
 """
 
 from __future__ import annotations
