@@ -221,8 +221,9 @@ def solver_status(
     stats = call.stats
     iterations = int(stats.get("iter_count", 0)) if stats else 0
     raw = stats.get("return_status", "unknown") if stats else "unknown"
-    if call.stall is not None:
-        return OcpStatus.INFEASIBLE, f"{name}: {call.stall.describe()}", iterations
+    if call.stall is not None:  # a diverged solve failed; the problem is not infeasible
+        status = OcpStatus.FAILED if call.stall.diverged else OcpStatus.INFEASIBLE
+        return status, f"{name}: {call.stall.describe()}", iterations
     if call.deadline_reached or raw in IPOPT_TIME_LIMIT:
         if call.solution is None:  # fatrop's process, stopped mid-solve
             return (

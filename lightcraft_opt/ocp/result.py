@@ -9,6 +9,7 @@ again (ocp/replay.py).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -32,7 +33,8 @@ class OcpStatus(Enum):
     TIME_LIMIT = "time_limit"  # the wall-clock limit (OcpOptions.time_limit) came first
     INFEASIBLE = "infeasible"  # the solver found the constraints (locally) infeasible, or
     # its constraint violation stalled (OcpOptions.stall_iterations, ocp/stall.py)
-    FAILED = "failed"  # anything else: evaluation error, line search or QP failure ...
+    FAILED = "failed"  # anything else: evaluation error, line search or QP failure, a solve
+    # that nearly met its constraints and then diverged (ocp/stall.py) ...
 
 
 @dataclass(frozen=True, eq=False)
@@ -202,6 +204,18 @@ class OcpResult(Presentable):
     def success(self) -> bool:
         """True when the solver converged (SOLVED or ACCEPTABLE)."""
         return self.status in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE)
+
+    def after_failed_resolve(self, failed: OcpResult) -> OcpResult:
+        """This cold solve, done after the re-solve ``failed`` fell short: its message
+        says so first, its iterations and solve time count both."""
+        how = failed.message.split(";")[0]
+        return dataclasses.replace(
+            self,
+            message=f"the re-solve from the previous result ended {failed.status.value} "
+            f"after {failed.iterations} iterations ({how}), so it was solved cold: " + self.message,
+            iterations=self.iterations + failed.iterations,
+            solve_time=self.solve_time + failed.solve_time,
+        )
 
     @property
     def horizon(self) -> int:

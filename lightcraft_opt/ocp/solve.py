@@ -74,7 +74,6 @@ from lightcraft_opt.ocp.start import (
 from lightcraft_opt.ocp.time_limit import (
     Deadline,
     Progress,
-    SolverCall,
     call_forked,
     call_solver,
     can_fork,
@@ -83,6 +82,13 @@ from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = ["CompiledOcp", "rollout", "solve"]
+
+
+#: How a re-solve from a previous result may end and be solved again cold: a
+#: neighbour's optimum can mislead IPOPT started at a barrier of 1e-9 (the craft moved 1 cm
+#: from the optimum of problems/beam_tracking_focus.toml: stalled after 128 iterations;
+#: cold, 173 iterations to the optimum). The wall-clock limit holds across both solves.
+RESOLVE_FELL_SHORT = frozenset({OcpStatus.FAILED, OcpStatus.INFEASIBLE})
 
 
 class CompiledOcp:
@@ -235,8 +241,10 @@ class CompiledOcp:
             with no multipliers; else the nominal policy's rollout.
         warm_start : a previous result of this compiled problem: its primal and dual
             solution start the solver (overrides ``initial_guess``); IPOPT then starts with
-            a barrier parameter of 1e-6 instead of 0.1 (a second IPOPT instance, built on
-            the first warm start).
+            a barrier parameter of 1e-9 (``nlp_solver.RESOLVE_IPOPT``, a second IPOPT
+            instance, built on the first warm start). A re-solve that fails or calls the
+            problem infeasible (:data:`RESOLVE_FELL_SHORT`) is solved again cold, as
+            without ``warm_start``; the result says so and counts both.
 
         Returns
         -------
@@ -255,6 +263,10 @@ class CompiledOcp:
             result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
         else:
             result = self._solve_once(x0v, pv, t0v, u_prev, ref, initial_guess, warm_start, until)
+        if warm_start is not None and result.status in RESOLVE_FELL_SHORT:
+            # a neighbour's optimum did not lead there: cold, as if there were none
+            cold = self._solve_once(x0v, pv, t0v, u_prev, ref, None, None, until)
+            result = cold.after_failed_resolve(result)
         if self.options.sensitivities:
             P = self.transcription.parameter_vector(x0v, pv, t0v, u_prev, self._u_fixed, ref)
             sens = self._envelope(result, P)
@@ -369,9 +381,9 @@ class CompiledOcp:
         first = None
         if convex is not None:  # the convexified Hessian first, then the exact one, warm
             first = call_solver(convex, args, self._deadline, until)
-            done = _iterations(first)
-            if _finite(first):
-                args = _continued(args, first)
+            done = first.iterations
+            if first.finite:
+                args = first.continued(args)
                 solver = self._warm_started()
             phase = f" (after {done} iterations with the convexified Hessian)"
         if first is not None and (first.stall is not None or first.deadline_reached):
@@ -380,12 +392,12 @@ class CompiledOcp:
             call = call_forked(solver, args, until - start)
         else:
             call = call_solver(solver, args, self._deadline, until, first_iteration=done)
-            if kept and not _succeeded(call) and call.stall is None and not call.deadline_reached:
+            if kept and not call.succeeded and call.stall is None and not call.deadline_reached:
                 # the kept Hessian did not get there: on from where it stopped, exact
-                done = _iterations(call)
+                done = call.iterations
                 self._keep_blocks(False)
-                if _finite(call):
-                    args = _continued(args, call)
+                if call.finite:
+                    args = call.continued(args)
                 call = call_solver(solver, args, self._deadline, until, first_iteration=done)
                 phase = f" (after {done} iterations with the kept Hessian)"
         self.last_solver = solver
@@ -616,14 +628,16 @@ class CompiledOcp:
         if status is OcpStatus.INFEASIBLE:
             message += "; infeasible: " + unmet_constraint(rows, g, tr.lbg, tr.ubg, lam_g, tol)
         elif status not in (OcpStatus.SOLVED, OcpStatus.ACCEPTABLE) and viol > tol:
+            stop = {
+                OcpStatus.MAX_ITER: f"the iteration limit ({self.options.max_iter})",
+                OcpStatus.TIME_LIMIT: "the wall-clock limit",
+            }.get(status, "the solver's stop")  # FAILED: its message says why
             message += f"; constraints violated by up to {viol:.3g} (scaled units) at the "
             message += (
                 "initial guess, returned as is"
                 if not iterations
-                else f"returned iterate: the iteration limit ({self.options.max_iter}) came "
-                "before the constraints were met (raise max_iter)"
-                if status is OcpStatus.MAX_ITER
-                else "returned iterate: the problem may be infeasible"
+                else f"returned iterate: {stop} came before the constraints were met"
+                + (" (raise max_iter)" if status is OcpStatus.MAX_ITER else "")
             )
         return OcpResult(
             status=status,
@@ -676,25 +690,3 @@ def solve(
     """
     compiled = CompiledOcp(problem, options, pulse_map=pulse_map)
     return compiled.solve(initial_guess=initial_guess, warm_start=warm_start)
-
-
-def _succeeded(call: SolverCall) -> bool:
-    """Whether the solver reported success for ``call``."""
-    return bool(call.stats and call.stats.get("success"))
-
-
-def _iterations(call: SolverCall) -> int:
-    """The iterations ``call`` reported (0 when it left no statistics)."""
-    return int(call.stats.get("iter_count", 0)) if call.stats else 0
-
-
-def _finite(call: SolverCall) -> bool:
-    """Whether ``call`` returned a finite primal point to go on from."""
-    return call.solution is not None and bool(np.all(np.isfinite(call.solution[0])))
-
-
-def _continued(args: dict[str, Any], call: SolverCall) -> dict[str, Any]:
-    """The solver arguments ``args`` started at ``call``'s primal and dual point."""
-    assert call.solution is not None
-    w, lam_x, lam_g = call.solution
-    return {**args, "x0": w, "lam_x0": lam_x, "lam_g0": lam_g}

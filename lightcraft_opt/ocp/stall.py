@@ -26,6 +26,14 @@ that flies (the director's flight, ocp/start.py) IPOPT walks through iterates vi
 not infeasibility; a problem that cannot be met at all misses by far more (24.8 and 17.7
 below).
 
+A stall is not always infeasibility. A solve whose own iterates came within :data:`NEAR`
+of its constraints (a millimetre's dynamics gap, scaled) and then rose above the floor and
+stayed there has diverged from a point that nearly met them: ``problems/design_flight5.toml``
+with the jump's derivatives cut (commit 45a9bd8, reverted) reached 1.28e-6 at iteration 97,
+then rose and stalled at 127. The rule stops it all the same (it will not come back by
+itself), and :attr:`Stall.diverged` says which it was, so the caller reports a failed solve,
+not an infeasible problem.
+
 Why W = 30 and 10 % (measured 2026-12-03): problem (b) (problems/least_energy_flight16.toml)
 with the pulse energy capped at 20 J, which cannot leave the pad, let alone reach 30 m:
 IPOPT's violation falls 30 -> 24.8 m in 35 iterations and stays there (20 pulses; it said
@@ -50,13 +58,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FALL", "FLOOR", "Stall", "find_stall"]
+__all__ = ["FALL", "FLOOR", "NEAR", "Stall", "find_stall"]
 
 #: A window's least violation must fall below this fraction of the least before it [-].
 FALL = 0.9
 
 #: Violations under this (scaled units) never stall: a solve still that close is going on.
 FLOOR = 1.0
+
+#: A stalled solve whose iterates once came under this (scaled units) diverged: the
+#: problem is feasible there, nearly; the solver lost it.
+NEAR = 1e-3
 
 
 @dataclass(frozen=True)
@@ -70,18 +82,36 @@ class Stall:
     before : least violation of iterations ``max(iteration - 2W + 1, 1) .. iteration - W``
         (scaled units; the start, iteration 0, left out).
     violation : least violation of the last W iterations (scaled units), > FALL * before.
+    nearest, nearest_iteration : least violation of any iterate before the last W (the
+        start left out) and the iteration that had it.
     """
 
     iteration: int
     window: int
     before: float
     violation: float
+    nearest: float = math.inf
+    nearest_iteration: int = 0
+
+    @property
+    def diverged(self) -> bool:
+        """Whether the solve came within :data:`NEAR` of its constraints before it stalled
+        (a failed solve, not an infeasible problem)."""
+        return self.nearest <= NEAR
 
     def describe(self) -> str:
         """The stall in words, for a result's message."""
         k, w = self.iteration, self.window
         first = max(k - 2 * w + 1, 1)
         fall = 1.0 - self.violation / self.before if math.isfinite(self.before) else 0.0
+        if self.diverged:
+            return (
+                f"diverged: the constraint violation came down to {self.nearest:.3g} (scaled) "
+                f"at iteration {self.nearest_iteration}, then rose, and the least of "
+                f"iterations {k - w + 1}-{k} is {self.violation:.3g}, only "
+                f"{100 * max(fall, 0.0):.1f} % below that of iterations {first}-{k - w}: "
+                "the problem is nearly met there, the solver lost it"
+            )
         return (
             f"stalled: the least constraint violation of iterations {k - w + 1}-{k}, "
             f"{self.violation:.3g} (scaled), is only {100 * max(fall, 0.0):.1f} % below that "
@@ -114,4 +144,6 @@ def find_stall(violations: Sequence[float] | np.ndarray, window: int, tol: float
     now, before = float(np.min(v[k - window + 1 :])), float(np.min(earlier))
     if now <= FALL * before or now < FLOOR:
         return None
-    return Stall(k, window, before, now)
+    solver = v[1 : k - window + 1]  # the solver's iterates before the window
+    j = int(np.argmin(solver))
+    return Stall(k, window, before, now, float(solver[j]), j + 1)

@@ -67,6 +67,27 @@ class SolverCall:
     deadline_reached: bool = False
     stall: Stall | None = None
 
+    @property
+    def succeeded(self) -> bool:
+        """Whether the solver reported success."""
+        return bool(self.stats and self.stats.get("success"))
+
+    @property
+    def iterations(self) -> int:
+        """The iterations the solver reported (0 when it left no statistics)."""
+        return int(self.stats.get("iter_count", 0)) if self.stats else 0
+
+    @property
+    def finite(self) -> bool:
+        """Whether the call returned a finite primal point to go on from."""
+        return self.solution is not None and bool(np.all(np.isfinite(self.solution[0])))
+
+    def continued(self, args: dict[str, Any]) -> dict[str, Any]:
+        """The solver arguments ``args`` started at this call's primal and dual point."""
+        assert self.solution is not None
+        w, lam_x, lam_g = self.solution
+        return {**args, "x0": w, "lam_x0": lam_x, "lam_g0": lam_g}
+
 
 #: A progress hook: (iteration, objective, largest constraint violation) of an iterate.
 Progress = Callable[[int, float, float], None]

@@ -26,10 +26,12 @@ from lightcraft_opt.errors import OptionError, ProblemFileError
 from lightcraft_opt.files.problem import load_problem
 from lightcraft_opt.layout import STATE
 from lightcraft_opt.ocp.constraint_rows import ConstraintRow, dynamics_gap, unmet_constraint
+from lightcraft_opt.ocp.nlp_solver import solver_status
 from lightcraft_opt.ocp.options import OCP_STALL_ITERATIONS, OcpOptions
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp, rollout
-from lightcraft_opt.ocp.stall import FALL, FLOOR, find_stall
+from lightcraft_opt.ocp.stall import FALL, FLOOR, NEAR, find_stall
+from lightcraft_opt.ocp.time_limit import SolverCall
 
 TOL = 1e-6  # problem (b)'s [solver] tol
 MAX_ITER = 300  # what issue 27's run was given
@@ -110,6 +112,33 @@ def test_a_solve_that_once_met_its_constraints_never_stalls():
     v = np.concatenate([[0.1, 1e-7], np.full(100, 4.0)])
     assert _first_stall(v) is None
     assert _first_stall(v, tol=1e-8) == 59
+
+
+def test_a_solve_that_came_near_and_then_rose_diverged():
+    """problems/design_flight5.toml with the jump's derivatives cut (commit 45a9bd8): the
+    violation came down to 1.28e-6 at iteration 97 (96 in the sequence here; tol 1e-6: not
+    met), then rose above the floor and stayed. The rule stops it (it would not come back)
+    and says it diverged, which the solve reports as failed, not infeasible; a solve that
+    never came under NEAR stalls as infeasible."""
+    v = np.concatenate([np.geomspace(3.0, 1.28e-6, 97), [1e-3, 0.4], np.full(60, 2.5)])
+    k = _first_stall(v)
+    assert k is not None
+    stall = find_stall(v[: k + 1], 30, TOL)
+    assert stall is not None and stall.diverged
+    assert (stall.nearest, stall.nearest_iteration) == (pytest.approx(1.28e-6), 96)
+    assert stall.describe().startswith(
+        "diverged: the constraint violation came down to 1.28e-06 (scaled) at iteration 96"
+    )
+    far = np.concatenate([[3.0], np.geomspace(3.0, 10 * NEAR, 40), np.full(60, 2.5)])
+    k = _first_stall(far)
+    assert k is not None and not find_stall(far[: k + 1], 30, TOL).diverged
+    assert NEAR == 1e-3
+    status = [
+        solver_status(SolverCall(None, stall=find_stall(seq[: k + 1], 30, TOL)), OcpOptions(), 2.5)
+        for seq, k in ((v, _first_stall(v)), (far, _first_stall(far)))
+    ]
+    assert [s for s, _, _ in status] == [OcpStatus.FAILED, OcpStatus.INFEASIBLE]
+    assert status[0][1].startswith("ipopt: diverged: ")
 
 
 #: Largest constraint violation of IPOPT's iterates in steps 8/12 and 10/12 of problem (a)'s

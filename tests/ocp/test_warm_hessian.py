@@ -106,3 +106,25 @@ def test_a_kept_hessian_solve_that_stops_short_goes_on_exact():
 def test_warm_hessian_is_checked():
     with pytest.raises(OptionError, match="warm_hessian"):
         OcpOptions(warm_hessian="frozen")  # type: ignore[arg-type]
+
+
+def test_a_resolve_that_finds_the_problem_infeasible_is_checked_cold():
+    """The craft moved 20 cm east of the lateral problem's optimum: the pointing's ±5 cm
+    cannot bring the beam axis within 0.2 of the capture radius of the optic at the first
+    pulse, so the re-solve from the old optimum ends infeasible; the solve then starts
+    again cold (the nominal rollout), which finds the same, and the result says both and
+    counts both solves' iterations."""
+    problem, options = _lateral()
+    compiled = CompiledOcp(problem, OcpOptions(pulse_map=options, tol=TOL, replay=False))
+    cold = compiled.solve()
+    assert cold.status is OcpStatus.SOLVED
+    moved = problem.x0.copy()
+    moved[STATE.index("r_L")] += (0.2, 0.0, 0.0)
+    again = compiled.solve(x0=moved, warm_start=cold)
+    alone = compiled.solve(x0=moved)
+    assert again.status is alone.status is OcpStatus.INFEASIBLE
+    head, _, tail = again.message.partition(", so it was solved cold: ")
+    assert head.startswith("the re-solve from the previous result ended infeasible after ")
+    resolved = int(head.split(" after ")[1].split()[0])
+    assert resolved >= 1 and again.iterations == resolved + alone.iterations
+    assert tail == alone.message
