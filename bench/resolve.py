@@ -57,7 +57,7 @@ def main() -> None:
         f"{cold.solve_time:.2f} s, cost {cold.cost:.9f}"
     )
     kept = compiled.chain.kept_blocks if compiled.chain is not None else None
-    blocks = kept._kept if kept is not None else None  # the cold solve's, for every re-solve
+    blocks = kept.blocks if kept is not None else None  # the cold solve's, for every re-solve
     east = STATE.slot("r_L").start
     for shift in shifts:
         moved = np.array(loaded.problem.x0, dtype=float)
@@ -68,7 +68,7 @@ def main() -> None:
             runs = []
             for _ in range(args.repeat):
                 if kept is not None:
-                    kept._kept = blocks
+                    kept.blocks = blocks
                 runs.append(compiled.solve(x0=moved, warm_start=cold))
             print(_row(f"re-solve {kind.value}", runs))
         print(_row("cold", [compiled.solve(x0=moved, initial_guess=loaded.initial_guess())]))

@@ -177,6 +177,16 @@ class KeptBlocks(ca.Callback):
         """Whether blocks were kept (a solve has evaluated the Hessian)."""
         return self._kept is not None
 
+    @property
+    def blocks(self) -> ca.DM | None:
+        """The kept blocks (None before the first evaluation); set them back to re-solve
+        more than once from the same kept curvature (bench/resolve.py)."""
+        return self._kept
+
+    @blocks.setter
+    def blocks(self, kept: ca.DM | None) -> None:
+        self._kept = kept
+
     def get_n_in(self) -> int:
         return int(self._f.n_in())
 

@@ -46,6 +46,9 @@ def test_kept_blocks_evaluate_unless_frozen():
     kept.frozen = False
     np.testing.assert_array_equal(np.asarray(kept(b)), np.asarray(f(b)))
     assert (kept.evaluations, kept.reuses) == (2, 1)
+    kept.blocks, kept.frozen = f(a), True  # set back: a's value answers again
+    np.testing.assert_array_equal(np.asarray(kept(b)), np.asarray(f(a)))
+    assert (kept.evaluations, kept.reuses) == (2, 2)
 
 
 @pytest.fixture(scope="module")
