@@ -120,6 +120,7 @@ _SOLVER: Mapping[str, Spec] = {
     "convex_iterations": INTEGER,
     "warm_hessian": choice(WarmHessian),
     "linear_solver": choice(LinearSolver),
+    "mumps_pivtol": NUMBER,
     "time_limit": quantity("time"),
     "stall_iterations": INTEGER,
     "sensitivities": SWITCH,

@@ -112,6 +112,8 @@ def solver_setup(
             "bound_relax_factor": 0.0,
             "linear_solver": opts.linear_solver.value,
         }
+        if opts.mumps_pivtol is not None:
+            ipopt["mumps_pivtol"] = float(opts.mumps_pivtol)
         if not exact:
             ipopt["hessian_approximation"] = "limited-memory"
         if opts.time_limit is not None:

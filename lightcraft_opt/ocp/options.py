@@ -191,8 +191,9 @@ class OcpOptions:
         no rule; default :data:`OCP_STALL_ITERATIONS`. IPOPT and sqpmethod stop when
         their least constraint violation, above ``tol`` and above 1 (scaled), has not
         fallen by 10 % over the last W iterations, with status ``INFEASIBLE`` and the
-        constraint that cannot be met in the message (ocp/result.py). fatrop calls no
-        iteration callback: the rule never stops it.
+        constraint that cannot be met in the message (ocp/result.py), or ``FAILED`` when
+        their iterates had come within ``stall.NEAR`` of the constraints first (diverged).
+        fatrop calls no iteration callback: the rule never stops it.
     convex_iterations : with IPOPT and the chain's exact Hessian, a cold solve from the
         director's flight (``start``) first runs up to this many iterations with the
         convexified Hessian (``CONVEX``) to a tolerance of 1e-3, then goes on with the exact
@@ -208,6 +209,15 @@ class OcpOptions:
     warm_hessian : with IPOPT and the chain's exact Hessian, Φ's curvature in a re-solve
         from a previous result (:class:`WarmHessian`).
     linear_solver : IPOPT's linear solver (:class:`LinearSolver`).
+    mumps_pivtol : MUMPS's relative pivot tolerance in IPOPT (its ``mumps_pivtol``), in
+        (0, 1), or None for IPOPT's default (1e-6); only with IPOPT and MUMPS. A larger
+        one pivots for stability more often, which changes the inertia IPOPT sees and so
+        how often it regularises the exact Hessian: cold, 1e-3 took
+        ``problems/beam_tracking_focus.toml`` in 121 iterations instead of 156 and
+        converged the 260-pulse apex problem, left problem (a) and the small problems as
+        they were, and failed ``problems/design_flight5.toml`` (diverged at 133 iterations;
+        551 to the optimum with the default). Figures:
+        bench/README.md#ipopts-inertia-corrections-and-mumpss-pivot-tolerance-2026-12-06.
     start : where a cold solve starts without an initial guess (:class:`OcpStart`).
     replay : fly every solve's plan again through the simulator's Φ at full accuracy and
         attach the comparison with the prediction to the result (``OcpResult.replay``,
@@ -234,6 +244,7 @@ class OcpOptions:
     convex_iterations: int = 80
     warm_hessian: WarmHessian = WarmHessian.KEPT
     linear_solver: LinearSolver = LinearSolver.MUMPS
+    mumps_pivtol: float | None = None
     start: OcpStart = OcpStart.FLOWN
     replay: bool = True
     sensitivities: bool = False
@@ -272,6 +283,20 @@ class OcpOptions:
             raise OptionError(
                 f"OcpOptions.pulse_map must be a PulseMapOptions, got {self.pulse_map!r}"
             )
+        pivtol = self.mumps_pivtol
+        if pivtol is not None:
+            if isinstance(pivtol, bool) or not isinstance(pivtol, int | float):
+                raise OptionError(
+                    f"OcpOptions.mumps_pivtol must be a number in (0, 1) or None, got {pivtol!r}"
+                )
+            if not 0.0 < pivtol < 1.0:
+                raise OptionError(f"OcpOptions.mumps_pivtol must lie in (0, 1), got {pivtol!r}")
+            if self.solver is not OcpSolver.IPOPT or self.linear_solver is not LinearSolver.MUMPS:
+                raise OptionError(
+                    "OcpOptions.mumps_pivtol is MUMPS's, in IPOPT: it needs solver 'ipopt' "
+                    f"and linear_solver 'mumps', got {self.solver.value!r} and "
+                    f"{self.linear_solver.value!r}"
+                )
         checked_choice("OcpOptions", "hessian", self.hessian, HessianApproximation)
         if self.hessian is HessianApproximation.CONVEX and not (
             self.solver is OcpSolver.IPOPT and self.chain_derivatives
