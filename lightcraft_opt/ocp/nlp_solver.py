@@ -223,6 +223,14 @@ def solver_status(
     stats = call.stats
     iterations = int(stats.get("iter_count", 0)) if stats else 0
     raw = stats.get("return_status", "unknown") if stats else "unknown"
+    if call.left is not None:
+        k, v = call.left
+        return (
+            OcpStatus.FAILED,
+            f"{name}: left the previous result's neighbourhood: violation {v:.3g} (scaled) "
+            f"at iteration {k}",
+            iterations,
+        )
     if call.stall is not None:  # a diverged solve failed; the problem is not infeasible
         status = OcpStatus.FAILED if call.stall.diverged else OcpStatus.INFEASIBLE
         return status, f"{name}: {call.stall.describe()}", iterations

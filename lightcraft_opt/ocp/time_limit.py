@@ -59,6 +59,8 @@ class SolverCall:
     error : the exception's text when the call raised, else "".
     deadline_reached : the wall-clock limit ended the call.
     stall : the stall (ocp/stall.py) that ended the call, else None.
+    left : (iteration, violation) of the iterate that rose above the call's ceiling and
+        ended it (a re-solve that left its start's neighbourhood), else None.
     """
 
     solution: tuple[np.ndarray, np.ndarray, np.ndarray] | None
@@ -66,6 +68,7 @@ class SolverCall:
     error: str = ""
     deadline_reached: bool = False
     stall: Stall | None = None
+    left: tuple[int, float] | None = None
 
     @property
     def succeeded(self) -> bool:
@@ -109,6 +112,9 @@ class Deadline(ca.Callback):
     progress : called with (iteration from 0, objective, violation) at each iterate.
     stall_window : W of the stall rule, iterations; None: no stall rule.
     tol : the constraint tolerance of the stall rule (scaled units).
+
+    :attr:`ceiling` (set per call by :func:`call_solver`): stop at the first iterate after
+    the start whose violation exceeds it, and say which in :attr:`left`.
     """
 
     def __init__(
@@ -133,6 +139,9 @@ class Deadline(ca.Callback):
         self.armed = False  # the stall rule, inside call_solver only
         self.violations: list[float] = []
         self.stall: Stall | None = None
+        self.ceiling = math.inf
+        self.left: tuple[int, float] | None = None
+        self.seen = 0  # iterates of the current call
         self._bounds = None if lbg is None or ubg is None else (np.asarray(lbg), np.asarray(ubg))
         self.construct("ocp_deadline", {})
 
@@ -159,6 +168,10 @@ class Deadline(ca.Callback):
         if time.perf_counter() > self.deadline:
             self.reached = True
             return [1]
+        self.seen += 1
+        if self.armed and self.seen > 1 and violation > self.ceiling:  # not the start
+            self.left = (self.iteration - 1, violation)
+            return [1]
         if self.armed and self.stall_window is not None:
             self.violations.append(violation)
             self.stall = find_stall(self.violations, self.stall_window, self.tol)
@@ -180,26 +193,32 @@ def call_solver(
     deadline: Deadline | None,
     until: float,
     first_iteration: int = 0,
+    ceiling: float = math.inf,
 ) -> SolverCall:
     """Call ``solver`` (an nlpsol Function) on ``args`` in this process, ``deadline`` (if
     any) armed until ``until`` (a ``time.perf_counter()`` time, +inf for none), with its
-    stall rule (if any); progress counts iterations from ``first_iteration`` (a solve's
+    stall rule (if any) and its ``ceiling`` (scaled units: no iterate after the start may
+    be violated by more); progress counts iterations from ``first_iteration`` (a solve's
     second phase goes on counting)."""
     if deadline is not None:
         deadline.deadline, deadline.reached = until, False
         deadline.iteration = first_iteration
         deadline.armed, deadline.violations, deadline.stall = True, [], None
+        deadline.ceiling, deadline.left, deadline.seen = ceiling, None, 0
     try:
         sol = solver(**args)
     except RuntimeError as err:  # e.g. an evaluation error the solver did not catch
         return SolverCall(None, _stats(solver), error=str(err))
     finally:
         if deadline is not None:
-            deadline.deadline, deadline.armed = math.inf, False
+            deadline.deadline, deadline.armed, deadline.ceiling = math.inf, False, math.inf
     w, lam_x, lam_g = (np.asarray(sol[k], dtype=float).ravel() for k in ("x", "lam_x", "lam_g"))
     reached = deadline is not None and deadline.reached
     stall = None if deadline is None or reached else deadline.stall
-    return SolverCall((w, lam_x, lam_g), _stats(solver), deadline_reached=reached, stall=stall)
+    left = None if deadline is None or reached else deadline.left
+    return SolverCall(
+        (w, lam_x, lam_g), _stats(solver), deadline_reached=reached, stall=stall, left=left
+    )
 
 
 def can_fork() -> bool:

@@ -14,6 +14,7 @@ References:
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import casadi as ca
@@ -27,7 +28,7 @@ from lightcraft_opt.layout import STATE
 from lightcraft_opt.ocp.evaluation import KeptBlocks
 from lightcraft_opt.ocp.options import OcpOptions, WarmHessian
 from lightcraft_opt.ocp.result import OcpStatus
-from lightcraft_opt.ocp.solve import CompiledOcp
+from lightcraft_opt.ocp.solve import RESOLVE_CEILING, CompiledOcp
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 POINTING = 0.05  # the lateral problem's pointing range [m], each side
@@ -111,12 +112,13 @@ def test_warm_hessian_is_checked():
         OcpOptions(warm_hessian="frozen")  # type: ignore[arg-type]
 
 
-def test_a_resolve_that_finds_the_problem_infeasible_is_checked_cold():
+def test_a_resolve_that_leaves_its_neighbourhood_is_solved_cold():
     """The craft moved 20 cm east of the lateral problem's optimum: the pointing's ±5 cm
     cannot bring the beam axis within 0.2 of the capture radius of the optic at the first
-    pulse, so the re-solve from the old optimum ends infeasible; the solve then starts
-    again cold (the nominal rollout), which finds the same, and the result says both and
-    counts both solves' iterations."""
+    pulse. The re-solve from the old optimum wanders off: at the first iterate violated by
+    more than RESOLVE_CEILING (1, scaled) it stops, failed; the solve then starts again
+    cold (the nominal rollout), which finds the problem infeasible. The result says both
+    and counts both solves' iterations."""
     problem, options = _lateral()
     compiled = CompiledOcp(problem, OcpOptions(pulse_map=options, tol=TOL, replay=False))
     cold = compiled.solve()
@@ -127,7 +129,14 @@ def test_a_resolve_that_finds_the_problem_infeasible_is_checked_cold():
     alone = compiled.solve(x0=moved)
     assert again.status is alone.status is OcpStatus.INFEASIBLE
     head, _, tail = again.message.partition(", so it was solved cold: ")
-    assert head.startswith("the re-solve from the previous result ended infeasible after ")
-    resolved = int(head.split(" after ")[1].split()[0])
-    assert resolved >= 1 and again.iterations == resolved + alone.iterations
+    found = re.fullmatch(
+        r"the re-solve from the previous result ended failed after (\d+) iterations \(ipopt: "
+        r"left the previous result's neighbourhood: violation (\S+) \(scaled\) at "
+        r"iteration (\d+)\)",
+        head,
+    )
+    assert found is not None, head
+    resolved, violation, at = int(found[1]), float(found[2]), int(found[3])
+    assert violation > RESOLVE_CEILING == 1.0 and 1 <= at <= resolved
+    assert again.iterations == resolved + alone.iterations
     assert tail == alone.message
