@@ -7,7 +7,8 @@ For each solver in ``--solvers`` (``name:hessian[:flag...]``, e.g. ``ipopt:exact
 for IPOPT's SPRAL in place of MUMPS, ``exact_only`` for no convexified first phase
 (OcpOptions.convex_iterations = 0), ``rollout`` for the nominal rollout as the start,
 ``kept`` for the warm re-solve on the Hessian blocks the cold solve ended with,
-OcpOptions.warm_hessian), in one process:
+OcpOptions.warm_hessian; ``pivtol`` for MUMPS's pivot tolerance at 1e-3 instead of IPOPT's
+1e-6, OcpOptions.mumps_pivtol), in one process:
 
 * **build**: transcription and nlpsol construction (:class:`~lightcraft_opt.ocp.solve.CompiledOcp`;
   the pulse map Φ is built once and shared, so only the first build pays for casadi's
@@ -172,11 +173,12 @@ def main() -> None:
         name, *rest = spec.split(":")
         hessian = rest[0] if rest else "exact"
         flags = set(rest[1:])
-        unknown = flags - {"reduced", "full", "ad", "spral", "exact_only", "rollout", "kept"}
+        known = {"reduced", "full", "ad", "spral", "exact_only", "rollout", "kept", "pivtol"}
+        unknown = flags - known
         if unknown:
             parser.error(
                 f"--solvers {spec!r}: unknown {sorted(unknown)}; use reduced, full, ad, spral, "
-                "exact_only, rollout, kept"
+                "exact_only, rollout, kept, pivtol"
             )
         options = replace(
             base,
@@ -188,6 +190,7 @@ def main() -> None:
             convex_iterations=0 if "exact_only" in flags else base.convex_iterations,
             start=OcpStart.ROLLOUT if "rollout" in flags else base.start,
             warm_hessian=WarmHessian.KEPT if "kept" in flags else base.warm_hessian,
+            mumps_pivtol=1e-3 if "pivtol" in flags else base.mumps_pivtol,
         )
         start = time.perf_counter()
         full = options.prediction is PredictionMap.FULL
