@@ -195,7 +195,9 @@ class OcpOptions:
         their iterates had come within ``stall.NEAR`` of the constraints first (diverged).
         fatrop calls no iteration callback: the rule never stops it.
     convex_iterations : with IPOPT and the chain's exact Hessian, a cold solve from the
-        director's flight (``start``) first runs up to this many iterations with the
+        director's flight (``start``), or a design problem's from its held optimum
+        (``start.CONVEXIFIED_FIRST``; not a robust problem's, where it was not measured),
+        first runs up to this many iterations with the
         convexified Hessian (``CONVEX``) to a tolerance of 1e-3, then goes on with the exact
         Hessian from there, warm, for up to ``max_iter`` more (0: none). From the nominal
         rollout or the calm flight it does not help (problem (a) from the calm flight: more
@@ -204,7 +206,8 @@ class OcpOptions:
         the optimum the exact Hessian is indefinite and IPOPT regularises it as a whole,
         crawling; near it the convexified one converges only linearly: on
         problems/beam_tracking_focus.toml (docs/ocp.md) the two phases took far fewer
-        iterations than the exact Hessian alone. Figures:
+        iterations than the exact Hessian alone, on problems/design_flight5.toml 159
+        against 551 (docs/design.md). Figures:
         bench/README.md#after-issue-27-shared-evaluation-flown-starts-two-hessians-2026-12-03.
     warm_hessian : with IPOPT and the chain's exact Hessian, Φ's curvature in a re-solve
         from a previous result (:class:`WarmHessian`).

@@ -62,6 +62,7 @@ from lightcraft_opt.ocp.scenario_shooting import ScenarioShooting, check_scenari
 from lightcraft_opt.ocp.sensitivity import Sensitivities
 from lightcraft_opt.ocp.stall import FLOOR
 from lightcraft_opt.ocp.start import (
+    CONVEXIFIED_FIRST,
     Start,
     StartKind,
     director_applies,
@@ -91,9 +92,8 @@ __all__ = ["CompiledOcp", "rollout", "solve"]
 #: cold, 173 iterations to the optimum). The wall-clock limit holds across both solves.
 RESOLVE_FELL_SHORT = frozenset({OcpStatus.FAILED, OcpStatus.INFEASIBLE})
 
-#: A re-solve stops (failed, then solved cold) at an iterate violated by more (scaled,
-#: stall.FLOOR): it left its start's basin. From the focus problem's optimum converging
-#: re-solves peaked at 0.072 (5 mm, kept); failing ones passed 1 at iterations 10-17.
+#: A re-solve stops (failed, then solved cold) at an iterate violated by more (scaled): it
+#: left its start's basin (converging ones peaked at 0.072, failing ones passed 1: bench/).
 RESOLVE_CEILING = FLOOR
 
 
@@ -381,8 +381,8 @@ class CompiledOcp:
             x0=w0, p=P, lbx=lbx, ubx=ubx, lbg=tr.lbg, ubg=tr.ubg, lam_x0=lam_x0, lam_g0=lam_g0
         )
         start = time.perf_counter()
-        director = cold is not None and cold.kind in (StartKind.DIRECTOR, StartKind.DIRECTOR_CALM)
-        convex = self._convex_phase() if director else None
+        convexify = cold is not None and cold.kind in CONVEXIFIED_FIRST and not (held and robust)
+        convex = self._convex_phase() if convexify else None
         phase, done = "", 0
         first = None
         if convex is not None:  # the convexified Hessian first, then the exact one, warm
