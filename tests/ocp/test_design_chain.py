@@ -127,8 +127,9 @@ def test_ipopt_reaches_the_same_design_with_chain_or_ad_derivatives(designed):
 def test_a_design_started_from_its_held_optimum_only_improves_on_it(designed):
     """``start = HELD_DESIGN``: the problem is solved first with its design held at the
     model's values; that optimum is feasible for the design problem, which starts there
-    and ends no worse (the held cost less the design's gain, never more). The rollout
-    start finds another local optimum of this non-convex problem: the start decides."""
+    and ends no worse (the held cost less the design's gain, never more), leaving it with
+    the convexified Hessian first (start.CONVEXIFIED_FIRST). The rollout start finds
+    another local optimum of this non-convex problem: the start decides."""
     problem, phi = designed
     options = OcpOptions(pulse_map=CHEAP_MAP, tol=TOL, replay=False)
     held_alone = CompiledOcp(replace(problem, design=()), options, pulse_map=phi).solve()
@@ -137,6 +138,7 @@ def test_a_design_started_from_its_held_optimum_only_improves_on_it(designed):
     designed_result = CompiledOcp(problem, start, pulse_map=phi).solve()
     assert designed_result.status is OcpStatus.SOLVED, designed_result.message
     assert "started from the problem solved with its design held" in designed_result.message
+    assert "iterations with the convexified Hessian)" in designed_result.message
     assert designed_result.cost <= held_alone.cost * (1 + 1e-9)
     for v in problem.design:
         assert v.lower <= designed_result.design[v.label] <= v.upper, v.label
