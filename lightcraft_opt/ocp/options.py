@@ -286,14 +286,8 @@ class OcpOptions:
             raise OptionError(
                 f"OcpOptions.pulse_map must be a PulseMapOptions, got {self.pulse_map!r}"
             )
-        pivtol = self.mumps_pivtol
-        if pivtol is not None:
-            if isinstance(pivtol, bool) or not isinstance(pivtol, int | float):
-                raise OptionError(
-                    f"OcpOptions.mumps_pivtol must be a number in (0, 1) or None, got {pivtol!r}"
-                )
-            if not 0.0 < pivtol < 1.0:
-                raise OptionError(f"OcpOptions.mumps_pivtol must lie in (0, 1), got {pivtol!r}")
+        if self.mumps_pivtol is not None:
+            _check_fraction("mumps_pivtol", self.mumps_pivtol)
             if self.solver is not OcpSolver.IPOPT or self.linear_solver is not LinearSolver.MUMPS:
                 raise OptionError(
                     "OcpOptions.mumps_pivtol is MUMPS's, in IPOPT: it needs solver 'ipopt' "
@@ -330,13 +324,7 @@ class OcpOptions:
             if isinstance(v, bool) or not isinstance(v, int) or v < low or (high and v > high):
                 span = f">= {low}" if high is None else f"in [{low}, {high}]"
                 raise OptionError(f"OcpOptions.{name} must be an integer {span}, got {v!r}")
-        if not (
-            isinstance(self.tol, int | float)
-            and not isinstance(self.tol, bool)
-            and math.isfinite(self.tol)
-            and 0 < self.tol < 1
-        ):
-            raise OptionError(f"OcpOptions.tol must be in (0, 1), got {self.tol!r}")
+        _check_fraction("tol", self.tol)
         blocks = self.move_blocking
         items = blocks if isinstance(blocks, tuple) else (blocks,)
         if not items or any(isinstance(b, bool) or not isinstance(b, int) or b < 1 for b in items):
@@ -357,3 +345,9 @@ class OcpOptions:
             return self.move_blocking
         n = self.move_blocking
         return tuple(min(n, horizon - k) for k in range(0, horizon, n))
+
+
+def _check_fraction(name: str, value: object) -> None:
+    """Raise OptionError naming ``OcpOptions.<name>`` unless ``value`` is a number in (0, 1)."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value < 1:
+        raise OptionError(f"OcpOptions.{name} must be a number in (0, 1), got {value!r}")
