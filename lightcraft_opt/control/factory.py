@@ -33,6 +33,8 @@ from lightcraft_opt.control.estimation import (
     PsiEstimationModel,
     SensorOptions,
     SensorSuite,
+    UkfOptions,
+    UnscentedKalmanFilter,
     estimation_model,
 )
 from lightcraft_opt.control.mpc import MpcController
@@ -151,9 +153,11 @@ def build_estimator(
     )
     ekf = EkfOptions()
     prior = ekf.prior + spec.prior_sigmas()  # later pairs override earlier ones
+    scale = float(spec.options.get("noise_scale", ekf.noise_scale))
     if spec.kind is EstimatorKind.EKF:
-        scale = float(spec.options.get("noise_scale", ekf.noise_scale))
         return ExtendedKalmanFilter(psi, EkfOptions(prior=prior, noise_scale=scale))
+    if spec.kind is EstimatorKind.UKF:
+        return UnscentedKalmanFilter(psi, UkfOptions(prior=prior, noise_scale=scale))
     # the MHE starts from the filter's priors: one belief about the launch
     mhe = MheOptions()
     horizon = int(spec.options.get("horizon", mhe.horizon))

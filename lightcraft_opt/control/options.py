@@ -493,24 +493,27 @@ class EstimatorKind(Enum):
 
     ``TRUTH``: no estimator; the controller is told the plant's true state with the
     closed loop's :class:`MeasurementNoise` on it (the loop before issue 30). ``EKF``: the
-    extended Kalman filter on Ψ, fed the sensors' readings. ``MHE``: the moving-horizon
-    estimator, likewise.
+    extended Kalman filter on Ψ, fed the sensors' readings. ``UKF``: the unscented Kalman
+    filter (the EKF with its prediction by sigma points), likewise. ``MHE``: the
+    moving-horizon estimator, likewise.
     """
 
     TRUTH = "truth"
     EKF = "ekf"
+    UKF = "ukf"
     MHE = "mhe"
 
 
-_BOTH = (EstimatorKind.EKF, EstimatorKind.MHE)
+_FILTERS = (EstimatorKind.EKF, EstimatorKind.UKF)
+_ALL = (*_FILTERS, EstimatorKind.MHE)
 #: The options an :class:`EstimatorSpec` may carry: their SI unit and the kinds that take
 #: each (docs/files/closed_loop.md#keys-estimator).
 ESTIMATOR_OPTIONS: Mapping[str, tuple[str, tuple[EstimatorKind, ...]]] = {
-    "prior_position": ("m", _BOTH),
-    "prior_velocity": ("m/s", _BOTH),
-    "prior_coning": ("rad", _BOTH),
-    "prior_wind": ("m/s", _BOTH),
-    "noise_scale": ("-", (EstimatorKind.EKF,)),
+    "prior_position": ("m", _ALL),
+    "prior_velocity": ("m/s", _ALL),
+    "prior_coning": ("rad", _ALL),
+    "prior_wind": ("m/s", _ALL),
+    "noise_scale": ("-", _FILTERS),
     "horizon": ("pulses", (EstimatorKind.MHE,)),
     "max_iter": ("-", (EstimatorKind.MHE,)),
     "relinearize": ("stages", (EstimatorKind.MHE,)),
@@ -544,8 +547,8 @@ class EstimatorSpec:
         estimator's own default (``TRUTH`` takes none): the prior standard deviation at the
         start of a flight of each axis of r_L, ``prior_position`` [m], of v_L,
         ``prior_velocity`` [m/s], of Ψ's coning offset, ``prior_coning`` [rad], and of the
-        wind, ``prior_wind`` [m/s], each > 0 (:meth:`prior_sigmas`); the EKF's
-        ``noise_scale`` (its process noise times this, > 0); the moving-horizon
+        wind, ``prior_wind`` [m/s], each > 0 (:meth:`prior_sigmas`); the EKF's and the
+        UKF's ``noise_scale`` (its process noise times this, > 0); the moving-horizon
         estimator's window ``horizon`` [pulses] (an integer in [1, 260]), its solver's
         ``max_iter`` (>= 1) and ``relinearize`` (stages evaluated afresh a pulse, in [1,
         the horizon]; the horizon: every stage; :class:`MheOptions`).

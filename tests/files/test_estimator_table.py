@@ -93,18 +93,20 @@ prior_wind_kmh = 3.6
     assert isinstance(spec.options["horizon"], int)
     ekf = _load(tmp_path, '[estimator]\nkind = "ekf"\nnoise_scale = 2.0\n')
     assert ekf == EstimatorSpec(EstimatorKind.EKF, {"noise_scale": 2.0})
+    ukf = _load(tmp_path, '[estimator]\nkind = "ukf"\nnoise_scale = 2.0\n')
+    assert ukf == EstimatorSpec(EstimatorKind.UKF, {"noise_scale": 2.0})
 
 
 @pytest.mark.parametrize(
     ("table", "key", "reason"),
     [
-        ('kind = "kalman"', "estimator.kind", r"'truth', 'ekf', 'mhe'"),
+        ('kind = "kalman"', "estimator.kind", r"'truth', 'ekf', 'ukf', 'mhe'"),
         ('kind = "ekf"\nprior_position_mm = -1.0', "estimator.prior_position_mm", r"> 0"),
         ('kind = "ekf"\nhorizon_pulses = 10', "estimator.horizon_pulses", r"kind 'mhe', not"),
         ('kind = "mhe"\nhorizon_pulses = 0', "estimator.horizon_pulses", r">= 1"),
         ('kind = "ekf"\nrelinearize = 2', "estimator.relinearize", r"kind 'mhe', not"),
         ('kind = "mhe"\nrelinearize = 0', "estimator.relinearize", r">= 1"),
-        ('kind = "mhe"\nnoise_scale = 0.5', "estimator.noise_scale", r"kind 'ekf', not"),
+        ('kind = "mhe"\nnoise_scale = 0.5', "estimator.noise_scale", r"kind 'ekf' or 'ukf', not"),
         ('kind = "ekf"\nnoise_scale = 0.0', "estimator.noise_scale", r"> 0"),
         ("prior_wind_mps = 1.0", "estimator.prior_wind_mps", r"not 'truth'"),
         ('kind = "ekf"\ngain = 1.0', "estimator.gain", r"kind|unknown|not"),

@@ -24,6 +24,8 @@
   engine's coupling and the rotor's moments as slow states (:class:`ProcessNoise`; its
   chains in :mod:`.psi_chain`);
 - :mod:`.ekf`: :class:`ExtendedKalmanFilter` (:class:`EkfOptions`), an :class:`Estimator`;
+- :mod:`.ukf`: :class:`UnscentedKalmanFilter` (:class:`UkfOptions`), the EKF with its
+  prediction by sigma points (consistent where the EKF's linearisation is not);
 - :mod:`.psi_observability`: :func:`model_flight`, :func:`model_observability`, the
   Gramian of an estimation model's flight.
 
@@ -55,6 +57,7 @@ from lightcraft_opt.control.estimation.sensor_options import (
     SpinSensorOptions,
 )
 from lightcraft_opt.control.estimation.sensors import SensorSuite
+from lightcraft_opt.control.estimation.ukf import UkfOptions, UnscentedKalmanFilter
 
 __all__ = [
     "SLOW_STATES",
@@ -78,6 +81,8 @@ __all__ = [
     "SensorOptions",
     "SensorSuite",
     "SpinSensorOptions",
+    "UkfOptions",
+    "UnscentedKalmanFilter",
     "estimation_model",
     "model_flight",
     "model_observability",

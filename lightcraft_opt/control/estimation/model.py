@@ -43,7 +43,10 @@ class EstimationModel(Protocol):
     - ``measure_many(sensor, S, dts) -> (Y, H)``: ``measure`` of each row of S (k, n) with
       its dt (k,), Y (k, m) and H (k, m, n), as ``measure`` gives them; the moving-horizon
       estimator reads its window's readings with one call a sensor (without it, one a
-      reading).
+      reading);
+    - ``predict_many(S, u, t) -> S_next``: ``predict``'s values (no F) from each row of S
+      (k, n), (k, n); the unscented filter propagates its sigma points with one call
+      (without it, one a point).
     """
 
     names: tuple[str, ...]

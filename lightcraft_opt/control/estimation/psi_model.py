@@ -52,7 +52,7 @@ import casadi as ca
 import numpy as np
 
 from lightcraft_opt.compiled import DERIVATIVE_INSTRUCTION_LIMIT, compile_by_default
-from lightcraft_opt.compiled.cache import DERIVATIVE_FLAGS, compile_all
+from lightcraft_opt.compiled.cache import DEFAULT_FLAGS, DERIVATIVE_FLAGS, compile_all
 from lightcraft_opt.control.estimation.buffered import Evaluator
 from lightcraft_opt.control.estimation.psi_chain import (
     SlowColumns,
@@ -69,6 +69,7 @@ from lightcraft_opt.linear.signal_names import entry_names
 from lightcraft_opt.model import Model, Propellant
 from lightcraft_opt.model.checks import checked_number
 from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
+from lightcraft_opt.symbolic.maps.reduced_map_derivatives import value_stage
 
 __all__ = ["SLOW_STATES", "ProcessNoise", "PsiEstimationModel", "estimation_model"]
 
@@ -228,6 +229,9 @@ class PsiEstimationModel:
         shape = (model, psi.options.substeps, psi.options.dense, entries, want)
         stage = estimator_stage(psi, estimator_jump(*shape), estimator_substep(*shape))
         self._stage = Evaluator(stage)  # the calm wind's columns
+        self._compiled = want
+        self._values: ca.Function | None = None  # Ψ's value chain, for predict_many
+        self._points: dict[int, Evaluator] = {}  # by the number of rows
         self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
             n for s in self.slow for n in SLOW_STATES[s]
         )
@@ -307,6 +311,22 @@ class PsiEstimationModel:
                 p[i] = self.p[i] * s[self._inertia + j]
         return p
 
+    def parameters_many(self, S: np.ndarray) -> np.ndarray:
+        """(k, PARAMETERS.size): :meth:`parameters` of each row of S (k, n)."""
+        P = np.repeat(self.p[None, :], S.shape[0], axis=0)
+        if self._wind is not None:
+            east, north = S[:, self._wind], S[:, self._wind + 1]
+            speed = np.hypot(east, north)
+            P[:, _SPEED] = speed
+            windy = speed > _CALM  # else the model's direction: undefined in calm air
+            P[windy, _DIRECTION] = np.arctan2(-east[windy], -north[windy])
+        if self._coupling is not None:
+            P[:, _IMPULSE] = S[:, self._coupling] * self.p[_REFERENCE_ENERGY]
+        if self._inertia is not None:
+            for j, i in enumerate(_INERTIA):
+                P[:, i] = self.p[i] * S[:, self._inertia + j]
+        return P
+
     def start(self, x0: np.ndarray) -> np.ndarray:
         """s of the full state x0 (STATE): Ψ's ``project`` of it and the model's slow states."""
         z = np.asarray(self.psi.project(np.asarray(x0, dtype=float), self.p)).ravel()
@@ -380,6 +400,33 @@ class PsiEstimationModel:
         s_next[:_NZ] = z_next
         return s_next, F
 
+    def predict_many(self, S: np.ndarray, u: np.ndarray, t: float) -> np.ndarray:
+        """(k, n): :meth:`predict`'s s_next from each row of S (k, n), by one call of Ψ's
+        value chain (its pieces compiled, cached by structure) mapped over the rows: the
+        unscented filter's sigma points (ukf.py). A row where Ψ is undefined (a coning
+        offset beyond 1) comes back non-finite."""
+        S = np.atleast_2d(np.asarray(S, dtype=float))
+        k = S.shape[0]
+        if k not in self._points:
+            if self._values is None:
+                self._values = self._value_stage()
+            self._points[k] = Evaluator(_mapped_values(self._values, k))
+        out = S.copy()
+        out[:, :_NZ] = self._points[k](S[:, :_NZ].T, self._input(u), self.parameters_many(S).T, t).T
+        return out
+
+    def _value_stage(self) -> ca.Function:
+        """Ψ's value chain over its own pieces, compiled (cached by structure) unless the
+        model was built interpreted: no Jacobians, which the sigma points do not need."""
+        jump, substep = self.psi.jump, self.psi.substep
+        if self._compiled:
+            jump, substep = compile_all(
+                [(jump, DEFAULT_FLAGS), (substep, DEFAULT_FLAGS)],
+                max_instructions=DERIVATIVE_INSTRUCTION_LIMIT,
+                what="Ψ's value pieces",
+            )[0]
+        return value_stage(jump, substep, self.psi.options.substeps, self.psi.period)
+
     def process_noise(self, s: np.ndarray, u: np.ndarray, t: float) -> np.ndarray:
         """Q (n, n): :class:`ProcessNoise` squared on the diagonal, plus the cone's phase
         noise along J c (``ProcessNoise.inertia``: |H| T / A turns c a pulse)."""
@@ -394,6 +441,30 @@ class PsiEstimationModel:
             for b in range(2):
                 Q[i + a, i + b] += turn[a] * turn[b]
         return Q
+
+    def sample_next(
+        self, s: np.ndarray, u: np.ndarray, t: float, rng: np.random.Generator
+    ) -> np.ndarray:
+        """A draw of s at the next pulse from the true ``s`` (n,) with ``u`` fired at ``t``
+        [s]: Ψ, then the noise :meth:`process_noise` describes, drawn as the process it
+        linearises: Q's diagonal added, and the cone's phase noise (standard deviation
+        |H| T / A · ``ProcessNoise.inertia``, along J c in Q) as a turn of the coning offset
+        c, which keeps |c| (a draw along J c would grow |c| by 50 % a pulse). What a
+        consistency check flies as the truth of the estimators' own model."""
+        s = np.asarray(s, dtype=float).ravel()
+        calm = s.copy()
+        calm[_CONE] = 0.0  # Q without the turn: its diagonal
+        sigma = np.sqrt(np.diag(self.process_noise(calm, u, t)))
+        out = self.predict_many(s[None, :], u, t)[0] + sigma * rng.normal(size=self.n)
+        H = s[_H]
+        phase = math.sqrt(float(H @ H)) * self.period / self._transverse * self.noise.inertia
+        turn = phase * rng.normal()
+        c1, c2 = out[_CONE]
+        out[_CONE] = (
+            math.cos(turn) * c1 - math.sin(turn) * c2,
+            math.sin(turn) * c1 + math.cos(turn) * c2,
+        )
+        return out
 
     def _measurement(self, name: str, h: ca.Function) -> ca.Function:
         """``measure_<name>(z, p, dt) -> [y H_z H_p]``: h at Ψ's lift of z, its Jacobians in z
@@ -468,6 +539,17 @@ class PsiEstimationModel:
                 "sensor", f"unknown {sensor!r}; the model has {list(self._sensors)}"
             )
         return self._sensors[sensor][1].copy()
+
+
+def _mapped_values(value: ca.Function, k: int) -> ca.Function:
+    """``psi_points(Z, u, P, t) -> Z_next``: ``value(z, u, p, t) -> (z_next, engine)``
+    (Ψ's value chain) of each column of Z (14, k) with its column of P (PARAMETERS.size, k),
+    the same u and t."""
+    Z, P = ca.MX.sym("Z", _NZ, k), ca.MX.sym("P", PARAMETERS.size, k)
+    u, t = ca.MX.sym("u", value.size1_in(1)), ca.MX.sym("t")
+    return ca.Function(
+        "psi_points", [Z, u, P, t], [value.map(k)(Z, u, P, t)[0]], ["Z", "u", "P", "t"], ["Z_next"]
+    )
 
 
 def _wind_chart(p: np.ndarray) -> np.ndarray | None:

@@ -24,7 +24,7 @@ import casadi as ca
 from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, REDUCED_STATE
 from lightcraft_opt.symbolic.maps.reduced_map import ReducedMap
 
-__all__ = ["ReducedMapDerivatives", "build_reduced_map_derivatives"]
+__all__ = ["ReducedMapDerivatives", "build_reduced_map_derivatives", "value_stage"]
 
 _SX_OPTIONS = {"cse": True}
 
@@ -97,6 +97,29 @@ def build_reduced_map_derivatives(psi: ReducedMap) -> ReducedMapDerivatives:
     return _chain(jump, substep, psi.jump, psi.substep, psi.options.substeps, psi.period)
 
 
+def value_stage(
+    value_jump: ca.Function, value_substep: ca.Function, substeps: int, period: float
+) -> ca.Function:
+    """``reduced_stage(z, u, p, t) -> (z_next, engine)``: Ψ's value, the jump
+    ``reduced_jump(z, pulse, p)`` then ``substeps`` coast steps ``reduced_substep(z, w, p,
+    t)`` over the ``period`` [s] (interpreted or compiled pieces alike), u = (pulse, w)."""
+    nz, n_pulse = REDUCED_STATE.size, PULSE_INPUT.size
+    zm = ca.MX.sym("z", nz)
+    um = ca.MX.sym("u", n_pulse + value_substep.size1_in(1))
+    pm, tm = ca.MX.sym("p", PARAMETERS.size), ca.MX.sym("t")
+    h = period / substeps
+    z_v, engine_v = value_jump(zm, um[:n_pulse], pm)
+    for i in range(substeps):
+        z_v = value_substep(z_v, um[n_pulse:], pm, tm + float(h * i))
+    return ca.Function(
+        "reduced_stage",
+        [zm, um, pm, tm],
+        [z_v, engine_v],
+        ["z", "u", "p", "t"],
+        ["z_next", "engine"],
+    )
+
+
 def _chain(
     jump: ca.Function,
     substep: ca.Function,
@@ -127,16 +150,7 @@ def _chain(
         ["z", "u", "p", "t"],
         ["z_next", "engine", "A", "B"],
     )
-    z_v, engine_v = value_jump(zm, um[:n_pulse], pm)
-    for i in range(substeps):
-        z_v = value_substep(z_v, um[n_pulse:], pm, tm + float(h * i))
-    value = ca.Function(
-        "reduced_stage",
-        [zm, um, pm, tm],
-        [z_v, engine_v],
-        ["z", "u", "p", "t"],
-        ["z_next", "engine"],
-    )
+    value = value_stage(value_jump, value_substep, substeps, period)
     return ReducedMapDerivatives(
         jump, substep, value_jump, value_substep, value, stage, substeps, period
     )

@@ -38,6 +38,7 @@ from lightcraft_opt.control.estimation import (
     ReadingSource,
     SensorOptions,
     SensorSuite,
+    UnscentedKalmanFilter,
 )
 from lightcraft_opt.control.factory import build_estimator, build_tracker
 from lightcraft_opt.control.options import (
@@ -419,9 +420,9 @@ def test_what_the_loop_refuses_is_named(phi):
 
 
 def test_the_factory_builds_the_estimators_and_names_what_is_missing():
-    """None for the truth; the MHE with the file's window and relinearisation (one stage
-    a pulse unless told) over the filter's priors; an estimator without a suite, or a spec
-    that is not one, is named."""
+    """None for the truth; the UKF with the file's noise scale; the MHE with the file's
+    window and relinearisation (one stage a pulse unless told) over the filter's priors; an
+    estimator without a suite, or a spec that is not one, is named."""
     assert build_estimator(EstimatorSpec(), MODEL, None) is None
     suite = SensorSuite(MODEL, SensorOptions())
     mhe = build_estimator(EstimatorSpec(EstimatorKind.MHE, {"horizon": 8}), MODEL, suite)
@@ -432,7 +433,10 @@ def test_the_factory_builds_the_estimators_and_names_what_is_missing():
     )
     assert isinstance(every, MovingHorizonEstimator) and every.options.relinearize == 8
     assert mhe.options.prior_sigmas[: len(EkfOptions().prior)] == EkfOptions().prior
-    for kind in (EstimatorKind.EKF, EstimatorKind.MHE):
+    ukf = build_estimator(EstimatorSpec(EstimatorKind.UKF, {"noise_scale": 2.0}), MODEL, suite)
+    assert isinstance(ukf, UnscentedKalmanFilter) and ukf.options.noise_scale == 2.0
+    assert ukf.options.prior == EkfOptions().prior and ukf.name == "ukf"
+    for kind in (EstimatorKind.EKF, EstimatorKind.UKF, EstimatorKind.MHE):
         with pytest.raises(OptionError, match=r"build_estimator.sensors: .* needs a suite"):
             build_estimator(EstimatorSpec(kind), MODEL, None)
     with pytest.raises(OptionError, match=r"build_estimator.spec must be an EstimatorSpec"):
@@ -442,13 +446,16 @@ def test_the_factory_builds_the_estimators_and_names_what_is_missing():
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"kind": "ekf"}, r"EstimatorSpec.kind must be one of \['truth', 'ekf', 'mhe'\]"),
+        ({"kind": "ekf"}, r"EstimatorSpec.kind must be one of \['truth', 'ekf', 'ukf', 'mhe'\]"),
         ({"options": {"prior_position": 0.01}}, r"options\[prior_position\] is an option of"),
         ({"kind": EstimatorKind.EKF, "options": {"horizon": 10}}, r"of kind 'mhe', not 'ekf'"),
         ({"kind": EstimatorKind.MHE, "options": {"horizon": 0}}, r"options\[horizon\] .*>= 1"),
         ({"kind": EstimatorKind.MHE, "options": {"horizon": 261}}, r"<= 260 \(10 s of pulses"),
         ({"kind": EstimatorKind.MHE, "options": {"horizon": 2.5}}, r"must be an integer"),
-        ({"kind": EstimatorKind.MHE, "options": {"noise_scale": 2.0}}, r"kind 'ekf', not 'mhe'"),
+        (
+            {"kind": EstimatorKind.MHE, "options": {"noise_scale": 2.0}},
+            r"kind 'ekf' or 'ukf', not 'mhe'",
+        ),
         ({"kind": EstimatorKind.EKF, "options": {"prior_wind": -1.0}}, r"prior_wind\] .*> 0"),
         ({"kind": EstimatorKind.EKF, "options": {"prior_coning": math.nan}}, r"prior_coning\]"),
         ({"kind": EstimatorKind.EKF, "options": {"gain": 1.0}}, r"options\[gain\]: no such"),
