@@ -1,10 +1,11 @@
 """``lightcraft closed-loop`` with an ``[estimator]`` table: the truth flies as before (no
 estimate columns, no estimate.png); a tracked flight (problems/director_tracked_gyro.toml,
-its first 0.4 s) writes the estimate's columns and estimate.png; a bad option exits 2 with
-one line naming its key, before any flight."""
+its first 0.4 s) writes the estimate's columns and estimate.png, and flies with the unscented
+filter; a bad option exits 2 with one line naming its key, before any flight."""
 
 from __future__ import annotations
 
+import csv
 from pathlib import Path
 
 from support.paths import REPO_ROOT
@@ -49,3 +50,22 @@ def test_a_tracked_flight_writes_the_estimate(tmp_path: Path, capsys):
     assert {"error_x_m", "sigma_x_m", "estimator_time_ms", "readings"} <= set(header)
     assert (out / "estimate.png").is_file()
     assert "ekf: position error RMS" in capsys.readouterr().out
+
+
+def test_the_unscented_filter_flies_from_a_file(tmp_path: Path, capsys):
+    """The tracked file with ``kind = "ukf"``: the director told the UKF's estimate, whose
+    error lies within 3 of its own σ on each axis at every pulse of the first 0.4 s."""
+    text = (REPO_ROOT / "problems" / "director_tracked_gyro.toml").read_text(encoding="utf-8")
+    text = text.replace('"../models/', f'"{REPO_ROOT / "models"}/')
+    assert 'kind = "ekf"' in text
+    path = tmp_path / "ukf.toml"
+    path.write_text(text.replace('kind = "ekf"', 'kind = "ukf"'), encoding="utf-8")
+    out = tmp_path / "ukf"
+    assert main(["closed-loop", str(path), "--out", str(out), "--duration", "0.4"]) == 0
+    assert "ukf: position error RMS" in capsys.readouterr().out
+    with (out / "steps.csv").open(encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["error_x_m"]]  # pulses with an estimate
+    assert len(rows) >= 8
+    for axis in "xyz":
+        for r in rows:
+            assert abs(float(r[f"error_{axis}_m"])) <= 3 * float(r[f"sigma_{axis}_m"]), (axis, r)
