@@ -157,7 +157,7 @@ def flight_outputs(result: ClosedLoopResult) -> dict[str, Any]:
     r = flight.state("r_L")
     k = int(np.argmax(r[:, 2]))
     landed = flight.status is SimulationStatus.LANDED
-    log = result.log
+    log, est = result.log, result.estimation
     counted = bool(np.all(log.iterations >= 0))
     return {
         "status": flight.status.value,
@@ -185,6 +185,9 @@ def flight_outputs(result: ClosedLoopResult) -> dict[str, Any]:
         "iterations_max": (int(np.max(log.iterations)) if log.iterations.size else 0)
         if counted
         else -1,
+        # the estimator's, NaN for a controller told the truth
+        "estimate_position_rms_m": est.rms_position_error() if est is not None else math.nan,
+        "estimate_position_nees": est.position_nees() if est is not None else math.nan,
     }
 
 

@@ -35,7 +35,8 @@ __all__ = [
     "Campaign",
 ]
 
-#: Outputs of a run, after its index and drawn inputs (SI but angles, in degrees).
+#: Outputs of a run, after its index and drawn inputs (SI but angles, in degrees); the
+#: estimate's columns are NaN in a run told the truth.
 OUTPUT_COLUMNS = (
     "status",
     "message",
@@ -59,6 +60,8 @@ OUTPUT_COLUMNS = (
     "fallbacks",
     "iterations_total",
     "iterations_max",
+    "estimate_position_rms_m",
+    "estimate_position_nees",
 )
 #: Outputs written as integers (-1 in an error row), and as text; the others are floats,
 #: NaN where a run has no value (an error row; a landing point of a run that did not land).

@@ -3,8 +3,9 @@
 :func:`campaign_summary` reads the columns of runs.csv (and of timings.csv) and gives the
 apogee's mean, standard deviation and percentiles, the mean and covariance of the landing
 points and of the final horizontal positions with their 1σ and 95 % confidence ellipses,
-the probability of leaving the beam with its Wilson 95 % interval, the status counts and
-the controller's statistics. Runs with status ``error`` or ``never_fired`` (no pulse fired:
+the probability of leaving the beam with its Wilson 95 % interval, the status counts, the
+controller's statistics and, where the controller was told an estimate, the estimator's
+position error and NEES. Runs with status ``error`` or ``never_fired`` (no pulse fired:
 the craft never left the pad) count in the status counts only.
 """
 
@@ -16,7 +17,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CHI2_2DOF_95", "Z_95", "campaign_summary", "ellipse", "wilson_interval"]
+__all__ = [
+    "CHI2_2DOF_95",
+    "Z_95",
+    "campaign_summary",
+    "chi2_mean_band",
+    "ellipse",
+    "wilson_interval",
+]
 
 #: Two-sided 95 % quantile of the standard normal.
 Z_95 = 1.959963984540054
@@ -69,6 +77,29 @@ def _stats(v: np.ndarray) -> dict[str, Any]:
         "median": float(p[1]),
         "p95": float(p[2]),
         "max": float(np.max(v)),
+    }
+
+
+def chi2_mean_band(k: int, z: float = Z_95) -> tuple[float, float]:
+    """The two-sided band holding 95 % (``z``) of χ²(k) / k, by Wilson and Hilferty's cube
+    root (docs/references.md#wilson-hilferty: within 0.1 % of the exact quantiles for
+    k >= 30); (nan, nan) for k < 1."""
+    if k < 1:
+        return (math.nan, math.nan)
+    a = 2.0 / (9.0 * k)
+    return ((1 - a - z * math.sqrt(a)) ** 3, (1 - a + z * math.sqrt(a)) ** 3)
+
+
+def _estimation(rms: np.ndarray, nees: np.ndarray) -> dict[str, Any]:
+    """The estimator's figures over the runs told an estimate: its position error's RMS
+    [m], and its position NEES per axis (1 when consistent) with the band of its mean
+    over n runs, χ²(3 n) / (3 n): the band of each run's pulses fully correlated, the
+    widest a consistent estimator can need (docs/estimation.md#the-unscented-filter)."""
+    n = int(np.sum(np.isfinite(nees)))
+    return {
+        "position_rms_m": _stats(rms),
+        "position_nees": _stats(nees),
+        "position_nees_band_95": list(chi2_mean_band(3 * n)),
     }
 
 
@@ -151,6 +182,10 @@ def campaign_summary(
         else math.nan,
         "iterations_max": int(np.max(col("iterations_max"))) if n else 0,
     }
+    if "estimate_position_nees" in table and np.any(np.isfinite(col("estimate_position_nees"))):
+        out["estimation"] = _estimation(
+            col("estimate_position_rms_m"), col("estimate_position_nees")
+        )
     if timings is not None and len(timings.get("run", ())):
         ms = {k: 1000.0 * np.asarray(timings[k], dtype=float) for k in timings if k != "run"}
         out["timing"] = {

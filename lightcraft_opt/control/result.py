@@ -157,6 +157,15 @@ class EstimationLog:
         e = self.error_r_L[start:]
         return float(np.sqrt(np.mean(np.sum(e**2, axis=1)))) if e.size else math.nan
 
+    def position_nees(self, start: int = 0) -> float:
+        """The mean over the pulses from ``start`` and the three axes of L of (error /
+        σ)², each axis of r_L under the estimate's own variance: 1 for a consistent
+        estimator, above 1 overconfident (the NEES of each axis apart: the log keeps no
+        cross-covariances); NaN without rows."""
+        e, sigma = self.error_r_L[start:], self.sigma_r_L[start:]
+        ok = np.all(np.isfinite(e), axis=1) & np.all(sigma > 0, axis=1)
+        return float(np.mean((e[ok] / sigma[ok]) ** 2)) if np.any(ok) else math.nan
+
 
 @dataclass(frozen=True)
 class ClosedLoopResult(Presentable):

@@ -193,7 +193,8 @@ def write_closed_loop_summary(
 
 def _estimation_summary(result: ClosedLoopResult) -> dict[str, Any]:
     """summary.json's estimator entries: its name, the RMS of the position error's norm
-    and the largest, and the median and largest step time."""
+    and the largest, the position's NEES per axis (EstimationLog.position_nees: 1 when
+    consistent), and the median and largest step time."""
     log = result.estimation
     assert log is not None
     error = np.linalg.norm(log.error_r_L, axis=1)
@@ -202,6 +203,7 @@ def _estimation_summary(result: ClosedLoopResult) -> dict[str, Any]:
         "estimator": log.estimator,
         "position_error_rms_m": finite_or_none(log.rms_position_error()),
         "position_error_max_m": finite_or_none(np.max(error)) if error.size else None,
+        "position_nees": finite_or_none(log.position_nees()),
         "estimator_time_median_ms": float(np.median(seconds)) * 1e3 if seconds.size else None,
         "estimator_time_max_ms": float(np.max(seconds)) * 1e3 if seconds.size else None,
     }

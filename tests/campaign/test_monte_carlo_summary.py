@@ -12,12 +12,14 @@ import math
 
 import numpy as np
 import pytest
+from scipy.stats import chi2
 
 from lightcraft_opt.campaign.run_table import RunTable, read_table
 from lightcraft_opt.campaign.summary import (
     CHI2_2DOF_95,
     Z_95,
     campaign_summary,
+    chi2_mean_band,
     ellipse,
     wilson_interval,
 )
@@ -126,6 +128,31 @@ def test_iterations_per_pulse_are_averaged_over_the_runs_that_counted_them():
     assert s["controller"]["iterations_per_pulse_mean"] == pytest.approx(650.0 / 260.0)
     t["iterations_total"] = np.full(4, -1.0)
     assert np.isnan(campaign_summary(t)["controller"]["iterations_per_pulse_mean"])
+
+
+def test_the_estimators_figures_and_the_nees_band():
+    """Runs told an estimate: the position error's RMS and NEES statistics over the flown
+    runs, and the 95 % band of the NEES's mean over n runs, χ²(3 n) / (3 n), by Wilson and
+    Hilferty's cube root against scipy's quantiles (0.1 %); runs told the truth (NaN
+    columns): no estimation entry."""
+    rng = np.random.default_rng(3)
+    t = _table(60, rng)
+    t["estimate_position_rms_m"] = rng.uniform(0.003, 0.006, 60)
+    t["estimate_position_nees"] = rng.uniform(0.5, 2.0, 60)
+    s = campaign_summary(t)["estimation"]
+    flown = t["status"] != "error"
+    assert s["position_nees"]["n"] == 59
+    assert s["position_nees"]["mean"] == pytest.approx(np.mean(t["estimate_position_nees"][flown]))
+    assert s["position_rms_m"]["median"] == pytest.approx(
+        np.median(t["estimate_position_rms_m"][flown])
+    )
+    np.testing.assert_allclose(
+        s["position_nees_band_95"], chi2.ppf([0.025, 0.975], 177) / 177, rtol=1e-3
+    )
+    for k in (30, 150, 600, 3000):
+        np.testing.assert_allclose(chi2_mean_band(k), chi2.ppf([0.025, 0.975], k) / k, rtol=1e-3)
+    t["estimate_position_rms_m"] = t["estimate_position_nees"] = np.full(60, np.nan)
+    assert "estimation" not in campaign_summary(t)
 
 
 def test_run_table_repairs_a_cut_line_and_sorts_when_finished(tmp_path):

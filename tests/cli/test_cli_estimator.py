@@ -6,6 +6,7 @@ filter; a bad option exits 2 with one line naming its key, before any flight."""
 from __future__ import annotations
 
 import csv
+import json
 from pathlib import Path
 
 from support.paths import REPO_ROOT
@@ -63,6 +64,8 @@ def test_the_unscented_filter_flies_from_a_file(tmp_path: Path, capsys):
     out = tmp_path / "ukf"
     assert main(["closed-loop", str(path), "--out", str(out), "--duration", "0.4"]) == 0
     assert "ukf: position error RMS" in capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["estimator"] == "ukf" and 0 < summary["position_nees"] < 10
     with (out / "steps.csv").open(encoding="utf-8") as f:
         rows = [r for r in csv.DictReader(f) if r["error_x_m"]]  # pulses with an estimate
     assert len(rows) >= 8

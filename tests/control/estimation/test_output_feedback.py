@@ -268,6 +268,10 @@ def test_a_noisy_camera_gives_its_noise_as_the_position_error(phi):
     assert log.rms_position_error() == pytest.approx(math.sqrt(3) * sigma, rel=0.5)
     rms = math.sqrt(np.mean(np.sum(log.error_r_L**2, axis=1)))
     assert log.rms_position_error() == pytest.approx(rms, rel=1e-12)
+    # an estimate that is the camera's reading with the camera's σ is consistent: its
+    # position NEES per axis, a mean of n χ²(1) draws, is 1 within 4 of its standard errors
+    assert log.position_nees() == pytest.approx(np.mean((log.error_r_L / sigma) ** 2), rel=1e-12)
+    assert abs(log.position_nees() - 1.0) < 4 * math.sqrt(2 / n)
     assert f"estimator        hooked: position error RMS {1e3 * rms:.2f} mm" in fed.summary()
     assert "estimator " not in truth.summary()
     # the beam followed the camera's noise: the flights differ
