@@ -327,7 +327,7 @@ for name, run in runs.items():
 # - The gyro pins the coning angle (error under 0.003 degrees for the filters) and the tilt
 #   to about 0.3 degrees RMS (the MHE's 0.4). With the camera alone the director loses this
 #   craft near 23 m (docs/estimation.md#what-the-director-needs).
-# - The UKF's step costs about 2.6 times the EKF's (2.0 against 0.76 ms median here; its
-#   first step also builds its mapped Ψ), the MHE's about six times (4.4 ms). All fit in the
-#   pulse's 38 ms beside the director's 1.4-2 ms. Where the UKF earns its cost is the
-#   consistency of its covariance over many flights (docs/estimation.md#the-unscented-filter).
+# - The UKF's step costs two to three times the EKF's (1.4-2.0 against 0.66-0.76 ms median
+#   over two runs here), the MHE's six to eight times (4.4-5.2 ms). All fit in the pulse's
+#   38 ms beside the director's 1.4-2 ms. Where the UKF earns its cost is the consistency of
+#   its covariance over many flights (docs/estimation.md#the-unscented-filter).

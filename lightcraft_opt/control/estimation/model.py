@@ -46,7 +46,8 @@ class EstimationModel(Protocol):
       reading);
     - ``predict_many(S, u, t) -> S_next``: ``predict``'s values (no F) from each row of S
       (k, n), (k, n); the unscented filter propagates its sigma points with one call
-      (without it, one a point).
+      (without it, one a point); ``prepare_many(k)`` builds that call for k rows ahead of
+      the first (the filter calls it when it is made).
     """
 
     names: tuple[str, ...]

@@ -407,13 +407,18 @@ class PsiEstimationModel:
         offset beyond 1) comes back non-finite."""
         S = np.atleast_2d(np.asarray(S, dtype=float))
         k = S.shape[0]
+        self.prepare_many(k)
+        out = S.copy()
+        out[:, :_NZ] = self._points[k](S[:, :_NZ].T, self._input(u), self.parameters_many(S).T, t).T
+        return out
+
+    def prepare_many(self, k: int) -> None:
+        """Build (compile or load) :meth:`predict_many`'s Function for k rows now, so that
+        its first call costs what the others do."""
         if k not in self._points:
             if self._values is None:
                 self._values = self._value_stage()
             self._points[k] = Evaluator(_mapped_values(self._values, k))
-        out = S.copy()
-        out[:, :_NZ] = self._points[k](S[:, :_NZ].T, self._input(u), self.parameters_many(S).T, t).T
-        return out
 
     def _value_stage(self) -> ca.Function:
         """Ψ's value chain over its own pieces, compiled (cached by structure) unless the

@@ -22,7 +22,8 @@ with each sensor's Jacobian (the position camera is linear in s). Everything els
 history, late readings re-filtered exactly, lost frames) is the EKF's.
 
 Where a sigma point leaves Ψ's domain (a coning offset beyond 1: the cone's prior has
-grown past what Ψ's chart holds) that step predicts as the EKF does and counts it
+grown past what Ψ's chart holds), or P has no Cholesky factor (not positive definite to
+rounding), that step predicts as the EKF does and counts it
 (:attr:`UnscentedKalmanFilter.linearised`).
 """
 
@@ -116,7 +117,7 @@ class UnscentedKalmanFilter(ExtendedKalmanFilter):
     ----------
     s, P, innovations, dropped : as the EKF's.
     linearised : predictions made as the EKF's because a sigma point left the model's
-        domain (its prediction not finite).
+        domain (its prediction not finite) or P had no Cholesky factor.
     """
 
     name = "ukf"
@@ -128,6 +129,9 @@ class UnscentedKalmanFilter(ExtendedKalmanFilter):
         super().__init__(model, options)
         self.weights = sigma_weights(len(model.names), options.alpha, options.beta, options.kappa)
         self.linearised = 0
+        prepare = getattr(model, "prepare_many", None)
+        if prepare is not None:  # the points' Function now, not in the first step's time
+            prepare(self.weights.mean.size)
 
     def reset(self, x0: np.ndarray, t0: float = 0.0) -> None:
         """As the EKF's, and the count of linearised predictions to 0."""
@@ -144,7 +148,11 @@ class UnscentedKalmanFilter(ExtendedKalmanFilter):
         self, s: np.ndarray, P: np.ndarray, u: np.ndarray, t: float
     ) -> tuple[np.ndarray, np.ndarray]:
         w = self.weights
-        root = np.linalg.cholesky(w.spread * P).T  # rows: the columns of √((n + λ) P)
+        try:
+            root = np.linalg.cholesky(w.spread * P).T  # rows: the columns of √((n + λ) P)
+        except np.linalg.LinAlgError:  # P not positive definite to rounding: no points
+            self.linearised += 1
+            return super()._predict(s, P, u, t)
         points = np.vstack([s, s + root, s - root])
         images = self._sigma_images(points, u, t)
         if not np.all(np.isfinite(images)):

@@ -110,6 +110,36 @@ def test_weights() -> None:
         UnscentedKalmanFilter(Square(), EkfOptions())
 
 
+class Collapse(Square):
+    """s_next = 0 with no process noise: the prediction's covariance is 0, which has no
+    Cholesky factor for the next prediction's points; ``prepare_many`` records its calls."""
+
+    def __init__(self) -> None:
+        self.prepared: list[int] = []
+
+    def prepare_many(self, k: int) -> None:
+        self.prepared.append(k)
+
+    def predict(self, s, u, t):
+        return np.zeros(1), np.zeros((1, 1))
+
+
+def test_a_covariance_without_points_is_predicted_as_the_ekf_does() -> None:
+    """The filter asks its model to prepare the 2n + 1 points' call when it is made; a P
+    with no Cholesky factor is predicted by the linearisation, counted, and reset clears
+    the count."""
+    model = Collapse()
+    ukf = UnscentedKalmanFilter(model)
+    assert model.prepared == [3]
+    ukf.reset(np.array([1.0]))
+    first = ukf.step([], np.zeros(1), T)  # by the points: P = 0
+    assert first.covariance[0, 0] == 0.0 and ukf.linearised == 0
+    second = ukf.step([], np.zeros(1), 2 * T)  # P = 0: no points
+    assert ukf.linearised == 1 and second.z[0] == 0.0 and second.covariance[0, 0] == 0.0
+    ukf.reset(np.array([1.0]))
+    assert ukf.linearised == 0
+
+
 def test_equals_the_kalman_filter_on_a_linear_model() -> None:
     """On the double integrator (linear: the unscented transform is exact) with lost frames
     and a reading a pulse late, the UKF's estimates and covariances are the EKF's (which
