@@ -1,10 +1,10 @@
 """The unscented Kalman filter at pulse rate: the EKF with its prediction by sigma points.
 
-The EKF (ekf.py) predicts the covariance through Ψ's Jacobian at the estimate, P⁻ = F P Fᵀ +
-Q. Across a prior that spans metres per second of wind that is not enough: on flights of Ψ
-itself the EKF's NEES is 1.6 times its mean (docs/estimation.md#the-unscented-filter), and
-the error it underrates lies along one combination of the velocity, the wind and H_L, the
-drag's and the aerodynamic torque's curvature in the relative wind. This filter predicts
+The EKF (ekf.py) predicts with Ψ at the estimate and its Jacobian, P⁻ = F P Fᵀ + Q. Across
+a prior of millimetres in the beam, metres per second of wind and a degree of tilt that is
+not enough: Ψ curves across it (the capture falls off with the offset in the beam, drag
+grows with the relative wind), and on flights of Ψ itself the EKF's NEES is 1.4 to 8.4
+times its mean (docs/estimation.md#the-unscented-filter). This filter predicts
 with the unscented transform instead (Julier and Uhlmann; the scaled form of Wan and van der
 Merwe, docs/references.md): the 2n + 1 sigma points
 
@@ -16,10 +16,11 @@ Merwe, docs/references.md): the 2n + 1 sigma points
     s⁻ = Σ W_i^m f(χ_i),   P⁻ = Σ W_i^c (f(χ_i) - s⁻)(f(χ_i) - s⁻)ᵀ + Q
 
 with W_0^m = λ / (n + λ), W_0^c = W_0^m + 1 - α² + β, W_i^m = W_i^c = 1 / (2 (n + λ)). The mean
-and covariance are exact for a linear f, and for a quadratic f of a Gaussian s with β = 2
-(tests/control/estimation/test_ukf_filter.py). The update stays the EKF's: the Joseph form
-with each sensor's Jacobian (the position camera is linear in s). Everything else (the
-history, late readings re-filtered exactly, lost frames) is the EKF's.
+is exact for a linear or a quadratic f of a Gaussian s, the covariance for a linear f and,
+with β = 2, for the square of one entry (tests/control/estimation/test_ukf_filter.py). The
+update stays the EKF's: the Joseph form with each sensor's Jacobian (the position camera is
+linear in s). Everything else (the history, late readings re-filtered exactly, lost frames)
+is the EKF's.
 
 Where a sigma point leaves Ψ's domain (a coning offset beyond 1: the cone's prior has
 grown past what Ψ's chart holds), or P has no Cholesky factor (not positive definite to
