@@ -135,6 +135,7 @@ def _fly(
         log = result.estimation
         estimated = (
             f", {log.estimator}: position error RMS {1e3 * log.rms_position_error():.2f} mm, "
+            f"NEES {log.position_nees():.2f} an axis, "
             f"step median {1e3 * float(np.median(log.seconds)) if log.seconds.size else 0:.2f} ms"
         )
         if np.any(log.restarts):

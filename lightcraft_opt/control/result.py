@@ -287,7 +287,8 @@ class ClosedLoopResult(Presentable):
             step = 1e3 * float(np.median(est.seconds)) if est.seconds.size else math.nan
             rows.append(
                 f"  estimator        {est.estimator}: position error RMS "
-                f"{1e3 * est.rms_position_error():.2f} mm, step median {step:.3f} ms, "
+                f"{1e3 * est.rms_position_error():.2f} mm, NEES {est.position_nees():.2f} an "
+                f"axis (1: consistent), step median {step:.3f} ms, "
                 f"{int(np.sum(est.restarts))} restarts"
             )
         return "\n".join(

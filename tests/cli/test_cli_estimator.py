@@ -63,9 +63,11 @@ def test_the_unscented_filter_flies_from_a_file(tmp_path: Path, capsys):
     path.write_text(text.replace('kind = "ekf"', 'kind = "ukf"'), encoding="utf-8")
     out = tmp_path / "ukf"
     assert main(["closed-loop", str(path), "--out", str(out), "--duration", "0.4"]) == 0
-    assert "ukf: position error RMS" in capsys.readouterr().out
+    printed = capsys.readouterr().out
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     assert summary["estimator"] == "ukf" and 0 < summary["position_nees"] < 10
+    assert f"ukf: position error RMS {1e3 * summary['position_error_rms_m']:.2f} mm" in printed
+    assert f"NEES {summary['position_nees']:.2f} an axis" in printed
     with (out / "steps.csv").open(encoding="utf-8") as f:
         rows = [r for r in csv.DictReader(f) if r["error_x_m"]]  # pulses with an estimate
     assert len(rows) >= 8

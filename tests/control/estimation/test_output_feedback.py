@@ -273,6 +273,7 @@ def test_a_noisy_camera_gives_its_noise_as_the_position_error(phi):
     assert log.position_nees() == pytest.approx(np.mean((log.error_r_L / sigma) ** 2), rel=1e-12)
     assert abs(log.position_nees() - 1.0) < 4 * math.sqrt(2 / n)
     assert f"estimator        hooked: position error RMS {1e3 * rms:.2f} mm" in fed.summary()
+    assert f"NEES {log.position_nees():.2f} an axis" in fed.summary()
     assert "estimator " not in truth.summary()
     # the beam followed the camera's noise: the flights differ
     assert not np.array_equal(fed.commanded, truth.commanded)
