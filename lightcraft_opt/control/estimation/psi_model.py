@@ -437,8 +437,7 @@ class PsiEstimationModel:
         noise along J c (``ProcessNoise.inertia``: |H| T / A turns c a pulse)."""
         Q = self._Q.copy()
         s = np.asarray(s, dtype=float).ravel()
-        H = s[_H]
-        phase = math.sqrt(float(H @ H)) * self.period / self._transverse  # |H| as numpy's norm
+        phase = self._cone_turn(s)
         sigma = self.noise.inertia
         turn = (-float(s[_CONE.start + 1]) * phase * sigma, float(s[_CONE.start]) * phase * sigma)
         i = _CONE.start  # the block += turn turnᵀ, in Python floats (numpy's dozen calls cost
@@ -446,6 +445,12 @@ class PsiEstimationModel:
             for b in range(2):
                 Q[i + a, i + b] += turn[a] * turn[b]
         return Q
+
+    def _cone_turn(self, s: np.ndarray) -> float:
+        """|H| T / A [rad]: how far Ψ turns the coning offset c in a pulse from s (|H| as
+        numpy's norm)."""
+        H = s[_H]
+        return math.sqrt(float(H @ H)) * self.period / self._transverse
 
     def sample_next(
         self, s: np.ndarray, u: np.ndarray, t: float, rng: np.random.Generator
@@ -458,13 +463,9 @@ class PsiEstimationModel:
         27 % for Flight 5, whose turn has a standard deviation of 0.52 rad). What a
         consistency check flies as the truth of the estimators' own model."""
         s = np.asarray(s, dtype=float).ravel()
-        calm = s.copy()
-        calm[_CONE] = 0.0  # Q without the turn: its diagonal
-        sigma = np.sqrt(np.diag(self.process_noise(calm, u, t)))
+        sigma = np.sqrt(np.diag(self._Q))  # Q without the turn: its diagonal
         out = self.predict_many(s[None, :], u, t)[0] + sigma * rng.normal(size=self.n)
-        H = s[_H]
-        phase = math.sqrt(float(H @ H)) * self.period / self._transverse * self.noise.inertia
-        turn = phase * rng.normal()
+        turn = self._cone_turn(s) * self.noise.inertia * rng.normal()
         c1, c2 = out[_CONE]
         out[_CONE] = (
             math.cos(turn) * c1 - math.sin(turn) * c2,

@@ -30,7 +30,6 @@ rounding), that step predicts as the EKF does and counts it
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,6 +38,7 @@ from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilt
 from lightcraft_opt.control.estimation.kalman import symmetric
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.errors import OptionError
+from lightcraft_opt.model.checks import checked_nonnegative
 
 __all__ = ["SigmaWeights", "UkfOptions", "UnscentedKalmanFilter", "sigma_weights"]
 
@@ -63,15 +63,11 @@ class UkfOptions(EkfOptions):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name, value in (("alpha", self.alpha), ("beta", self.beta), ("kappa", self.kappa)):
-            alpha = name == "alpha"
-            if not _finite_number(value) or not (0 < value <= 1 if alpha else value >= 0):
-                span = "in (0, 1]" if alpha else ">= 0"
-                raise OptionError(f"UkfOptions.{name} must be {span}, got {value!r}")
-
-
-def _finite_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+        alpha = self.alpha
+        if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not 0 < alpha <= 1:
+            raise OptionError(f"UkfOptions.alpha must be in (0, 1], got {alpha!r}")
+        checked_nonnegative("UkfOptions", "beta", self.beta)
+        checked_nonnegative("UkfOptions", "kappa", self.kappa)
 
 
 @dataclass(frozen=True)

@@ -104,7 +104,7 @@ def test_weights() -> None:
         sigma_weights(17, 0.5, 0.0, 0.0)  # W_0^c = -3.75 + 0.75
     with pytest.raises(OptionError, match=r"UkfOptions.alpha must be in \(0, 1\]"):
         UkfOptions(alpha=1.5)
-    with pytest.raises(OptionError, match=r"UkfOptions.beta must be >= 0"):
+    with pytest.raises(OptionError, match=r"UkfOptions.beta must be a finite number >= 0"):
         UkfOptions(beta=-1.0)
     with pytest.raises(OptionError, match="options must be UkfOptions"):
         UnscentedKalmanFilter(Square(), EkfOptions())
