@@ -47,6 +47,7 @@ from lightcraft_opt.compiled.pulse_map import DESIGN_INSTRUCTION_LIMIT
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.layout import (
     PARAMETERS,
+    STATE,
     initial_state,
     map_input_layout,
     nominal_inputs,
@@ -57,7 +58,10 @@ from lightcraft_opt.simulation.result import SimulationResult, SimulationStatus
 from lightcraft_opt.simulation.simulate import simulate
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
-from lightcraft_opt.symbolic.maps.pulse_map_derivatives import build_pulse_map_derivatives
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
+    build_pulse_map_derivatives,
+    chain_derivatives,
+)
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 SMALL = PulseMapOptions(substeps=4, dense=2)
@@ -444,3 +448,45 @@ def test_compiled_chain_derivatives_are_saved_and_loaded_by_structure(small, mon
     again = rebuilt.hessian(x, u, p, 0.4, lam_x, lam_e)
     assert np.array_equal(np.asarray(again), np.asarray(hess[0]))
     assert load_functions(DERIVATIVES_CACHE, key) is not None  # whole again
+
+
+def test_interpreted_derivative_pieces_are_kept_by_structure(tmp_path, monkeypatch):
+    """saved_derivative_pieces (what a process that compiles nothing uses): the first call
+    builds the pieces by casadi's AD and saves them, the next loads them without any AD and
+    they give the same numbers to the last bit; other numbers through p share the entry;
+    a damaged entry is dropped with a CacheWarning (so the next call builds it again)."""
+    monkeypatch.setenv("LIGHTCRAFT_CACHE", str(tmp_path))
+    model = _small_model()
+    phi = build_pulse_map(model, PulseMapOptions(substeps=2, dense=1))
+    said: list[str] = []
+    first = compiled_pulse_map.saved_derivative_pieces(phi, report=said.append)
+    assert said == [compiled_pulse_map.BUILDING_PIECES]
+    (entry,) = tmp_path.glob(f"{compiled_pulse_map.PIECES_CACHE}-*.casadi")
+
+    def no_build(*args, **kwargs):
+        raise AssertionError("built again instead of loading the saved pieces")
+
+    same = build_pulse_map(table1_flight5(engine=COARSE_OPTIC, mass=0.04), phi.options)
+    with monkeypatch.context() as patch:
+        patch.setattr(compiled_pulse_map, "build_derivative_pieces", no_build)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CacheWarning)
+            loaded = compiled_pulse_map.saved_derivative_pieces(same, report=said.append)
+    assert said[-1].startswith("Φ's derivative pieces: loaded from the cache")
+    x = initial_state(model, r_L=(0.01, -0.02, 4.0), v_L=(0.2, 0.1, 8.0), w_B=(0.0, 2.0, -1.0))
+    u, p = nominal_inputs(model), parameter_values(model)
+    lam = np.random.default_rng(3).normal(size=STATE.size)
+    chains = [chain_derivatives(phi, d) for d in (first, loaded)]
+    assert all(c.hessian is not None for c in chains)
+    for f, g in ((chains[0].jacobian, chains[1].jacobian), (chains[0].values, chains[1].values)):
+        for a, b in zip(f(x, u, p, 0.4), g(x, u, p, 0.4), strict=True):
+            assert np.array_equal(np.asarray(a), np.asarray(b))
+    lam_e = np.zeros(chains[0].values.size1_out(1))
+    hess = [np.asarray(c.hessian(x, u, p, 0.4, lam, lam_e)) for c in chains]  # type: ignore[misc]
+    assert np.array_equal(*hess) and np.any(hess[0])
+
+    entry.write_bytes(entry.read_bytes()[:-100])  # damaged: dropped, so built again
+    key = entry.name.removeprefix(f"{compiled_pulse_map.PIECES_CACHE}-").removesuffix(".casadi")
+    with pytest.warns(CacheWarning, match="damaged"):
+        assert load_functions(compiled_pulse_map.PIECES_CACHE, key) is None
+    assert not entry.exists()

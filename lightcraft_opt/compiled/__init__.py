@@ -21,6 +21,7 @@ from lightcraft_opt.compiled.pulse_map import (
     compile_pulse_map,
     compile_pulse_map_derivatives,
     derivatives_key,
+    saved_derivative_pieces,
     saved_pulse_map_derivatives,
 )
 
@@ -35,5 +36,6 @@ __all__ = [
     "derivatives_key",
     "pulse_map_for",
     "reduced_derivatives_for",
+    "saved_derivative_pieces",
     "saved_pulse_map_derivatives",
 ]

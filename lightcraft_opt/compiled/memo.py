@@ -29,10 +29,10 @@ from lightcraft_opt.compiled.cache import (
     compile_all,
 )
 from lightcraft_opt.compiled.pulse_map import (
-    BUILDING_PIECES,
     DERIVATIVE_INSTRUCTION_LIMIT,
     compile_pieces,
     compile_pulse_map,
+    saved_derivative_pieces,
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.model import Model
@@ -40,7 +40,6 @@ from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap, build_pulse_map
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
-    build_derivative_pieces,
     chain_derivatives,
     check_design,
 )
@@ -169,10 +168,8 @@ def derivatives_for(
     def build() -> PulseMapDerivatives:
         phi = pulse_map_for(model, opts, compiled=False)
         assert phi.pieces is not None  # build_pulse_map always records its pieces
-        if not want:
-            if report is not None:
-                report(BUILDING_PIECES)
-            pieces = build_derivative_pieces(phi.pieces, design=design)
+        if not want:  # interpreted, the pieces' AD kept on disk
+            pieces = saved_derivative_pieces(phi, design=design, report=report)
             return chain_derivatives(phi, pieces, design=design)
         with _compilation_warned_once():
             return saved_pulse_map_derivatives(phi, report=report, design=design)

@@ -9,7 +9,9 @@ own library, and chains them (symbolic/maps/pulse_map_derivatives.py), never cas
 the whole graph (docs/architecture.md#rule-17); :func:`saved_pulse_map_derivatives` keeps
 that chain on disk (compiled/cache/functions.py), so a later build of the same structure loads it in
 milliseconds instead of redoing casadi's AD of every piece (seconds; figures:
-bench/README.md#build-time-a-new-structure-and-the-same-structure-again).
+bench/README.md#build-time-a-new-structure-and-the-same-structure-again);
+:func:`saved_derivative_pieces` keeps the pieces' interpreted derivatives likewise, for
+processes that compile nothing.
 
 Cost, for Flight 5 with the default options (Φ composed of named pieces,
 symbolic/maps/pulse_map.py; 0.65 MB of C): gcc -O2 compiles it in seconds, once per model
@@ -63,11 +65,13 @@ __all__ = [
     "DERIVATIVES_CACHE",
     "DERIVATIVE_INSTRUCTION_LIMIT",
     "DESIGN_INSTRUCTION_LIMIT",
+    "PIECES_CACHE",
     "compile_pieces",
     "compile_pulse_map",
     "compile_pulse_map_derivatives",
     "derivatives_key",
     "instruction_limit",
+    "saved_derivative_pieces",
     "saved_pulse_map_derivatives",
 ]
 
@@ -275,20 +279,62 @@ def derivatives_key(
     if version is None:
         return None
     max_instructions = instruction_limit(design, max_instructions)
+    compiled = repr((DEFAULT_FLAGS, DERIVATIVE_FLAGS, max_instructions))
+    return _structure_key("pulse_map_derivatives", phi, design, version, compiled)
+
+
+def _structure_key(name: str, phi: PulseMap, design: tuple[int, ...], *more: str) -> str:
+    """The key of an entry ``name`` built from ``phi``'s structure in v = (x, u,
+    p[design]) (:func:`derivatives_key`), with ``more`` (how it was built) after it."""
     pieces = phi.pieces
     assert pieces is not None
     numbers = (pieces.substeps, pieces.step_length, pieces.n_thrusters, pieces.has_carrier)
     designed = (repr(("design", check_design(design))),) if design else ()
     return structure_key(
-        "pulse_map_derivatives",
+        name,
         phi.dense,
         pieces.normalise,
         pieces.jump,
         pieces.substep,
         pieces.coning_rate,
         repr((numbers, pieces.substep_inputs, phi.options, phi.inputs, phi.period)),
-        version,
-        repr((DEFAULT_FLAGS, DERIVATIVE_FLAGS, max_instructions)),
+        *more,
         source_digest(derivative_chain, jump_derivatives, _THIS_MODULE),
         *designed,
     )
+
+
+#: Name of the cache entries of Φ's interpreted derivative pieces (:func:`saved_derivative_pieces`).
+PIECES_CACHE = "pulse_map_derivative_pieces"
+
+#: What an entry of :data:`PIECES_CACHE` holds in place of a Hessian that was not built.
+_ABSENT = "absent_piece"
+
+
+def saved_derivative_pieces(
+    phi: PulseMap, *, design: tuple[int, ...] = (), report: BuildReport | None = None
+) -> DerivativePieces:
+    """``phi``'s derivative pieces in v = (x, u, p[design]), interpreted (casadi's AD of
+    each piece, :func:`build_derivative_pieces`), kept on disk by structure like the
+    compiled chain (compiled/cache/functions.py): where nothing is compiled
+    (``LIGHTCRAFT_COMPILE=0``, no C compiler) a later process loads them in a second or
+    two instead of redoing the AD (4-20 s for the problem files' maps). ``report`` hears
+    which it was; a damaged entry is built again with a
+    :class:`~lightcraft_opt.compiled.cache.CacheWarning`."""
+    if phi.pieces is None:
+        raise ParameterError("phi", "needs a Φ from build_pulse_map, with its pieces")
+    design = check_design(design)
+    start = time.perf_counter()
+    key = _structure_key(PIECES_CACHE, phi, design, "interpreted")
+    loaded = load_functions(PIECES_CACHE, key)
+    if loaded is not None and len(loaded) == len(fields(DerivativePieces)):
+        if report is not None:
+            seconds = time.perf_counter() - start
+            report(f"Φ's derivative pieces: loaded from the cache in {seconds:.1f} s")
+        return DerivativePieces.of(tuple(None if f.name() == _ABSENT else f for f in loaded))
+    if report is not None:
+        report(BUILDING_PIECES)
+    pieces = build_derivative_pieces(phi.pieces, design=design)
+    absent = ca.Function(_ABSENT, [], [])
+    save_functions(PIECES_CACHE, key, [absent if f is None else f for f in pieces.functions()])
+    return pieces

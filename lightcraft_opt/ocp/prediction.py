@@ -15,6 +15,7 @@ from lightcraft_opt.compiled import (
     compile_by_default,
     derivatives_for,
     pulse_map_for,
+    saved_derivative_pieces,
     saved_pulse_map_derivatives,
 )
 from lightcraft_opt.compiled.cache import BuildReport
@@ -27,7 +28,7 @@ from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
     PulseMapDerivatives,
-    build_pulse_map_derivatives,
+    chain_derivatives,
 )
 from lightcraft_opt.symbolic.maps.reduced_map import ReducedMapOptions, reduced_pulse_map
 
@@ -83,4 +84,5 @@ def prediction_derivatives(
         return derivatives_for(problem.model, built_with, design=design, report=report)
     if compile_by_default():
         return saved_pulse_map_derivatives(phi, report=report, design=design)
-    return build_pulse_map_derivatives(phi, design=design)
+    pieces = saved_derivative_pieces(phi, design=design, report=report)
+    return chain_derivatives(phi, pieces, design=design)
