@@ -82,7 +82,7 @@ def test_a_solve_from_the_directors_flight_improves_on_it(waist):
     0.061 measured), so only each solve's own claims are checked."""
     problem, options, phi = waist
     results = {}
-    for start in OcpStart:
+    for start in (OcpStart.FLOWN, OcpStart.ROLLOUT):  # HELD_DESIGN: FLOWN without a design
         opts = OcpOptions(pulse_map=options, tol=TOL, start=start, replay=False)
         compiled = CompiledOcp(problem, opts, pulse_map=phi)
         results[start] = (compiled, compiled.solve())
