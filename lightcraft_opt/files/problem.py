@@ -117,6 +117,7 @@ _SOLVER: Mapping[str, Spec] = {
     "wind_ramp": INTEGER,
     "prediction": choice(PredictionMap),
     "start": choice(OcpStart),
+    "grow_pulses": INTEGER,
     "convex_iterations": INTEGER,
     "warm_hessian": choice(WarmHessian),
     "linear_solver": choice(LinearSolver),

@@ -66,11 +66,16 @@ class OcpStart(Enum):
     problem started from those optima and their multipliers
     (docs/design.md#robust-design). FLOWN when that solve fails, and for problems without
     a design.
+    ``GROWN``: for a long horizon, the problem solved over its first half, then
+    ``OcpOptions.grow_pulses`` more at a time, each from the last optimum flown on by the
+    director (ocp/grown_start.py; problems/beam_tracking_apogee.toml). FLOWN when a stage
+    fails or the horizon is under twice ``grow_pulses``.
     """
 
     FLOWN = "flown"
     ROLLOUT = "rollout"
     HELD_DESIGN = "held_design"
+    GROWN = "grown"
 
 
 class WarmHessian(Enum):
@@ -222,6 +227,7 @@ class OcpOptions:
         551 to the optimum with the default). Figures:
         bench/README.md#ipopts-inertia-corrections-and-mumpss-pivot-tolerance-2026-12-06.
     start : where a cold solve starts without an initial guess (:class:`OcpStart`).
+    grow_pulses : pulses added per stage of a ``GROWN`` start, >= 1.
     replay : fly every solve's plan again through the simulator's Φ at full accuracy and
         attach the comparison with the prediction to the result (``OcpResult.replay``,
         ocp/replay.py), with a ``PlanWarning`` when the plan does not fly. False: skip it
@@ -249,6 +255,7 @@ class OcpOptions:
     linear_solver: LinearSolver = LinearSolver.MUMPS
     mumps_pivtol: float | None = None
     start: OcpStart = OcpStart.FLOWN
+    grow_pulses: int = 26
     replay: bool = True
     sensitivities: bool = False
 
@@ -319,6 +326,7 @@ class OcpOptions:
             ("print_level", 0, 12),
             ("wind_ramp", 0, None),
             ("convex_iterations", 0, None),
+            ("grow_pulses", 1, None),
         ):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < low or (high and v > high):

@@ -23,6 +23,7 @@ dynamics gaps are closed (``OcpResult.dynamics_closed``); bad inputs raise
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Sequence
@@ -38,6 +39,7 @@ from lightcraft_opt.layout import PARAMETERS, STATE
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.ocp.constraint_rows import dynamics_gap, unmet_constraint
 from lightcraft_opt.ocp.envelope import EnvelopeGradient
+from lightcraft_opt.ocp.grown_start import check_growable, grown_start
 from lightcraft_opt.ocp.held_start import HeldDesignStarts
 from lightcraft_opt.ocp.nlp_solver import (
     CONVEX_PHASE_TOL,
@@ -63,6 +65,7 @@ from lightcraft_opt.ocp.sensitivity import Sensitivities
 from lightcraft_opt.ocp.stall import FLOOR
 from lightcraft_opt.ocp.start import (
     CONVEXIFIED_FIRST,
+    Guess,
     Start,
     StartKind,
     director_applies,
@@ -73,13 +76,7 @@ from lightcraft_opt.ocp.start import (
     scenario_start,
     wind_scaled,
 )
-from lightcraft_opt.ocp.time_limit import (
-    Deadline,
-    Progress,
-    call_forked,
-    call_solver,
-    can_fork,
-)
+from lightcraft_opt.ocp.time_limit import Deadline, Progress, call_forked, call_solver, can_fork
 from lightcraft_opt.ocp.transcription import MultipleShooting
 from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
@@ -151,6 +148,8 @@ class CompiledOcp:
         if not ca.has_nlpsol(plugin) or (qp is not None and not ca.has_conic(qp)):
             raise OptionError(f"OcpOptions.solver {opts.solver.value!r}: not in this casadi build")
         self.problem, self.options = problem, opts
+        if opts.start is OcpStart.GROWN:
+            check_growable(problem, opts.move_blocking)
         self.pulse_map, self._map_options = prediction_map(problem, opts, pulse_map)
         blocks = opts.blocks(problem.horizon)
         derivatives = prediction_derivatives(
@@ -211,7 +210,7 @@ class CompiledOcp:
         self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
         self._held: HeldDesignStarts | None = None  # the problem with its design held
         self.scenario_starts: tuple[Start, ...] = ()
-        self._given_map = pulse_map
+        self._given_map, self._said = pulse_map, build_progress
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
@@ -227,7 +226,7 @@ class CompiledOcp:
         t0: float | None = None,
         u_previous: np.ndarray | Sequence[float] | None = None,
         reference: np.ndarray | None = None,
-        initial_guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None = None,
+        initial_guess: Guess = None,
         warm_start: OcpResult | None = None,
     ) -> OcpResult:
         """Solve for new run-time values (each defaults to the compiled problem's).
@@ -342,7 +341,7 @@ class CompiledOcp:
         t0: float,
         u_previous: np.ndarray | None,
         reference: np.ndarray,
-        initial_guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+        initial_guess: Guess,
         warm_start: OcpResult | None,
         until: float,
     ) -> OcpResult:
@@ -432,7 +431,7 @@ class CompiledOcp:
         p: np.ndarray,
         t0: float,
         u_previous: np.ndarray | None,
-        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+        guess: Guess,
         P: np.ndarray,
     ) -> np.ndarray:
         """The scaled start of the NLP from the cold start ``cold``; with scenarios, each
@@ -568,18 +567,22 @@ class CompiledOcp:
         x0: np.ndarray,
         p: np.ndarray,
         t0: float,
-        guess: np.ndarray | tuple[np.ndarray, np.ndarray] | None,
+        guess: Guess,
     ) -> Start:
         """The cold start (ocp/start.py): the caller's guess, else with ``OcpOptions.start``
         "flown" the director's flight where it applies, else the nominal rollout (in calm
         air if the problem's wind blows it out of the beam); with "rollout" the nominal
         rollout in the problem's wind; with "held_design" the problem solved with its design
-        held."""
+        held; with "grown" over shorter horizons (ocp/grown_start.py)."""
         start = self.options.start
+        if isinstance(guess, Start):  # a start made by the caller (ocp/grown_start.py)
+            return guess
         held_kind = guess is None and start is OcpStart.HELD_DESIGN
         if held_kind and self.problem.design and (held := self._held_design_start(x0, p, t0)):
             return held
-        flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN)
+        if guess is None and start is OcpStart.GROWN and (grown := self._grown(x0, p, t0)):
+            return grown
+        flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN, OcpStart.GROWN)
         if guess is None and flown and director_applies(self.problem):
             return director_start(self.problem, self._flight_map(), x0, p, t0)
         if guess is None and flown:
@@ -588,6 +591,12 @@ class CompiledOcp:
         X, U = guessed_nodes(self.problem, self.pulse_map, x0, p, t0, guess)
         kind = StartKind.ROLLOUT if guess is None else StartKind.GIVEN
         return Start(kind, X, U, time.perf_counter() - began)
+
+    def _grown(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
+        """The problem grown to its horizon (ocp/grown_start.py), or None."""
+        stage = functools.partial(CompiledOcp, pulse_map=self._given_map, build_progress=self._said)
+        phi = self._flight_map()
+        return grown_start(self.problem, self.options, stage, phi, x0, p, t0, report=self._said)
 
     def _held_design_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
         """The problem with its design held at the model's values (with scenarios, the
@@ -682,19 +691,9 @@ def solve(
     warm_start: OcpResult | None = None,
     pulse_map: PulseMap | None = None,
 ) -> OcpResult:
-    """Build and solve ``problem`` once (see :class:`CompiledOcp` to solve it repeatedly).
-
-    Parameters
-    ----------
-    problem : what to solve (ocp/problem.py).
-    options : how (default :class:`~lightcraft_opt.ocp.options.OcpOptions`: IPOPT, exact
-        Hessian, Φ with :data:`~lightcraft_opt.ocp.options.OCP_PULSE_MAP`).
-    initial_guess, warm_start : see :meth:`CompiledOcp.solve`.
-    pulse_map : a prebuilt Φ (see :class:`CompiledOcp`).
-
-    Returns
-    -------
-    OcpResult (status, cost, iterations, times, optimal inputs, predicted trajectory).
-    """
+    """Build and solve ``problem`` once (:class:`CompiledOcp` solves it repeatedly): how
+    by ``options`` (default :class:`~lightcraft_opt.ocp.options.OcpOptions`); the start,
+    the warm start and a prebuilt Φ as for :class:`CompiledOcp` and its ``solve``. Returns
+    the OcpResult (status, cost, iterations, times, inputs, predicted trajectory)."""
     compiled = CompiledOcp(problem, options, pulse_map=pulse_map)
     return compiled.solve(initial_guess=initial_guess, warm_start=warm_start)

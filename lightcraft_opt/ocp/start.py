@@ -34,6 +34,7 @@ bench/README.md#after-issue-27-shared-evaluation-flown-starts-two-hessians-2026-
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from enum import Enum
@@ -51,10 +52,12 @@ from lightcraft_opt.symbolic.maps.pulse_map import PulseMap
 
 __all__ = [
     "CONVEXIFIED_FIRST",
+    "Guess",
     "Start",
     "StartKind",
     "director_applies",
     "director_start",
+    "flown_on",
     "guessed_nodes",
     "nominal_start",
     "rollout",
@@ -72,12 +75,15 @@ class StartKind(Enum):
     CALM = "calm"  # the nominal policy rolled through Φ in calm air
     GIVEN = "given"  # the caller's initial guess
     HELD_DESIGN = "held_design"  # the design problem solved with its design held
+    GROWN = "grown"  # the problem solved over shorter horizons, then flown on (grown_start.py)
 
 
 #: The starts a cold solve leaves with the convexified Hessian first (OcpOptions.
 #: convex_iterations): the director's flights, and a design problem's held optimum
 #: (problems/design_flight5.toml: 159 iterations, 57 s, against 551, 344 s, without).
-CONVEXIFIED_FIRST = frozenset({StartKind.DIRECTOR, StartKind.DIRECTOR_CALM, StartKind.HELD_DESIGN})
+CONVEXIFIED_FIRST = frozenset(
+    {StartKind.DIRECTOR, StartKind.DIRECTOR_CALM, StartKind.HELD_DESIGN, StartKind.GROWN}
+)
 
 
 @dataclass(frozen=True)
@@ -103,11 +109,12 @@ class Start:
     def flown(self) -> bool:
         """Whether the nodes are a flight that stayed in the beam under inputs the problem
         allows, near-feasible: the director's, or the nominal one in calm air (module
-        docstring)."""
+        docstring), or a shorter horizon's optimum flown on by them (GROWN)."""
         return self.kind in (
             StartKind.DIRECTOR,
             StartKind.DIRECTOR_CALM,
             StartKind.CALM,
+            StartKind.GROWN,
         )
 
     def describe(self) -> str:
@@ -128,7 +135,13 @@ _FLIGHT_NAMES = {
     StartKind.CALM: "the nominal flight in calm air",
     StartKind.GIVEN: "the given guess",
     StartKind.HELD_DESIGN: "the problem solved with its design held",
+    StartKind.GROWN: "the problem solved over shorter horizons",
 }
+
+
+#: What a caller may give a cold solve as its start: inputs (N, map-input size), nodes
+#: (X (N + 1, STATE.size), U), a :class:`Start` made elsewhere (ocp/grown_start.py), or None.
+Guess = np.ndarray | tuple[np.ndarray, np.ndarray] | Start | None
 
 
 def director_applies(problem: OcpProblem) -> bool:
@@ -196,6 +209,25 @@ def _directed(
         caught.append(share)
         u_last = u
     return np.array(X), np.array(U).reshape(N, lay.size), np.array(caught)
+
+
+def flown_on(
+    problem: OcpProblem, phi: PulseMap, X: np.ndarray, U: np.ndarray, p: np.ndarray, t0: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes (X (N + 1, STATE.size), U (N, map-input size)) of ``problem`` that begin
+    with a shorter horizon's (``X`` (n + 1, STATE.size), ``U`` (n, ...), n < N, from the
+    problem's first pulse time ``t0`` [s]) and go on from its last state, under the slew
+    limits from its last input, flown through ``phi`` in the wind of ``p`` (PARAMETERS.size,)
+    by the director where it applies, else by the nominal policy (the gap there is the
+    optimum's)."""
+    n = U.shape[0]
+    rest = dataclasses.replace(problem, horizon=problem.horizon - n, u_previous=U[-1])
+    t = t0 + n * phi.period
+    if director_applies(problem):
+        Xr, Ur, _ = _directed(rest, phi, X[-1], p, t)
+    else:
+        Xr, Ur, _ = _rolled(rest, phi, None, X[-1], p, t)
+    return np.vstack([X, Xr[1:]]), np.vstack([U, Ur])
 
 
 def nominal_start(

@@ -20,7 +20,13 @@ from lightcraft_opt.errors import ProblemFileError
 from lightcraft_opt.files.model import load_model
 from lightcraft_opt.files.problem import objective_names
 from lightcraft_opt.layout import PARAMETERS, STATE, RcsProfile, initial_state
-from lightcraft_opt.ocp.options import OCP_PULSE_MAP, HessianApproximation, OcpOptions, OcpSolver
+from lightcraft_opt.ocp.options import (
+    OCP_PULSE_MAP,
+    HessianApproximation,
+    OcpOptions,
+    OcpSolver,
+    OcpStart,
+)
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
     EnergyBudget,
@@ -28,6 +34,7 @@ from lightcraft_opt.ocp.problem import (
     OffsetFrom,
     OffsetLimit,
     RcsEnvelope,
+    TerminalAltitude,
     TerminalState,
     TiltLimit,
     TrackReference,
@@ -469,6 +476,11 @@ def test_the_ready_problems_load_as_their_comments_say() -> None:
     tilt = [k for k in c.problem.constraints if isinstance(k, TiltLimit)]
     assert tilt[0].max_tilt == pytest.approx(math.radians(1.0))
     assert c.problem.inputs.slot("rcs_thrust").size == 4
+    apogee = load_problem(root / "beam_tracking_apogee.toml")
+    assert apogee.problem.horizon == 260 and apogee.options.start is OcpStart.GROWN
+    assert apogee.options.grow_pulses == 26
+    assert not any(isinstance(k, TerminalAltitude) for k in apogee.problem.constraints)
+    assert PARAMETERS.get("wind_speed_ref", apogee.problem.p) == pytest.approx(3.0)
 
 
 def test_rcs_profile_envelope_and_wind_ramp_reach_problem_and_options(folder: Path) -> None:
