@@ -15,6 +15,7 @@ optimum. The whole problem starts from the last stage's optimum so flown on.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Callable
 from typing import Any, Protocol
@@ -77,6 +78,7 @@ def grown_start(
     t0: float,
     *,
     report: Callable[[str], None] | None = None,
+    until: float = math.inf,
 ) -> Start | None:
     """The start of ``problem`` grown ``step`` pulses at a time (module docstring), or None
     when its horizon is too short to grow (:func:`grow_stages`) or a stage is not solved.
@@ -92,6 +94,8 @@ def grown_start(
     x0 : (STATE.size,) launch state; p : (PARAMETERS.size,) parameters; t0 : first pulse
         time [s].
     report : told each stage's outcome, one line each.
+    until : the ``time.perf_counter()`` time by which the whole solve ends (its wall-clock
+        limit): each stage gets what is left of it, and none is started after it.
     """
     began = time.perf_counter()
     iterations, step = 0, options.grow_pulses
@@ -99,6 +103,11 @@ def grown_start(
     stage_options = dataclasses.replace(options, **kw)
     nodes: tuple[np.ndarray, np.ndarray] | None = None
     for n in grow_stages(problem.horizon, step):
+        left = until - time.perf_counter()
+        if left <= 0:
+            return None
+        if math.isfinite(left):
+            stage_options = dataclasses.replace(stage_options, time_limit=left)
         stage = dataclasses.replace(problem, horizon=n)
         guess = None
         if nodes is not None:

@@ -210,7 +210,7 @@ class CompiledOcp:
         self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
         self._held: HeldDesignStarts | None = None  # the problem with its design held
         self.scenario_starts: tuple[Start, ...] = ()
-        self._given_map, self._said = pulse_map, build_progress
+        self._given_map, self._said, self._until = pulse_map, build_progress, math.inf
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
@@ -262,7 +262,7 @@ class CompiledOcp:
         """
         x0v, pv, t0v, u_prev, ref = self._run_time_values(x0, p, t0, u_previous, reference)
         limit = self.options.time_limit
-        until = math.inf if limit is None else time.perf_counter() + limit
+        self._until = until = math.inf if limit is None else time.perf_counter() + limit
         ramped = warm_start is None and initial_guess is None and self.options.wind_ramp
         if ramped and not np.array_equal(wind_scaled(pv, 0.0), pv):
             result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
@@ -595,8 +595,8 @@ class CompiledOcp:
     def _grown(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
         """The problem grown to its horizon (ocp/grown_start.py), or None."""
         stage = functools.partial(CompiledOcp, pulse_map=self._given_map, build_progress=self._said)
-        phi = self._flight_map()
-        return grown_start(self.problem, self.options, stage, phi, x0, p, t0, report=self._said)
+        phi, pr, opts = self._flight_map(), self.problem, self.options
+        return grown_start(pr, opts, stage, phi, x0, p, t0, report=self._said, until=self._until)
 
     def _held_design_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
         """The problem with its design held at the model's values (with scenarios, the

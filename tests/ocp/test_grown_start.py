@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import time
 
 import numpy as np
 import pytest
@@ -101,14 +102,14 @@ def test_a_grown_start_leads_to_the_whole_problems_optimum(short, grown, monkeyp
     problem, options, phi = short
     asked = []
 
-    def stub(whole, opts, compile_stage, flight, x0, p, t0, report=None):
-        asked.append((whole.horizon, opts.grow_pulses))
+    def stub(whole, opts, compile_stage, flight, x0, p, t0, report=None, until=None):
+        asked.append((whole.horizon, opts.grow_pulses, until is not None and until > 0))
         return grown[0]
 
     solve_module = importlib.import_module("lightcraft_opt.ocp.solve")  # ocp.solve: a function
     monkeypatch.setattr(solve_module, "grown_start", stub)
     result = CompiledOcp(problem, options, pulse_map=phi).solve()
-    assert asked == [(12, 3)]
+    assert asked == [(12, 3, True)]  # told the solve's deadline
     assert result.status is OcpStatus.SOLVED, result.message
     assert "started from the problem solved over shorter horizons" in result.message
     assert result.dynamics_closed
@@ -126,3 +127,24 @@ def test_what_cannot_be_cut_is_refused_by_name(short):
     tracked = dataclasses.replace(problem, objective=(TrackReference(path),))
     with pytest.raises(OptionError, match=r"'grown'.*a reference path"):
         CompiledOcp(tracked, options)
+
+
+def test_the_stages_share_the_solves_wall_clock_limit(short):
+    """Each stage is given what is left of the solve's limit, and none starts after it."""
+    problem, options, phi = short
+    given = []
+
+    class Stop(Exception):
+        pass
+
+    def compile_stage(stage, stage_options):
+        given.append(stage_options.time_limit)
+        raise Stop
+
+    x0, p, t0 = problem.x0, problem.p, problem.t0
+    past = time.perf_counter()
+    assert grown_start(problem, options, compile_stage, phi, x0, p, t0, until=past) is None
+    assert given == []
+    with pytest.raises(Stop):
+        grown_start(problem, options, compile_stage, phi, x0, p, t0, until=past + 100.0)
+    assert len(given) == 1 and 0 < given[0] <= 100.0
