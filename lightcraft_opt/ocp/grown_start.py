@@ -80,8 +80,9 @@ def grown_start(
     report: Callable[[str], None] | None = None,
     until: float = math.inf,
 ) -> Start | None:
-    """The start of ``problem`` grown ``step`` pulses at a time (module docstring), or None
-    when its horizon is too short to grow (:func:`grow_stages`) or a stage is not solved.
+    """The start of ``problem`` grown ``options.grow_pulses`` pulses at a time (module
+    docstring), or None when its horizon is too short to grow (:func:`grow_stages`), a
+    stage is not solved or the wall-clock limit ``until`` has passed.
 
     Parameters
     ----------
