@@ -23,7 +23,7 @@ from lightcraft_opt.ocp.options import OcpOptions, OcpStart
 from lightcraft_opt.ocp.problem import FinalAltitude, TerminalAltitude, TrackReference
 from lightcraft_opt.ocp.result import OcpResult, OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
-from lightcraft_opt.ocp.start import Start, StartKind
+from lightcraft_opt.ocp.start import Start, StartKind, flown_on, rollout
 from lightcraft_opt.symbolic.maps.pulse_map import build_pulse_map
 
 pytestmark = pytest.mark.slow
@@ -148,3 +148,17 @@ def test_the_stages_share_the_solves_wall_clock_limit(short):
     with pytest.raises(Stop):
         grown_start(problem, options, compile_stage, phi, x0, p, t0, until=past + 100.0)
     assert len(given) == 1 and 0 < given[0] <= 100.0
+
+
+def test_where_the_director_does_not_apply_the_nominal_policy_flies_on():
+    """Under the linear beam (crosswind_launch.toml) the new pulses are the nominal rollout's
+    from the given nodes' last state, under the slew limits from their last input."""
+    loaded = load_problem(REPO_ROOT / "problems" / "crosswind_launch.toml", horizon=8)
+    problem = dataclasses.replace(loaded.problem, parameters={"wind_speed_ref": 0.0})
+    phi = build_pulse_map(problem.model, problem.pulse_map_options(loaded.options.pulse_map))
+    X, U = rollout(dataclasses.replace(problem, horizon=5), phi)
+    grown_X, grown_U = flown_on(problem, phi, X, U, problem.p, problem.t0)
+    assert np.array_equal(grown_X[:6], X) and np.array_equal(grown_U[:5], U)
+    whole_X, whole_U = rollout(problem, phi)  # the same nominal policy over all 8 pulses
+    np.testing.assert_allclose(grown_X, whole_X, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(grown_U, whole_U, rtol=0, atol=1e-12)
