@@ -239,8 +239,9 @@ class CompiledOcp:
         u_previous : (map-input size,) input of the pulse before t0 (only when the problem
             had one: its presence is structure).
         reference : (N + 1, width) TrackReference paths side by side.
-        initial_guess : (N, map-input size) inputs, rolled out from x0 through Φ; or a pair
-            (X (N + 1, STATE.size), U (N, map-input size)) used as is. Default
+        initial_guess : (N, map-input size) inputs, rolled out from x0 through Φ; a pair
+            (X (N + 1, STATE.size), U (N, map-input size)) used as is; or a ``Start``,
+            whose kind says how IPOPT starts (``Start.flown``: as from a warm start). Default
             (``OcpOptions.start``, ocp/start.py): the director's closed-loop flight where it
             applies (pointing free, waist beam), IPOPT then started as from a warm start
             with no multipliers; else the nominal policy's rollout.
