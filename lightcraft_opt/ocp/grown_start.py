@@ -92,8 +92,8 @@ def grown_start(
     compile_stage : compiles a problem cut to a shorter horizon with options (a
         CompiledOcp).
     phi : Φ to fly the new pulses with.
-    x0 : (STATE.size,) launch state; p : (PARAMETERS.size,) parameters; t0 : first pulse
-        time [s].
+    x0 : (STATE.size,) launch state (docs/frames.md: r_L, v_L in L, w_B in B ...);
+        p : (PARAMETERS.size,) parameters; t0 : first pulse time [s].
     report : told each stage's outcome, one line each.
     until : the ``time.perf_counter()`` time by which the whole solve ends (its wall-clock
         limit): each stage gets what is left of it, and none is started after it.

@@ -210,7 +210,7 @@ class CompiledOcp:
         self._variants: dict[str, ca.Function] = {}  # IPOPT with other start settings
         self._held: HeldDesignStarts | None = None  # the problem with its design held
         self.scenario_starts: tuple[Start, ...] = ()
-        self._given_map, self._said, self._until = pulse_map, build_progress, math.inf
+        self._given_map, self._said = pulse_map, build_progress
         #: the nlpsol Function the last solve called last (its ``stats()``: bench/ocp.py)
         self.last_solver: ca.Function = self.solver
         self._convex_solver: ca.Function | None = None
@@ -263,7 +263,7 @@ class CompiledOcp:
         """
         x0v, pv, t0v, u_prev, ref = self._run_time_values(x0, p, t0, u_previous, reference)
         limit = self.options.time_limit
-        self._until = until = math.inf if limit is None else time.perf_counter() + limit
+        until = math.inf if limit is None else time.perf_counter() + limit
         ramped = warm_start is None and initial_guess is None and self.options.wind_ramp
         if ramped and not np.array_equal(wind_scaled(pv, 0.0), pv):
             result = self._solve_ramped(x0v, pv, t0v, u_prev, ref, until)
@@ -357,7 +357,7 @@ class CompiledOcp:
             w0, lam_x0, lam_g0 = warm_start.w, warm_start.lam_x, warm_start.lam_g
             cold = None
         else:
-            cold = self._start(x0, p, t0, initial_guess)
+            cold = self._start(x0, p, t0, initial_guess, until)
             w0 = self._packed(cold, x0, p, t0, u_previous, initial_guess, P)
         held = cold is not None and cold.kind is StartKind.HELD_DESIGN
         robust = tr if isinstance(tr, ScenarioShooting) else None
@@ -564,24 +564,21 @@ class CompiledOcp:
         return self._variants[name]
 
     def _start(
-        self,
-        x0: np.ndarray,
-        p: np.ndarray,
-        t0: float,
-        guess: Guess,
+        self, x0: np.ndarray, p: np.ndarray, t0: float, guess: Guess, until: float = math.inf
     ) -> Start:
         """The cold start (ocp/start.py): the caller's guess, else with ``OcpOptions.start``
         "flown" the director's flight where it applies, else the nominal rollout (in calm
         air if the problem's wind blows it out of the beam); with "rollout" the nominal
         rollout in the problem's wind; with "held_design" the problem solved with its design
-        held; with "grown" over shorter horizons (ocp/grown_start.py)."""
+        held; with "grown" over shorter horizons by the ``time.perf_counter()`` time ``until``
+        (ocp/grown_start.py)."""
         start = self.options.start
         if isinstance(guess, Start):  # a start made by the caller (ocp/grown_start.py)
             return guess
         held_kind = guess is None and start is OcpStart.HELD_DESIGN
         if held_kind and self.problem.design and (held := self._held_design_start(x0, p, t0)):
             return held
-        if guess is None and start is OcpStart.GROWN and (grown := self._grown(x0, p, t0)):
+        if guess is None and start is OcpStart.GROWN and (grown := self._grown(x0, p, t0, until)):
             return grown
         flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN, OcpStart.GROWN)
         if guess is None and flown and director_applies(self.problem):
@@ -593,11 +590,11 @@ class CompiledOcp:
         kind = StartKind.ROLLOUT if guess is None else StartKind.GIVEN
         return Start(kind, X, U, time.perf_counter() - began)
 
-    def _grown(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
+    def _grown(self, x0: np.ndarray, p: np.ndarray, t0: float, until: float) -> Start | None:
         """The problem grown to its horizon (ocp/grown_start.py), or None."""
         stage = functools.partial(CompiledOcp, pulse_map=self._given_map, build_progress=self._said)
         phi, pr, opts = self._flight_map(), self.problem, self.options
-        return grown_start(pr, opts, stage, phi, x0, p, t0, report=self._said, until=self._until)
+        return grown_start(pr, opts, stage, phi, x0, p, t0, report=self._said, until=until)
 
     def _held_design_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
         """The problem with its design held at the model's values (with scenarios, the

@@ -214,9 +214,10 @@ def _directed(
 def flown_on(
     problem: OcpProblem, phi: PulseMap, X: np.ndarray, U: np.ndarray, p: np.ndarray, t0: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The nodes (X (N + 1, STATE.size), U (N, map-input size)) of ``problem`` that begin
-    with a shorter horizon's (``X`` (n + 1, STATE.size), ``U`` (n, ...), n < N, from the
-    problem's first pulse time ``t0`` [s]) and go on from its last state, under the slew
+    """The nodes (X (N + 1, STATE.size), frames per docs/frames.md; U (N, map-input size),
+    pointing in L) of ``problem`` that begin with a shorter horizon's (``X`` (n + 1,
+    STATE.size), ``U`` (n, ...), n < N, from the problem's first pulse time ``t0`` [s])
+    and go on from its last state, under the slew
     limits from its last input, flown through ``phi`` in the wind of ``p`` (PARAMETERS.size,)
     by the director where it applies, else by the nominal policy (the gap there is the
     optimum's)."""
