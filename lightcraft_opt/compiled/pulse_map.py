@@ -206,6 +206,8 @@ def compile_pieces(
 
 #: Name of the cache entries of Φ's compiled derivatives (compiled/cache/functions.py).
 DERIVATIVES_CACHE = "pulse_map_derivatives"
+#: The chain's Functions an entry holds before the pieces (PulseMapDerivatives.functions).
+_CHAIN_FUNCTIONS = 5
 
 
 def saved_pulse_map_derivatives(
@@ -229,19 +231,18 @@ def saved_pulse_map_derivatives(
     start = time.perf_counter()
     key = derivatives_key(phi, max_instructions, design)
     loaded = None if key is None else load_functions(DERIVATIVES_CACHE, key)
-    if loaded is not None and len(loaded) == 3 + len(fields(DerivativePieces)):
+    if loaded is not None and len(loaded) == _CHAIN_FUNCTIONS + len(fields(DerivativePieces)):
         if report is not None:
             report(f"Φ's derivatives: loaded from the cache in {time.perf_counter() - start:.1f} s")
-        pieces_of = DerivativePieces.of(tuple(loaded[3:]))
-        return PulseMapDerivatives(loaded[0], loaded[1], loaded[2], pieces_of, design)
+        pieces_of = DerivativePieces.of(tuple(loaded[_CHAIN_FUNCTIONS:]))
+        return PulseMapDerivatives.of_functions(loaded[:_CHAIN_FUNCTIONS], pieces_of, design)
     derivatives, libraries = _compiled_derivatives(
         phi, None, None, None, max_instructions, report, design
     )
     pieces = derivatives.pieces.functions()
     complete = derivatives.hessian is not None and _all_compiled(pieces, max_instructions)
     if key is not None and complete:
-        functions = [derivatives.values, derivatives.jacobian, derivatives.hessian]
-        saved = [*functions, *(f for f in pieces if f)]
+        saved = [*derivatives.functions(), *(f for f in pieces if f)]
         save_functions(DERIVATIVES_CACHE, key, saved, libraries)
     return derivatives
 

@@ -16,9 +16,11 @@ surrogate, never Φ.
 
 Φ over the horizon is evaluated once per primal point and shared (ocp/evaluation.py): its
 values by f and g, its values and Jacobians by ∇f, ∂g/∂w and the Hessian's multipliers;
-the chain's Hessian blocks once per iterate. Every other piece is an SX Function (the NLP
-with Φ's outputs as symbols, and the surrogate), a few microseconds a pulse in casadi's SX
-machine; those are pure structure, kept on disk (:func:`build_surrogate`).
+the chain's Hessian blocks once per iterate, as the backward sweep alone over the tape of
+the Jacobians' forward sweep (``PulseMapDerivatives.hessian_tape``). Every other piece is
+an SX Function (the NLP with Φ's outputs as symbols, and the surrogate), a few microseconds a
+pulse in casadi's SX machine; those are pure structure, kept on disk
+(:func:`build_surrogate`).
 """
 
 from __future__ import annotations
@@ -124,7 +126,7 @@ def chain_nlp(
     (tests/ocp/test_chain_derivatives.py). ``upper``: the Hessians' upper triangles (IPOPT);
     ``report`` hears whether the surrogate was built or loaded."""
     der = tr.derivatives
-    if der is None or der.hessian is None:
+    if der is None or der.hessian_tape is None or der.jacobian_tape is None:
         raise ParameterError(
             "derivatives", "the chain's NLP needs Φ's chain derivatives with Hessians"
         )
@@ -140,7 +142,10 @@ def chain_nlp(
     s = build_surrogate(tr, upper=upper, report=report)
     # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
     values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, tr.threads))
-    jacobians = SharedEvaluation("ocp_pulse_jacobians", horizon_map(der.jacobian, N, tr.threads))
+    # the Jacobians with the forward sweep's tape, which the Hessian's backward sweep reads
+    jacobians = SharedEvaluation(
+        "ocp_pulse_jacobians", horizon_map(der.jacobian_tape, N, tr.threads)
+    )
     times = tr.pulse_times()
     z = s.arguments(w, P)
     # each pulse's p: the problem's, its designed entries from z's last rows
@@ -153,7 +158,8 @@ def chain_nlp(
         ["x", "p"],
         ["f", "g"],
     )
-    point = [z, *jacobians(x_z, u_z, p, times)]
+    *first_order, tape = jacobians(x_z, u_z, p, times)
+    point = [z, *first_order]
     grad_f = ca.Function(
         "nlp_grad_f", [w, P], s.grad_f.call([w, P, *point]), ["x", "p"], ["f", "grad_f_x"]
     )
@@ -164,8 +170,9 @@ def chain_nlp(
     _, xn, en, _, _ = point
     mu_x, mu_e = s.multipliers(w, xn, en, P, lam_f, lam_g)
     # the chain's Hessian blocks, kept for re-solves that reuse them (OcpOptions.warm_hessian)
-    kept = KeptBlocks("ocp_pulse_hessians", horizon_map(der.hessian, N, tr.threads))
-    Hb = kept(x_z, u_z, ca.repmat(p, 1, N) if p.size2() == 1 else p, times, mu_x, mu_e)
+    # (the accepted point's Jacobians and tape are in memory: only the backward sweep runs)
+    kept = KeptBlocks("ocp_pulse_hessians", horizon_map(der.hessian_tape, N, tr.threads))
+    Hb = kept(x_z, u_z, ca.repmat(p, 1, N) if p.size2() == 1 else p, times, tape, mu_x, mu_e)
     # each pulse's μᵀ∇²Φ made positive semidefinite (ocp/evaluation.py)
     psd = ConvexBlocks("ocp_convex_blocks", der.n_v, N)
     hess_lag, hess_convex = (

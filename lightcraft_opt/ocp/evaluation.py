@@ -12,7 +12,8 @@ or its values and Jacobians, over the horizon, on several threads) that remember
 results of the last few argument points, keyed by their bytes. The NLP's functions call
 it with the same arguments whenever they stand at the same primal point, so each
 quantity is computed once per point whatever asks for it; the Hessian of the chain,
-which needs the dual point too, is computed once per iterate by nlp_hess_l alone.
+which needs the dual point too, is computed once per iterate by nlp_hess_l alone, as a
+backward sweep over the tape the Jacobians' forward sweep left at the same point.
 
 The cache is exact (a hit needs the same bytes), so results never depend on whether a
 value came from it: :attr:`SharedEvaluation.evaluations` against
@@ -142,10 +143,10 @@ class ConvexBlocks(ca.Callback):
 
 
 class KeptBlocks(ca.Callback):
-    """``kept_blocks(x, u, p, t, mu_x, mu_e) -> H``: Φ's curvature blocks over the horizon,
-    μ_kᵀ∇²Φ(z_k) per pulse side by side, evaluated by ``hessians`` (the chain's, mapped
-    over the horizon) and kept; while :attr:`frozen`, the kept blocks answer every call
-    without evaluating anything.
+    """``kept_blocks(x, u, p, t, tape, mu_x, mu_e) -> H``: Φ's curvature blocks over the
+    horizon, μ_kᵀ∇²Φ(z_k) per pulse side by side, evaluated by ``hessians`` (the chain's
+    backward sweep from the Jacobians' tape, mapped over the horizon) and kept; while
+    :attr:`frozen`, the kept blocks answer every call without evaluating anything.
 
     A re-solve from a neighbouring optimum (a warm start: the craft moved a few mm, the
     next MPC step) stands where the last solve ended: its multipliers and pulse arguments

@@ -59,7 +59,6 @@ def test_pulse_map_coast_equals_cvodes_between_pulses(flight5, substeps, tol):
     # the same jump, then CVODES: jump = Φ with a zero-length coast is not exposed, so
     # take the jump from the dense output's definition: x+ = x0 + (impulse terms)
 
-
     xs, us, ps = ca.SX.sym("x", STATE.size), ca.SX.sym("u", 4), ca.SX.sym("p", p.size)
     jump = ca.Function("jump", [xs, us, ps], [pulse_jump(xs, us, ps, model)[0]])
     x_plus = np.asarray(jump(x0, u[:4], p)).ravel()

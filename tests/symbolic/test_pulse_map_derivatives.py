@@ -98,6 +98,23 @@ def test_chain_jacobian_and_hessian_equal_casadi_ad(chain):
     assert H.shape == (d.n_v, d.n_v)
 
 
+def test_tape_gives_the_same_jacobian_and_hessian_bit_for_bit(chain):
+    """The Hessian's backward sweep from the Jacobian's tape (what the OCP calls) is the
+    self-contained Hessian to the last bit, and the tape's Jacobian is the Jacobian; a tape
+    of another point gives that point's curvature, not this one's."""
+    _, _, d, point, lam = chain
+    *first, tape = d.jacobian_tape(*point)
+    for a, b in zip(first, d.jacobian(*point), strict=True):
+        assert _rel(a, b) == 0.0
+    assert _rel(d.hessian_tape(*point, tape, *lam), d.hessian(*point, *lam)) == 0.0
+    x, u, p, t = point
+    moved = (x + 1e-3 * np.abs(x), u, p, t)
+    H_moved = np.asarray(d.hessian(*moved, *lam))
+    from_moved_tape = np.asarray(d.hessian_tape(*moved, d.jacobian_tape(*moved)[4], *lam))
+    assert _rel(from_moved_tape, H_moved) == 0.0
+    assert _rel(d.hessian_tape(*moved, tape, *lam), H_moved) > 1e-6
+
+
 def test_chain_jacobian_and_hessian_equal_finite_differences(chain):
     model, phi, d, point, lam = chain
     x, u, p, t = point

@@ -210,3 +210,11 @@ def test_a_bad_design_names_the_field():
     pieces = build_derivative_pieces(phi.pieces, hessians=False, design=(i,))
     with pytest.raises(ParameterError, match="design"):
         chain_derivatives(phi, pieces, design=(i, j))
+
+
+def test_design_tape_gives_the_same_hessian_bit_for_bit(chain):
+    _, _, _, d, point, lam = chain
+    *first, tape = d.jacobian_tape(*point)
+    for a, b in zip(first, d.jacobian(*point), strict=True):
+        assert _rel(a, b) == 0.0
+    assert _rel(d.hessian_tape(*point, tape, *lam), d.hessian(*point, *lam)) == 0.0

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from functools import cached_property
+from typing import NamedTuple
 
 import casadi as ca
 import numpy as np
@@ -110,6 +111,14 @@ class PulseMapDerivatives:
     pieces : the pieces' derivative Functions the chain calls.
     design : sorted indices into PARAMETERS of the entries of p in v (the OCP's designed
         entries, ocp/design.py); () for v = (x, u).
+    jacobian_tape : ``pulse_map_jacobian_tape(x, u, p, t) -> (x_next, engine, dx_next_dv,
+        dengine_dv, tape)``: ``jacobian``'s outputs and the forward sweep's quantities the
+        backward sweep needs (the substeps' states and input Jacobians, the normalisations'
+        and the jump's Jacobians), one column; None without Hessians.
+    hessian_tape : ``pulse_map_hessian_tape(x, u, p, t, tape, lam_x, lam_e) -> hess_v_v``:
+        ``hessian`` from the tape of ``jacobian_tape`` at the same (x, u, p, t), so the
+        backward sweep alone: the same bits, without the forward sweep again (an OCP has
+        the Jacobians of its accepted point already, ocp/chain.py); None without Hessians.
     """
 
     values: ca.Function
@@ -117,6 +126,24 @@ class PulseMapDerivatives:
     hessian: ca.Function | None
     pieces: DerivativePieces
     design: tuple[int, ...] = ()
+    jacobian_tape: ca.Function | None = None
+    hessian_tape: ca.Function | None = None
+
+    def functions(self) -> list[ca.Function]:
+        """The chain's Functions with Hessians, in the order :meth:`of_functions` takes
+        (what the disk cache keeps, compiled/pulse_map.py)."""
+        out = [self.values, self.jacobian, self.hessian, self.jacobian_tape, self.hessian_tape]
+        if any(f is None for f in out):
+            raise ParameterError("derivatives", "built without Hessians: nothing to keep")
+        return [f for f in out if f is not None]
+
+    @classmethod
+    def of_functions(
+        cls, functions: list[ca.Function], pieces: DerivativePieces, design: tuple[int, ...]
+    ) -> PulseMapDerivatives:
+        """From :meth:`functions`' list (e.g. loaded from the cache)."""
+        values, jacobian, hessian, jacobian_tape, hessian_tape = functions
+        return cls(values, jacobian, hessian, pieces, design, jacobian_tape, hessian_tape)
 
     @cached_property
     def n_v(self) -> int:
@@ -247,9 +274,6 @@ def chain_derivatives(
     lam_e = ca.MX.sym("lam_e", ne)
 
     # ------------------------------------------------------------ forward sweep
-    xn = pieces.normalise(x)
-    Nx_in = jN(x)
-    D_n = ca.horzcat(Nx_in, ca.MX.zeros(nx, nu + nd))
     pulse_select = np.zeros((npulse, nv))
     pulse_select[:, nx : nx + npulse] = np.eye(npulse)
     # p[design] in v: the pieces' Jacobians have its columns after their other inputs
@@ -260,7 +284,12 @@ def chain_derivatives(
         """A piece's inputs' Jacobian in v: ``D`` (its other inputs') and p[design]'s."""
         return ca.vertcat(D, ca.DM(design_select)) if nd else D
 
-    D_y = with_design(ca.vertcat(D_n, ca.DM(pulse_select)))
+    def entry(x: ca.MX) -> tuple[ca.MX, ca.MX]:
+        """The normalised entry state x_n and the Jacobian D_y of the jump's inputs in v."""
+        D_n = ca.horzcat(jN(x), ca.MX.zeros(nx, nu + nd))
+        return pieces.normalise(x), with_design(ca.vertcat(D_n, ca.DM(pulse_select)))
+
+    xn, D_y = entry(x)
     x_plus, engine = pieces.jump(xn, u[:npulse], p)
     J_y = jJ(xn, u[:npulse], p)
     D_0 = ca.mtimes(J_y[:nx, :], D_y)
@@ -288,54 +317,118 @@ def chain_derivatives(
     x_next = pieces.normalise(s)
     Nx_out = jN(s)
     dx_next = ca.mtimes(Nx_out, D)
+    names_in = ["x", "u", "p", "t"]
+    jacobian_out = ["x_next", "engine", "dx_next_dv", "dengine_dv"]
     jacobian = ca.Function(
-        "pulse_map_jacobian",
-        [x, u, p, t],
-        [x_next, engine, dx_next, D_e],
-        ["x", "u", "p", "t"],
-        ["x_next", "engine", "dx_next_dv", "dengine_dv"],
+        "pulse_map_jacobian", [x, u, p, t], [x_next, engine, dx_next, D_e], names_in, jacobian_out
     )
     values = ca.Function(
-        "pulse_map_values",
-        [x, u, p, t],
-        [x_next, engine],
-        ["x", "u", "p", "t"],
-        ["x_next", "engine"],
+        "pulse_map_values", [x, u, p, t], [x_next, engine], names_in, ["x_next", "engine"]
     )
 
     if hN is None or hJ is None or hS is None or hW is None:
         return PulseMapDerivatives(values, jacobian, None, derivatives, design)
 
     # ------------------------------------------------------------ backward sweep
-    _, H_out = hN(s, lam_x)
-    H = ca.mtimes([D.T, H_out, D])
-    rho = ca.mtimes(Nx_out.T, lam_x)
-    a_omega = ca.MX(0)
-    for k in reversed(range(opts.substeps)):
-        t_k = t + pieces.step_length * k
-        jac_k, H_k = hS(states[k], W_inputs[:, k], p, t_k, rho)
-        H = H + ca.mtimes([Gs[k].T, H_k, Gs[k]])
+    def backward(
+        x: ca.MX,
+        xn: ca.MX,
+        D_y: ca.MX,
+        W_inputs: ca.MX,
+        tape: _Tape,
+        lam_x: ca.MX,
+        lam_e: ca.MX,
+    ) -> ca.MX:
+        """The Hessian of lam_xᵀ x_next + lam_eᵀ engine from the forward sweep's tape."""
+        states, Gs, D, Nx_out, J_y = tape
+        x_plus, s = states[0], states[-1]
+        _, H_out = hN(s, lam_x)
+        H = ca.mtimes([D.T, H_out, D])
+        rho = ca.mtimes(Nx_out.T, lam_x)
+        a_omega = ca.MX(0)
+        for k in reversed(range(opts.substeps)):
+            t_k = t + pieces.step_length * k
+            jac_k, H_k = hS(states[k], W_inputs[:, k], p, t_k, rho)
+            H = H + ca.mtimes([Gs[k].T, H_k, Gs[k]])
+            if phase_locked:
+                a_omega = a_omega + ca.mtimes(jac_k[:, nx + i_omega].T, rho)
+            rho = ca.mtimes(jac_k[:, :nx].T, rho)
         if phase_locked:
-            a_omega = a_omega + ca.mtimes(jac_k[:, nx + i_omega].T, rho)
-        rho = ca.mtimes(jac_k[:, :nx].T, rho)
-    if phase_locked:
-        omega_x, H_omega = hW(x_plus, p, a_omega)
-        rho = rho + a_omega * omega_x[:, :nx].T
-        G_omega = with_design(D_0)
-        H = H + ca.mtimes([G_omega.T, H_omega, G_omega])
-    _, H_jump = hJ(xn, u[:npulse], p, ca.vertcat(rho, lam_e))
-    H = H + ca.mtimes([D_y.T, H_jump, D_y])
-    entry = ca.mtimes(J_y[:nx, :nx].T, rho) + ca.mtimes(J_y[nx:, :nx].T, lam_e)
-    _, H_in = hN(x, entry)
-    H = H + ca.diagcat(H_in, ca.MX.zeros(nu + nd, nu + nd))
+            omega_x, H_omega = hW(x_plus, p, a_omega)
+            rho = rho + a_omega * omega_x[:, :nx].T
+            G_omega = with_design(Gs[0][:nx, :])  # D_0
+            H = H + ca.mtimes([G_omega.T, H_omega, G_omega])
+        _, H_jump = hJ(xn, u[:npulse], p, ca.vertcat(rho, lam_e))
+        H = H + ca.mtimes([D_y.T, H_jump, D_y])
+        entry_adjoint = ca.mtimes(J_y[:nx, :nx].T, rho) + ca.mtimes(J_y[nx:, :nx].T, lam_e)
+        _, H_in = hN(x, entry_adjoint)
+        return H + ca.diagcat(H_in, ca.MX.zeros(nu + nd, nu + nd))
+
+    tape = _Tape(states, Gs, D, Nx_out, J_y)
+    hessian_in = [*names_in, "lam_x", "lam_e"]
     hessian = ca.Function(
         "pulse_map_hessian",
         [x, u, p, t, lam_x, lam_e],
-        [H],
-        ["x", "u", "p", "t", "lam_x", "lam_e"],
+        [backward(x, xn, D_y, W_inputs, tape, lam_x, lam_e)],
+        hessian_in,
         ["hess_v_v"],
     )
-    return PulseMapDerivatives(values, jacobian, hessian, derivatives, design)
+    jacobian_tape = ca.Function(
+        "pulse_map_jacobian_tape",
+        [x, u, p, t],
+        [x_next, engine, dx_next, D_e, tape.packed()],
+        names_in,
+        [*jacobian_out, "tape"],
+    )
+    # the same backward sweep from a tape given as an input: nothing forward but the
+    # entry's normalisation and the substeps' inputs, both cheap and bit for bit the same
+    kept = ca.MX.sym("tape", tape.size)
+    given = tape.unpacked(kept)
+    W_given = substep_inputs(pieces, opts, ulay, u, t, given.states[0], p)
+    hessian_tape = ca.Function(
+        "pulse_map_hessian_tape",
+        [x, u, p, t, kept, lam_x, lam_e],
+        [backward(x, *entry(x), W_given, given, lam_x, lam_e)],
+        [*names_in, "tape", "lam_x", "lam_e"],
+        ["hess_v_v"],
+    )
+    return PulseMapDerivatives(
+        values, jacobian, hessian, derivatives, design, jacobian_tape, hessian_tape
+    )
+
+
+class _Tape(NamedTuple):
+    """The forward sweep's quantities the backward sweep reads (module docstring): the
+    states s_0 = x_+ .. s_n, each substep's input Jacobian G_k, D_n = ∂s_n/∂v, the exit
+    normalisation's Jacobian ∂N(s_n)/∂s and the jump's J_y."""
+
+    states: list[ca.MX]
+    Gs: list[ca.MX]
+    D: ca.MX
+    Nx_out: ca.MX
+    J_y: ca.MX
+
+    def _parts(self) -> list[ca.MX]:
+        return [*self.states, *self.Gs, self.D, self.Nx_out, self.J_y]
+
+    @property
+    def size(self) -> int:
+        return sum(int(m.numel()) for m in self._parts())
+
+    def packed(self) -> ca.MX:
+        """One column: every part's columns in turn."""
+        return ca.vertcat(*(ca.vec(m) for m in self._parts()))
+
+    def unpacked(self, column: ca.MX) -> _Tape:
+        """A tape of the same shapes read from ``column`` (:meth:`packed`'s layout)."""
+        parts, at = [], 0
+        for m in self._parts():
+            n = int(m.numel())
+            parts.append(ca.reshape(column[at : at + n], m.size1(), m.size2()))
+            at += n
+        k = len(self.states)
+        g = len(self.Gs)
+        return _Tape(parts[:k], parts[k : k + g], *parts[k + g :])
 
 
 def _unit(n: int, i: int) -> np.ndarray:
