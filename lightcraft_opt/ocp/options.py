@@ -81,16 +81,22 @@ class OcpStart(Enum):
 class WarmHessian(Enum):
     """Φ's curvature in a re-solve from a previous result (``CompiledOcp.solve(warm_start=...)``).
 
-    ``EXACT``: the chain's Hessian blocks at every iteration, as in a cold solve.
+    ``EXACT``: the chain's Hessian blocks at every iteration, as in a cold solve. The
+    default since the Hessian reads the Jacobians' forward sweep from a tape (a third
+    cheaper): a 2 mm re-solve of problems/beam_tracking_focus.toml takes 4 iterations,
+    0.54-0.63 s, against 12 kept, 0.89 s; problem (a) 4 exact against 6 kept at 2 mm and 4
+    against 9 at 5 mm in the same time within the noise, 0.26-0.67 s
+    (bench/README.md#the-hessian-from-the-jacobians-tape-2026-12-07); from further away
+    the exact one takes far fewer iterations (5 mm on the focus problem: 27 against 98).
     ``KEPT``: the blocks the last solve of this compiled problem ended with, never
     evaluated again (ocp/evaluation.py KeptBlocks): an iteration costs Φ's values and
     Jacobians only; gradients and Jacobians stay exact, so the optimum is the same, reached
     in more, cheaper iterations. Meant for a re-solve from the last result (the next MPC
     step, a small change of x0 or p); from an older result the kept blocks are another
     point's. A kept-Hessian solve that does not succeed is solved again from where it
-    stopped with the exact Hessian. The default: a 2 mm re-solve of
-    problems/beam_tracking_focus.toml took 12 iterations, 0.67 s, against 4, 1.58 s, exact
-    (bench/README.md#re-solves-barrier-and-kept-hessian-2026-12-03).
+    stopped with the exact Hessian. It was the default while an exact iteration paid
+    for Φ's forward sweep twice (2 mm on the focus problem: 12 iterations, 0.67 s, against
+    4, 1.58 s; bench/README.md#re-solves-barrier-and-kept-hessian-2026-12-03).
     """
 
     EXACT = "exact"
@@ -251,7 +257,7 @@ class OcpOptions:
     time_limit: float | None = OCP_TIME_LIMIT
     stall_iterations: int | None = OCP_STALL_ITERATIONS
     convex_iterations: int = 80
-    warm_hessian: WarmHessian = WarmHessian.KEPT
+    warm_hessian: WarmHessian = WarmHessian.EXACT
     linear_solver: LinearSolver = LinearSolver.MUMPS
     mumps_pivtol: float | None = None
     start: OcpStart = OcpStart.FLOWN
