@@ -155,9 +155,9 @@ def test_each_point_evaluates_phi_once():
     assert result.status is OcpStatus.SOLVED
     stats = compiled.solver.stats()
     values, jacobians = compiled.chain.shared
-    # the Jacobian chain at most once per point IPOPT differentiates at (∇f, ∂g/∂w and
-    # the Hessian's multipliers there share it; IPOPT asks for ∇f twice at one point),
-    # at least once per iterate
+    # the Jacobian chain at most once per point IPOPT differentiates at (∇f, ∂g/∂w, the
+    # Hessian's multipliers and its backward sweep's tape there share it; IPOPT asks for
+    # ∇f twice at one point), at least once per iterate
     assert result.iterations <= jacobians.evaluations <= stats["n_call_nlp_grad_f"]
     assert jacobians.requests == (
         stats["n_call_nlp_grad_f"] + stats["n_call_nlp_jac_g"] + stats["n_call_nlp_hess_l"]
