@@ -32,6 +32,10 @@ the forward sweep) and ρ the adjoint of its outputs, swept back from λ and ν:
 with G = [D_k; W_k; P] for substep k, [D_0; P] for ω, D_y for the jump. The selections of
 u into w and of p_d from v are linear and add nothing. Each piece's Hessian is casadi's
 SX Hessian of ρᵀ piece, so nothing here is a hand derivation: only the chain is.
+The backward sweep reads the forward sweep's states and Jacobians: ``jacobian_tape`` returns
+them beside the Jacobian as one column a pulse (the tape), and ``hessian_tape`` runs the
+backward sweep alone from it, bit for bit the self-contained Hessian (an OCP has the
+Jacobians of the point first, ocp/chain.py).
 tests/symbolic/test_pulse_map_derivatives.py checks both against casadi's AD through Φ
 and against finite differences, tests/symbolic/test_pulse_map_design_derivatives.py with
 designed entries of p.
@@ -113,8 +117,8 @@ class PulseMapDerivatives:
         entries, ocp/design.py); () for v = (x, u).
     jacobian_tape : ``pulse_map_jacobian_tape(x, u, p, t) -> (x_next, engine, dx_next_dv,
         dengine_dv, tape)``: ``jacobian``'s outputs and the forward sweep's quantities the
-        backward sweep needs (the substeps' states and input Jacobians, the normalisations'
-        and the jump's Jacobians), one column; None without Hessians.
+        backward sweep needs (the substeps' states and input Jacobians, the exit
+        normalisation's and the jump's Jacobians), one column; None without Hessians.
     hessian_tape : ``pulse_map_hessian_tape(x, u, p, t, tape, lam_x, lam_e) -> hess_v_v``:
         ``hessian`` from the tape of ``jacobian_tape`` at the same (x, u, p, t), so the
         backward sweep alone: the same bits, without the forward sweep again (an OCP has
@@ -382,12 +386,12 @@ def chain_derivatives(
     )
     # the same backward sweep from a tape given as an input: nothing forward but the
     # entry's normalisation and the substeps' inputs, both cheap and bit for bit the same
-    kept = ca.MX.sym("tape", tape.size)
-    given = tape.unpacked(kept)
+    tape_in = ca.MX.sym("tape", tape.size)
+    given = tape.unpacked(tape_in)
     W_given = substep_inputs(pieces, opts, ulay, u, t, given.states[0], p)
     hessian_tape = ca.Function(
         "pulse_map_hessian_tape",
-        [x, u, p, t, kept, lam_x, lam_e],
+        [x, u, p, t, tape_in, lam_x, lam_e],
         [backward(x, *entry(x), W_given, given, lam_x, lam_e)],
         [*names_in, "tape", "lam_x", "lam_e"],
         ["hess_v_v"],
