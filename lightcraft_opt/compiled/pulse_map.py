@@ -206,8 +206,6 @@ def compile_pieces(
 
 #: Name of the cache entries of Φ's compiled derivatives (compiled/cache/functions.py).
 DERIVATIVES_CACHE = "pulse_map_derivatives"
-#: The chain's Functions an entry holds before the pieces (PulseMapDerivatives.functions).
-_CHAIN_FUNCTIONS = 5
 
 
 def saved_pulse_map_derivatives(
@@ -231,11 +229,12 @@ def saved_pulse_map_derivatives(
     start = time.perf_counter()
     key = derivatives_key(phi, max_instructions, design)
     loaded = None if key is None else load_functions(DERIVATIVES_CACHE, key)
-    if loaded is not None and len(loaded) == _CHAIN_FUNCTIONS + len(fields(DerivativePieces)):
+    chain = PulseMapDerivatives.CHAIN_FUNCTIONS  # then the pieces
+    if loaded is not None and len(loaded) == chain + len(fields(DerivativePieces)):
         if report is not None:
             report(f"Φ's derivatives: loaded from the cache in {time.perf_counter() - start:.1f} s")
-        pieces_of = DerivativePieces.of(tuple(loaded[_CHAIN_FUNCTIONS:]))
-        return PulseMapDerivatives.of_functions(loaded[:_CHAIN_FUNCTIONS], pieces_of, design)
+        pieces_of = DerivativePieces.of(tuple(loaded[chain:]))
+        return PulseMapDerivatives.of_functions(loaded[:chain], pieces_of, design)
     derivatives, libraries = _compiled_derivatives(
         phi, None, None, None, max_instructions, report, design
     )

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from functools import cached_property
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import casadi as ca
 import numpy as np
@@ -132,6 +132,8 @@ class PulseMapDerivatives:
     design: tuple[int, ...] = ()
     jacobian_tape: ca.Function | None = None
     hessian_tape: ca.Function | None = None
+    #: How many Functions :meth:`functions` returns.
+    CHAIN_FUNCTIONS: ClassVar[int] = 5
 
     def functions(self) -> list[ca.Function]:
         """The chain's Functions with Hessians, in the order :meth:`of_functions` takes
