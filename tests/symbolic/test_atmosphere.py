@@ -74,3 +74,42 @@ def test_closed_forms_solve_the_hydrostatic_equation():
 @pytest.mark.parametrize("h", [500.0, 1194.0, 15000.0, 40000.0, 60000.0])
 def test_atmosphere_jacobian_matches_finite_differences(h):
     assert_jacobians_match_finite_differences(build_atmosphere(), [h])
+
+
+def test_each_layer_is_its_own_closed_form_to_the_last_bit():
+    """Inside each layer, us1976's T and p are that layer's textbook formulas (power law or
+    exponential) written out here, bit for bit: the other layers' branches add nothing."""
+    import math
+
+    from lightcraft_opt.symbolic.terms.atmosphere import _PB
+
+    gmr = 9.80665 * 0.0289644 / 8.31432
+    f = build_atmosphere()
+    rng = np.random.default_rng(3)
+    tops = [layer[0] for layer in LAYERS[1:]] + [84852.0]
+    for (H_b, T_b, lapse), p_b, H_top in zip(LAYERS, _PB, tops, strict=True):
+        for H in rng.uniform(H_b, H_top, 20):
+            h = R0 * H / (R0 - H)
+            H_exact = R0 * h / (R0 + h)  # what us1976 computes from h
+            T = T_b + lapse * (H_exact - H_b)
+            if lapse == 0.0:
+                p = p_b * math.exp(-gmr * (H_exact - H_b) / T_b)
+            else:
+                p = p_b * (T / T_b) ** (-gmr / lapse)
+            _rho, T_got, p_got, _mu = (float(v) for v in f(h))
+            assert (T_got, p_got) == (T, p)
+
+
+@pytest.mark.parametrize("h", [500.0, 15000.0, 50000.0])
+def test_density_curvature_matches_finite_differences(h):
+    """d²rho/dh² by casadi's AD (what the OCP's Hessian uses) against central differences
+    of the exact first derivative."""
+    import casadi as ca
+
+    x = ca.SX.sym("h")
+    rho = build_atmosphere()(x)[0]
+    d1 = ca.Function("d1", [x], [ca.jacobian(rho, x)])
+    d2 = ca.Function("d2", [x], [ca.hessian(rho, x)[0]])
+    step = 1.0
+    fd = (float(d1(h + step)) - float(d1(h - step))) / (2 * step)
+    assert float(d2(h)) == pytest.approx(fd, rel=1e-6)
