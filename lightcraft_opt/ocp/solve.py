@@ -68,10 +68,8 @@ from lightcraft_opt.ocp.start import (
     Guess,
     Start,
     StartKind,
-    director_applies,
-    director_start,
+    flown_start,
     guessed_nodes,
-    nominal_start,
     rollout,
     scenario_start,
     wind_scaled,
@@ -419,7 +417,7 @@ class CompiledOcp:
         if phase:  # a first phase ran: its iterations count too
             iterations += done
             message += phase
-        if cold is not None and (cold.flown or cold.kind is StartKind.HELD_DESIGN):
+        if cold is not None and (cold.flown or cold.instead or cold.kind is StartKind.HELD_DESIGN):
             message += f"; {cold.describe()}"
         return self._result(
             w, lam_x, lam_g, P, g, violation, status, message, iterations, solve_time, t0
@@ -575,16 +573,18 @@ class CompiledOcp:
         start = self.options.start
         if isinstance(guess, Start):  # a start made by the caller (ocp/grown_start.py)
             return guess
-        held_kind = guess is None and start is OcpStart.HELD_DESIGN
-        if held_kind and self.problem.design and (held := self._held_design_start(x0, p, t0)):
-            return held
-        if guess is None and start is OcpStart.GROWN and (grown := self._grown(x0, p, t0, until)):
-            return grown
+        instead = ""  # why the start asked for was not made
+        if guess is None and start is OcpStart.HELD_DESIGN and self.problem.design:
+            if held := self._held_design_start(x0, p, t0):
+                return held
+            instead = self._held.failure() if self._held else ""
+        if guess is None and start is OcpStart.GROWN:
+            if grown := self._grown(x0, p, t0, until):
+                return grown
+            instead = "the problem over shorter horizons did not solve"
         flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN, OcpStart.GROWN)
-        if guess is None and flown and director_applies(self.problem):
-            return director_start(self.problem, self._flight_map(), x0, p, t0)
         if guess is None and flown:
-            return nominal_start(self.problem, self.pulse_map, x0, p, t0)
+            return flown_start(self.problem, self._flight_map, self.pulse_map, x0, p, t0, instead)
         began = time.perf_counter()
         X, U = guessed_nodes(self.problem, self.pulse_map, x0, p, t0, guess)
         kind = StartKind.ROLLOUT if guess is None else StartKind.GIVEN

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 from typing import cast
@@ -58,6 +59,7 @@ __all__ = [
     "director_applies",
     "director_start",
     "flown_on",
+    "flown_start",
     "guessed_nodes",
     "nominal_start",
     "rollout",
@@ -97,6 +99,8 @@ class Start:
     U : (N, map-input size) inputs, one row per pulse.
     seconds : wall time to make it [s].
     iterations : the solver's iterations that made it (HELD_DESIGN), else 0.
+    instead : why the start the options asked for (a held design's optimum, a grown one)
+        was not made and this one was, or "" when it is the start asked for.
     """
 
     kind: StartKind
@@ -104,6 +108,7 @@ class Start:
     U: np.ndarray
     seconds: float = 0.0
     iterations: int = 0
+    instead: str = ""
 
     @property
     def flown(self) -> bool:
@@ -122,8 +127,10 @@ class Start:
         r = self.X[:, STATE.index("r_L")]
         drift = float(np.max(np.hypot(r[:, 0], r[:, 1])))
         made = f"{self.iterations} iterations, " if self.iterations else ""
+        instead = f" ({self.instead})" if self.instead else ""
         return (
-            f"started from {_FLIGHT_NAMES[self.kind]}: highest {float(r[:, 2].max()):.1f} m, "
+            f"started from {_FLIGHT_NAMES[self.kind]}{instead}: "
+            f"highest {float(r[:, 2].max()):.1f} m, "
             f"drift at most {100 * drift:.1f} cm ({made}{self.seconds:.1f} s)"
         )
 
@@ -251,6 +258,26 @@ def nominal_start(
         return Start(StartKind.ROLLOUT, X, U, time.perf_counter() - began)
     X, U, _ = _rolled(problem, phi, None, x0, calm, t0)
     return Start(StartKind.CALM, X, U, time.perf_counter() - began)
+
+
+def flown_start(
+    problem: OcpProblem,
+    flight_map: Callable[[], PulseMap],
+    phi: PulseMap,
+    x0: np.ndarray,
+    p: np.ndarray,
+    t0: float,
+    instead: str = "",
+) -> Start:
+    """The "flown" start: :func:`director_start` through ``flight_map()`` where the
+    director applies (:func:`director_applies`), else :func:`nominal_start` through ``phi``;
+    ``instead`` says why the start the options asked for was not made (:class:`Start`).
+    x0 : (STATE.size,) state at the first pulse; p : (PARAMETERS.size,); t0 [s]."""
+    if director_applies(problem):
+        made = director_start(problem, flight_map(), x0, p, t0)
+    else:
+        made = nominal_start(problem, phi, x0, p, t0)
+    return dataclasses.replace(made, instead=instead)
 
 
 def rollout(

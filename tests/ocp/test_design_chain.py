@@ -142,3 +142,18 @@ def test_a_design_started_from_its_held_optimum_only_improves_on_it(designed):
     assert designed_result.cost <= held_alone.cost * (1 + 1e-9)
     for v in problem.design:
         assert v.lower <= designed_result.design[v.label] <= v.upper, v.label
+
+
+def test_a_held_solve_that_fails_is_named_in_the_start_it_falls_back_to(designed):
+    """Where the held problem does not solve, the design solve starts from the flown start
+    instead, and its message says so and why (the held solve's status and iterations)."""
+    problem, phi = designed
+    options = OcpOptions(
+        pulse_map=CHEAP_MAP, tol=TOL, replay=False, start=OcpStart.HELD_DESIGN, max_iter=2
+    )
+    result = CompiledOcp(problem, options, pulse_map=phi).solve()
+    assert result.status is OcpStatus.MAX_ITER
+    assert "started from the problem solved with its design held" not in result.message
+    assert "(its design held, the problem ended max_iter after 2 iterations" in result.message, (
+        result.message
+    )
