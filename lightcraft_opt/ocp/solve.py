@@ -569,7 +569,7 @@ class CompiledOcp:
         air if the problem's wind blows it out of the beam); with "rollout" the nominal
         rollout in the problem's wind; with "held_design" the problem solved with its design
         held; with "grown" over shorter horizons by the ``time.perf_counter()`` time ``until``
-        (ocp/grown_start.py)."""
+        (ocp/grown_start.py). Where those two are not made, the flown start says why."""
         start = self.options.start
         if isinstance(guess, Start):  # a start made by the caller (ocp/grown_start.py)
             return guess
@@ -581,7 +581,7 @@ class CompiledOcp:
         if guess is None and start is OcpStart.GROWN:
             if grown := self._grown(x0, p, t0, until):
                 return grown
-            instead = "the problem over shorter horizons did not solve"
+            instead = "a shorter horizon did not solve, or the time ran out"
         flown = start in (OcpStart.FLOWN, OcpStart.HELD_DESIGN, OcpStart.GROWN)
         if guess is None and flown:
             return flown_start(self.problem, self._flight_map, self.pulse_map, x0, p, t0, instead)

@@ -162,3 +162,16 @@ def test_where_the_director_does_not_apply_the_nominal_policy_flies_on():
     whole_X, whole_U = rollout(problem, phi)  # the same nominal policy over all 8 pulses
     np.testing.assert_allclose(grown_X, whole_X, rtol=0, atol=1e-12)
     np.testing.assert_allclose(grown_U, whole_U, rtol=0, atol=1e-12)
+
+
+def test_a_grown_start_that_is_not_made_is_named_in_the_flown_start(short, monkeypatch):
+    """Where grown_start gives nothing (a stage failed, or the time ran out), the solve
+    starts from the flown start and its message says why."""
+    problem, options, phi = short
+    solve_module = importlib.import_module("lightcraft_opt.ocp.solve")
+    monkeypatch.setattr(solve_module, "grown_start", lambda *args, **kwargs: None)
+    result = CompiledOcp(problem, options, pulse_map=phi).solve()
+    assert "started from the problem solved over shorter horizons" not in result.message
+    assert "(a shorter horizon did not solve, or the time ran out)" in result.message, (
+        result.message
+    )
