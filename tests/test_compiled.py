@@ -231,7 +231,7 @@ def _assert_same_flight(a: SimulationResult, b: SimulationResult) -> None:
     assert (a.status, a.message) == (b.status, b.message)
     for name in ("t", "x"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
-    for name in ("t", "u", "engine"):
+    for name in ("t", "u", "engine", "beam_gap"):
         np.testing.assert_array_equal(getattr(a.pulses, name), getattr(b.pulses, name))
 
 
@@ -242,6 +242,7 @@ def _assert_same_flight(a: SimulationResult, b: SimulationResult) -> None:
         ("laser_off_lands_in_second_chunk", SimulationStatus.LANDED, None),
         ("tilted_leaves_beam_in_second_chunk", SimulationStatus.LEFT_BEAM, None),
         ("ramped_energy_with_dropouts", SimulationStatus.DURATION_REACHED, 52),
+        ("two_pulses_beside_the_craft_inside_a_chunk", SimulationStatus.DURATION_REACHED, 52),
     ],
 )
 def test_mapaccum_chunks_fly_the_per_pulse_policy_flight(flight5, case, status, pulses):
@@ -261,6 +262,10 @@ def test_mapaccum_chunks_fly_the_per_pulse_policy_flight(flight5, case, status, 
         rows = np.tile(u0, (40, 1))
         rows[:, energy] *= np.linspace(1.0, 0.7, 40)  # the last row held after pulse 40
         dropout_rate = 0.3
+    elif case == "two_pulses_beside_the_craft_inside_a_chunk":
+        rows = np.tile(u0, (52, 1))
+        pointing = map_input_layout(0, False).slot("pointing_L").start
+        rows[30:32, pointing] = 0.3  # the beam 30 cm east for two pulses: outside, not out
 
     def policy(k, t, x):
         return rows[min(k, len(rows) - 1)]
@@ -277,6 +282,9 @@ def test_mapaccum_chunks_fly_the_per_pulse_policy_flight(flight5, case, status, 
         assert n == pulses
     if dropout_rate:
         assert 0 < np.sum(chunked.pulses.u[:, energy] == 0.0) < n
+    if case == "two_pulses_beside_the_craft_inside_a_chunk":
+        outside = np.flatnonzero(chunked.pulses.beam_gap > 0.0)
+        assert outside.tolist() == [30, 31]
 
 
 # --------------------------------------------------------------------------- Φ by default

@@ -4,9 +4,11 @@ When the inputs do not depend on the state (open-loop rows, the "none" controlle
 campaign), a second of pulses goes through Φ in one call (``dense.mapaccum``: the same
 Function on the same numbers, so the flight is the pulse-by-pulse flight to the last bit;
 tests/test_compiled.py). With a compiled Φ that is one trip into C per second of flight
-instead of one per pulse. Each pulse is then checked in order by the flight's
-:class:`~lightcraft_opt.simulation.flight_log.FlightLog`; at most one chunk is computed
-beyond the pulse that ends the flight.
+instead of one per pulse. The flight's :class:`~lightcraft_opt.simulation.flight_log.FlightLog`
+then records the chunk's pulses in order: a run of pulses that cannot end the flight in one
+go (``recorded_quiet``, checked for all of them at once), any other pulse by itself
+(``ended_by``), with the same records either way; at most one chunk is computed beyond the
+pulse that ends the flight.
 """
 
 from __future__ import annotations
@@ -64,10 +66,17 @@ def step_in_chunks(
             np.asarray(v) for v in _chunk_map(phi, m)(xk, U[k0 : k0 + m].T, p, ts[None, :])
         )
         d = X.shape[1] // m
-        for j in range(m):
+        j = 0
+        while j < m:
+            quiet = flight.recorded_quiet(ts, U[k0 : k0 + m], X, E, first=j)
+            nodes.extend(x_next[:, j : j + quiet].T)
+            j += quiet
+            if j == m:
+                break
             if flight.ended_by(float(ts[j]), U[k0 + j], X[:, j * d : (j + 1) * d], E[:, j]):
                 return nodes
             nodes.append(x_next[:, j])
+            j += 1
         xk = x_next[:, -1]
     return nodes
 

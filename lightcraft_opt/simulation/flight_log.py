@@ -114,6 +114,9 @@ class FlightLog:
         self.i_energy = inputs.slot("energy").start
         self.i_focus = inputs.slot("focus").start
         self.p, self.laser = np.asarray(p, dtype=float), laser
+        self.radius = float(PARAMETERS.get("capture_radius", self.p))  # [m]
+        #: the dense samples' times after a pulse, by count (the same floats every pulse)
+        self._after: dict[int, np.ndarray] = {}
         self.times: list[float] = [t0]
         self.states: list[np.ndarray] = [x0]
         self.pulse_t: list[float] = []
@@ -152,6 +155,62 @@ class FlightLog:
         self.status = SimulationStatus.NEVER_FIRED
         self.message = "no pulse fired: the craft rests on the pad"
 
+    def _after_pulse(self, n: int) -> np.ndarray:
+        """(n,) times of a pulse's n dense samples after it [s]: period k / n, k = 1..n."""
+        after = self._after.get(n)
+        if after is None:
+            after = self._after[n] = self.period * np.arange(1, n + 1) / n
+        return after
+
+    def recorded_quiet(
+        self, ts: np.ndarray, U: np.ndarray, X: np.ndarray, E: np.ndarray, first: int = 0
+    ) -> int:
+        """Record in one go the pulses from ``first`` on that cannot end the flight, and
+        return how many: a chunk's leading run of pulses whose states and engine outputs are
+        finite, whose dense states stay above the pad within the flight's duration, and that
+        either were dropped or left the optic overlapping the beam. What :meth:`ended_by`
+        would record for each of them, to the last bit; the pulse after them (if any) goes
+        to :meth:`ended_by`.
+
+        ``ts`` (m,) pulse times [s], ``U`` (m, map-input size), ``X`` (STATE.size, m d) the
+        dense states of the m pulses in order, ``E`` (ENGINE.size, m) engine outputs.
+        """
+        m = len(ts)
+        d = X.shape[1] // m
+        tb = ts[:, None] + self._after_pulse(d)[None, :]  # (m, d), the floats of ended_by
+        blocks = X.reshape(X.shape[0], m, d)
+        quiet = np.isfinite(blocks).all(axis=(0, 2)) & np.isfinite(E).all(axis=0)
+        quiet &= (blocks[Z_UP] >= 0.0).all(axis=1) & (tb <= self.end + 1e-12).all(axis=1)
+        gaps: list[float] = []
+        n, fired_any = first, False
+        z_pulse = float(self.states[-1][Z_UP])  # the craft's altitude at pulse ``first``
+        while n < m and quiet[n]:
+            if U[n, self.i_energy] > 0:
+                side = float(beam_side(z_pulse, U[n, self.i_focus], self.p, self.laser))
+                offset = E[_OFFSET.start : _OFFSET.stop, n]
+                gap = beam_gap(offset, side, self.radius, self.laser.profile, signed=True)
+                if gap > 0.0:
+                    break
+                fired_any = True
+            else:
+                gap = math.nan
+            gaps.append(gap)
+            z_pulse = float(X[Z_UP, (n + 1) * d - 1])
+            n += 1
+        if n == first:
+            return 0
+        self.on_pad = False
+        self.status, self.message = SimulationStatus.DURATION_REACHED, ""
+        self.pulse_t.extend(ts[first:n].tolist())
+        self.pulse_u.extend(U[first:n])
+        self.pulse_e.extend(E[:, first:n].T)
+        self.pulse_gap.extend(gaps)
+        self.times.extend(tb[first:n].ravel())
+        self.states.extend(X[:, first * d : n * d].T)
+        if fired_any:
+            self.outside = 0
+        return n - first
+
     def ended_by(self, t: float, u: np.ndarray, X: np.ndarray, eng: np.ndarray) -> bool:
         """Record the pulse fired at ``t`` [s] with map input ``u``: ``X`` (STATE.size,
         dense) states after it, ``eng`` (ENGINE.size,) engine outputs. True when the flight
@@ -170,11 +229,11 @@ class FlightLog:
         fired = bool(u[self.i_energy] > 0)
         side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser)) if fired else 0.0
         offset = eng[_OFFSET.start : _OFFSET.stop]
-        radius = float(PARAMETERS.get("capture_radius", self.p))
+        radius = self.radius
         gap = beam_gap(offset, side, radius, self.laser.profile, signed=True) if fired else math.nan
         self.pulse_gap.append(gap)
         X = X.T
-        tb = t + self.period * np.arange(1, len(X) + 1) / len(X)
+        tb = t + self._after_pulse(len(X))
         keep = tb <= self.end + 1e-12
         below = X[:, iz] < 0.0
         if np.any(below & keep):
