@@ -49,8 +49,7 @@ class HeldDesignStarts:
 
     def __init__(self, held: HeldSolver, problem: OcpProblem) -> None:
         self.held, self.problem = held, problem
-        self.nominal: OcpResult | None = None  # the last nominal optimum
-        self.failed: OcpResult | None = None  # the last nominal solve, when it did not succeed
+        self.last: OcpResult | None = None  # the last nominal solve, successful or not
         self.optima: list[OcpResult | None] = []  # each scenario's of the last start
 
     def nominal_start(self, x0: np.ndarray, p: np.ndarray, t0: float) -> Start | None:
@@ -59,19 +58,23 @@ class HeldDesignStarts:
         None when that solve does not succeed (a design may be what makes it feasible)."""
         began = time.perf_counter()
         held = self.held.solve(x0=x0, p=p, t0=t0)
-        self.nominal = held if held.success else None
-        self.failed = None if held.success else held
+        self.last = held
         self.optima = []
         if not held.success:
             return None
         seconds = time.perf_counter() - began
         return Start(StartKind.HELD_DESIGN, held.x, held.u, seconds, held.iterations)
 
+    @property
+    def nominal(self) -> OcpResult | None:
+        """The last nominal optimum: the last :meth:`nominal_start`'s solve if it succeeded."""
+        return self.last if self.last is not None and self.last.success else None
+
     def failure(self) -> str:
         """Why the last :meth:`nominal_start` gave None, in a few words ("" if it did not)."""
-        if self.failed is None:
+        f = self.last
+        if f is None or f.success:
             return ""
-        f = self.failed
         return (
             f"its design held, the problem ended {f.status.value} after {f.iterations} "
             f"iterations, {f.solve_time:.1f} s"

@@ -162,6 +162,16 @@ class FlightLog:
             after = self._after[n] = self.period * np.arange(1, n + 1) / n
         return after
 
+    def _beam_at(self, z_pulse: float, u: np.ndarray, eng: np.ndarray) -> tuple[float, float]:
+        """(beam size [m], :func:`beam_gap` signed [m]) of a pulse with map input ``u`` and
+        engine outputs ``eng`` (ENGINE.size,), the craft at altitude ``z_pulse`` [m] when it
+        fired; (0, NaN) for a dropped pulse."""
+        if not u[self.i_energy] > 0:
+            return 0.0, math.nan
+        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser))
+        offset = eng[_OFFSET.start : _OFFSET.stop]
+        return side, beam_gap(offset, side, self.radius, self.laser.profile, signed=True)
+
     def recorded_quiet(
         self, ts: np.ndarray, U: np.ndarray, X: np.ndarray, E: np.ndarray, first: int = 0
     ) -> int:
@@ -185,15 +195,10 @@ class FlightLog:
         n, fired_any = first, False
         z_pulse = float(self.states[-1][Z_UP])  # the craft's altitude at pulse ``first``
         while n < m and quiet[n]:
-            if U[n, self.i_energy] > 0:
-                side = float(beam_side(z_pulse, U[n, self.i_focus], self.p, self.laser))
-                offset = E[_OFFSET.start : _OFFSET.stop, n]
-                gap = beam_gap(offset, side, self.radius, self.laser.profile, signed=True)
-                if gap > 0.0:
-                    break
-                fired_any = True
-            else:
-                gap = math.nan
+            _, gap = self._beam_at(z_pulse, U[n], E[:, n])
+            if gap > 0.0:
+                break
+            fired_any = fired_any or bool(U[n, self.i_energy] > 0)
             gaps.append(gap)
             z_pulse = float(X[Z_UP, (n + 1) * d - 1])
             n += 1
@@ -227,10 +232,7 @@ class FlightLog:
         self.pulse_u.append(u)
         self.pulse_e.append(eng)
         fired = bool(u[self.i_energy] > 0)
-        side = float(beam_side(z_pulse, u[self.i_focus], self.p, self.laser)) if fired else 0.0
-        offset = eng[_OFFSET.start : _OFFSET.stop]
-        radius = self.radius
-        gap = beam_gap(offset, side, radius, self.laser.profile, signed=True) if fired else math.nan
+        side, gap = self._beam_at(z_pulse, u, eng)
         self.pulse_gap.append(gap)
         X = X.T
         tb = t + self._after_pulse(len(X))
@@ -255,9 +257,10 @@ class FlightLog:
         if self.outside < LEFT_BEAM_PULSES:
             return False
         self.status = SimulationStatus.LEFT_BEAM
+        off_axis = float(np.hypot(*eng[_OFFSET.start : _OFFSET.stop]))
         self.message = (
             f"the optic was outside the beam for {LEFT_BEAM_PULSES} fired pulses in a row "
-            f"(last: {100 * float(np.hypot(*offset)):.3g} cm from the axis, beam "
-            f"{100 * side:.3g} cm, optic radius {100 * radius:.3g} cm)"
+            f"(last: {100 * off_axis:.3g} cm from the axis, beam "
+            f"{100 * side:.3g} cm, optic radius {100 * self.radius:.3g} cm)"
         )
         return True

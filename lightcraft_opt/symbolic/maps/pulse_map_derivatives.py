@@ -132,13 +132,20 @@ class PulseMapDerivatives:
     design: tuple[int, ...] = ()
     jacobian_tape: ca.Function | None = None
     hessian_tape: ca.Function | None = None
-    #: How many Functions :meth:`functions` returns.
-    CHAIN_FUNCTIONS: ClassVar[int] = 5
+    #: The fields :meth:`functions` returns, in order, and how many.
+    CHAIN_FIELDS: ClassVar[tuple[str, ...]] = (
+        "values",
+        "jacobian",
+        "hessian",
+        "jacobian_tape",
+        "hessian_tape",
+    )
+    CHAIN_FUNCTIONS: ClassVar[int] = len(CHAIN_FIELDS)
 
     def functions(self) -> list[ca.Function]:
         """The chain's Functions with Hessians, in the order :meth:`of_functions` takes
         (what the disk cache keeps, compiled/pulse_map.py)."""
-        out = [self.values, self.jacobian, self.hessian, self.jacobian_tape, self.hessian_tape]
+        out = [getattr(self, name) for name in self.CHAIN_FIELDS]
         if any(f is None for f in out):
             raise ParameterError("derivatives", "built without Hessians: nothing to keep")
         return [f for f in out if f is not None]
@@ -148,8 +155,8 @@ class PulseMapDerivatives:
         cls, functions: list[ca.Function], pieces: DerivativePieces, design: tuple[int, ...]
     ) -> PulseMapDerivatives:
         """From :meth:`functions`' list (e.g. loaded from the cache)."""
-        values, jacobian, hessian, jacobian_tape, hessian_tape = functions
-        return cls(values, jacobian, hessian, pieces, design, jacobian_tape, hessian_tape)
+        chain = dict(zip(cls.CHAIN_FIELDS, functions, strict=True))
+        return cls(pieces=pieces, design=design, **chain)
 
     @cached_property
     def n_v(self) -> int:
