@@ -21,7 +21,7 @@ from support.models import table1_flight5
 from support.paths import MODELS
 
 from lightcraft_opt.files.model import load_model
-from lightcraft_opt.layout import PULSE_INPUT, STATE, initial_state, parameter_values
+from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, initial_state, parameter_values
 from lightcraft_opt.model import BeamProfile, BeamSizeModel, Engine, ImpulseModel, Model
 from lightcraft_opt.symbolic.maps.jump_derivatives import structured_jump_derivatives
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -71,12 +71,37 @@ def _point(model: Model, seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     return x, pulse, parameter_values(model), rng.normal(0, 1.0, STATE.size + 11)
 
 
-@pytest.mark.parametrize("case", list(CASES))
-def test_the_cut_equals_ad_of_the_whole_jump(case):
+#: Designed entries of p (the OCP's design, v = (x, pulse, p[design])) with the waist beam:
+#: the rotor's mass and moment (the pose's mass centre, K), the ring's height (the pose and
+#: E_ref's range), the Rayleigh range (the beam's size at each point and at E_ref's), the
+#: edge width (the fluence itself), the reference energy (E_ref's and the engine load's).
+DESIGNS = {
+    "waist-beam": (
+        "rotor_mass_dry",
+        "rotor_transverse_inertia_dry",
+        "ring_height",
+        "beam_rayleigh_range",
+        "beam_edge_width",
+        "reference_pulse_energy",
+    ),
+    "delrin": ("rotor_mass_dry", "impulse_per_pulse"),
+}
+
+
+def _design(names: tuple[str, ...]) -> tuple[int, ...]:
+    return tuple(sorted(PARAMETERS.slot(name).start for name in names))
+
+
+@pytest.mark.parametrize(
+    ("case", "design"),
+    [(case, ()) for case in CASES] + [(case, names) for case, names in DESIGNS.items()],
+)
+def test_the_cut_equals_ad_of_the_whole_jump(case, design):
     model = CASES[case]()
+    design = _design(design)
     pieces = build_pulse_map_pieces(model, PulseMapOptions())
-    plain_jacobian, plain_hessian = _piece_derivatives(pieces.jump, (0, 1))
-    built = structured_jump_derivatives(model)
+    plain_jacobian, plain_hessian = _piece_derivatives(pieces.jump, (0, 1), True, design)
+    built = structured_jump_derivatives(model, design=design)
     assert built is not None
     jacobian, hessian = built
     assert hessian is not None
@@ -109,11 +134,14 @@ def test_the_cut_is_smaller_than_ad_of_the_whole_jump():
     assert built[1].n_instructions() < 0.5 * plain.n_instructions()
 
 
-def test_the_kernel_model_and_two_sectors_keep_ad_of_the_whole_jump():
-    """The cut needs the SECTOR model's three moments, which two sectors cannot carry."""
+def test_the_kernel_model_two_sectors_and_designed_radii_keep_ad_of_the_whole_jump():
+    """The cut needs the SECTOR model's three moments, which two sectors cannot carry, and
+    quadrature points that the design does not move."""
     model = table1_flight5(engine=Engine(impulse_model=ImpulseModel.KERNEL))
     assert structured_jump_derivatives(model) is None
     assert structured_jump_derivatives(_optic(_flight5(), 2, 2)) is None
     assert structured_jump_derivatives(_optic(_flight5(), 2, 3)) is not None
+    radius = _design(("capture_radius",))  # moves the quadrature's points
+    assert structured_jump_derivatives(_optic(_flight5(), 2, 8), design=radius) is None
     pieces = build_pulse_map_pieces(model, PulseMapOptions())
     assert pieces.model is model

@@ -34,12 +34,12 @@ E_ref, the same quadrature for a centred upright craft, depends on v through the
 at the ring's height, a function of the focus alone. Nothing is derived by hand but the cut:
 every derivative is casadi's AD of a piece. The Functions have the names, inputs and outputs
 of the plain pieces and equal them to rounding (tests/symbolic/test_jump_derivatives.py);
-at 8 x 32 the Hessian has 43 % of the instructions (bench/README.md). The SECTOR impulse
-model only (the KERNEL model evaluates the quadrature twice, at the craft and on the axis:
-:func:`structured_jump_derivatives` returns None); the chain uses it only without designed
-entries of p (pulse_map_derivatives.py). Designed entries can move the quadrature's radii,
-and a version in them (tried 2026-12-06: 278k instead of 662k instructions for
-problems/design_flight5.toml) changed where that problem's IPOPT path ended (docs/design.md).
+at 8 x 32 the Hessian has 43 % of the instructions (bench/README.md). With designed entries
+of p (an OCP's design, v = (x, pulse, p[design])) those the fluence reads (beam parameters)
+join s and y, the rest reach the pose, K and E_ref through casadi's AD as x does. The SECTOR
+impulse model only (the KERNEL model evaluates the quadrature twice, at the craft and on the
+axis), and not with the optic's radii designed (they move the quadrature's points):
+:func:`structured_jump_derivatives` returns None, and the chain keeps the whole jump's AD.
 """
 
 from __future__ import annotations
@@ -64,18 +64,29 @@ __all__ = ["structured_jump_derivatives"]
 
 _SX_OPTIONS = {"cse": True}
 #: The pose y's entries: (xi0, eta0, z0) 0-2, b2_L 3-5, b3_L 6-8, focus 9, energy 10,
-#: the projection 11.
+#: the projection 11, then the designed entries of p the fluence reads.
 _FOCUS, _ENERGY, _PROJECTION, _NY = 9, 10, 11, 12
+#: Entries of p that place the quadrature's points: a design of them keeps the whole AD.
+_RADII = ("shadow_radius", "capture_radius")
 
 
-def _point_derivatives(model: Model) -> ca.Function:
+def _point_derivatives(model: Model, reads: tuple[int, ...]) -> ca.Function:
     """``optic_point(s, p) -> (F, g, H)``: the fluence [J/m^2] at s = (xi, eta, z, focus,
-    energy) and its gradient and Hessian in s."""
-    s = ca.SX.sym("s", 5)
+    energy, p[reads]) and its gradient and Hessian in s (``reads``: designed entries of p
+    the fluence reads, taken from s instead of p)."""
+    s = ca.SX.sym("s", 5 + len(reads))
     p = ca.SX.sym("p", PARAMETERS.size)
-    F = point_fluence(s[0], s[1], s[2], s[3], s[4], p, model)
+    F = point_fluence(s[0], s[1], s[2], s[3], s[4], _replaced(p, reads, s[5:]), model)
     H, g = ca.hessian(F, s)
     return ca.Function("optic_point", [s, p], [F, g, H], ["s", "p"], ["F", "g", "H"], _SX_OPTIONS)
+
+
+def _replaced(p: ca.SX, entries: tuple[int, ...], values: ca.SX) -> ca.SX:
+    """``p`` with its ``entries`` replaced by ``values``."""
+    out = ca.SX(p)
+    for k, i in enumerate(entries):
+        out[i] = values[k]
+    return out
 
 
 def _pose_index(i: int, a: int) -> int:
@@ -92,17 +103,18 @@ def _accumulate_point(
     weight: ca.SX,
     g: ca.SX,
     H: ca.SX,
+    plain: list[tuple[int, int]],
 ) -> None:
-    """Add a point's alpha A_jkᵀ H A_jk to ``hess`` (the upper triangle, 12 x 12 nested
-    lists) and weight A_jkᵀ g to ``grad`` (12 entries): A_jk's spatial rows hold ``coef`` =
-    (1, r cos φ, r sin φ) at the columns :func:`_pose_index` (A_jkᵀ H A_jk's entry of
-    (i, a), (j, b) is coef_i coef_j H_ab), its focus and energy rows 1 at theirs."""
+    """Add a point's alpha A_jkᵀ H A_jk to ``hess`` (the upper triangle, nested lists) and
+    weight A_jkᵀ g to ``grad``: A_jk's spatial rows hold ``coef`` = (1, r cos φ, r sin φ) at
+    the columns :func:`_pose_index` (A_jkᵀ H A_jk's entry of (i, a), (j, b) is coef_i coef_j
+    H_ab); its other rows are 1 at ``plain``'s (index in y, index in s), in y's order."""
     aH = alpha * H
     for i in range(3):
         for a in range(3):
             grad[_pose_index(i, a)] += weight * coef[i] * g[a]
-    grad[_FOCUS] += weight * g[3]
-    grad[_ENERGY] += weight * g[4]
+    for at_y, at_s in plain:
+        grad[at_y] += weight * g[at_s]
     spatial = [(i, a) for i in range(3) for a in range(3)]
     for m, (i, a) in enumerate(spatial):
         row = _pose_index(i, a)
@@ -110,11 +122,11 @@ def _accumulate_point(
             col = _pose_index(j, b)
             lo, hi = min(row, col), max(row, col)
             hess[lo][hi] += coef[i] * coef[j] * aH[a, b]
-        for extra, e in ((_FOCUS, 3), (_ENERGY, 4)):
-            hess[row][extra] += coef[i] * aH[a, e]
-    hess[_FOCUS][_FOCUS] += aH[3, 3]
-    hess[_FOCUS][_ENERGY] += aH[3, 4]
-    hess[_ENERGY][_ENERGY] += aH[4, 4]
+        for at_y, at_s in plain:
+            hess[row][at_y] += coef[i] * aH[a, at_s]
+    for m, (row, s_row) in enumerate(plain):
+        for col, s_col in plain[m:]:
+            hess[row][col] += aH[s_row, s_col]
 
 
 def _symmetric(upper: list[list[ca.SX]]) -> ca.SX:
@@ -128,42 +140,50 @@ def _symmetric(upper: list[list[ca.SX]]) -> ca.SX:
     return M
 
 
+def _fluence_reads(model: Model, p: ca.SX, design: tuple[int, ...]) -> tuple[int, ...]:
+    """The entries of ``design`` that a point's fluence reads (beam parameters)."""
+    s = ca.SX.sym("s", 5)
+    F = point_fluence(s[0], s[1], s[2], s[3], s[4], p, model)
+    return tuple(i for i in design if ca.depends_on(F, p[i]))
+
+
 def _harmonics(phi: np.ndarray) -> ca.DM:
     """(3, N): 1, cos φ_k, sin φ_k of the sectors' azimuths ``phi`` (N,) [rad]."""
     return ca.DM(np.vstack([np.ones(phi.size), np.cos(phi), np.sin(phi)]))
 
 
 def _quadrature_moments(
-    model: Model, p: ca.SX, y: ca.SX, beta: ca.SX
+    model: Model, p: ca.SX, y: ca.SX, beta: ca.SX, reads: tuple[int, ...]
 ) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """(M (3,) [J], M_y (3, 12), ∇²(βᵀ M) (12, 12)) in the pose y (module docstring), point
-    by point; ``p`` the parameters (the quadrature's radii), ``beta`` (3,) the moments'
-    weights."""
+    """(M (3,) [J], M_y (3, n_y), ∇²(βᵀ M) (n_y, n_y)) in the pose y (module docstring),
+    point by point; ``p`` the parameters (the quadrature's radii), ``beta`` (3,) the
+    moments' weights, ``reads`` the designed entries of p the fluence reads (y's last)."""
     r, w_r, phi = optic_quadrature(model.craft.engine, p)
     c = 2 * math.pi / len(phi)
-    point = _point_derivatives(model)
+    point = _point_derivatives(model, reads)
+    n_y = _NY + len(reads)
+    plain = [(_FOCUS, 3), (_ENERGY, 4), *((_NY + k, 5 + k) for k in range(len(reads)))]
     S, dS = [], []
-    upper = [[ca.SX(0) for _ in range(_NY)] for _ in range(_NY)]  # Σ_k β̃_k ∇²S_k
+    upper = [[ca.SX(0) for _ in range(n_y)] for _ in range(n_y)]  # Σ_k β̃_k ∇²S_k
     for angle in phi:
         harmonics = (1.0, math.cos(angle), math.sin(angle))
         beta_k = sum(h * beta[i] for i, h in enumerate(harmonics))
-        S_k, grad = ca.SX(0), [ca.SX(0) for _ in range(_NY)]
+        S_k, grad = ca.SX(0), [ca.SX(0) for _ in range(n_y)]
         for j in range(r.shape[0]):
             coef = (ca.SX(1), r[j] * harmonics[1], r[j] * harmonics[2])
             s_jk = ca.vertcat(
                 *(sum(coef[i] * y[_pose_index(i, a)] for i in range(3)) for a in range(3)),
-                y[_FOCUS],
-                y[_ENERGY],
+                *(y[at_y] for at_y, _ in plain),
             )
             F, g, H = point(s_jk, p)
             S_k += w_r[j] * F
-            _accumulate_point(upper, grad, coef, beta_k * w_r[j], w_r[j], g, H)
+            _accumulate_point(upper, grad, coef, beta_k * w_r[j], w_r[j], g, H, plain)
         S.append(S_k)
         dS.append(ca.vertcat(*grad))
     harmonic = _harmonics(phi)
-    S_row, dS_cols = ca.horzcat(*S), ca.horzcat(*dS)  # (1, N), (12, N)
+    S_row, dS_cols = ca.horzcat(*S), ca.horzcat(*dS)  # (1, N), (n_y, N)
     projection = y[_PROJECTION]
-    e_pi = ca.DM.zeros(_NY)
+    e_pi = ca.DM.zeros(n_y)
     e_pi[_PROJECTION] = 1
     M = c * projection * ca.mtimes(harmonic, S_row.T)  # E_cap, D_b2, D_b3 [J]
     M_y = c * (
@@ -179,56 +199,65 @@ def _quadrature_moments(
     return M, M_y, hess_M
 
 
-def _reference_energy(model: Model, p: ca.SX, focus: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """(E_ref [J], dE_ref/dfocus, d²E_ref/dfocus²): a centred, upright craft at the pulse's
-    ``focus`` [m] and the reference energy. Its points share the range h (the ring's
-    height), so E_ref depends on the focus through the beam's size a there."""
+def _reference_energy(
+    model: Model, p: ca.SX, focus: ca.SX, v: ca.SX, design: tuple[int, ...]
+) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """(E_ref [J], ∂E_ref/∂v (1, n_v), ∂²E_ref/∂v² (n_v, n_v)): a centred, upright craft at
+    the pulse's ``focus`` [m] and the reference energy. Its points share the range h (the
+    ring's height), so E_ref depends on v through the beam's size a there (a function of the
+    focus and of p) and through the designed entries of p the fluence reads: G(a, p[design])
+    differentiated in those few numbers, then chained to v (p[design] is v's tail)."""
     r, w_r, phi = optic_quadrature(model.craft.engine, p)
     c = 2 * math.pi / len(phi)
     upright = math.sqrt(1 + PROJECTION_EPS**2)
-    size = ca.SX.sym("a")
-    e0 = PARAMETERS.get("reference_pulse_energy", p)
+    u = ca.SX.sym("u", 1 + len(design))  # (a, p[design])
+    p_u = _replaced(p, design, u[1:])
+    e0 = PARAMETERS.get("reference_pulse_energy", p_u)
     cos_phi, sin_phi = ca.DM(np.cos(phi)).T, ca.DM(np.sin(phi)).T
-    F_ref = fluence(ca.mtimes(r, cos_phi), ca.mtimes(r, sin_phi), size, e0, p, model.laser)
-    of_size = c * upright * ca.sum2(ca.mtimes(w_r.T, F_ref))
-    dd_size, d_size = ca.hessian(of_size, size)
-    f = ca.SX.sym("focus")
-    size_of_focus = beam_side(PARAMETERS.get("ring_height", p), f, p, model.laser)
-    size_dd, size_d = ca.hessian(size_of_focus, f)
-    chained = (of_size, d_size * size_d, dd_size * size_d**2 + d_size * size_dd)
-    at_focus = [ca.substitute(ca.substitute(q, size, size_of_focus), f, focus) for q in chained]
-    return at_focus[0], at_focus[1], at_focus[2]
+    F_ref = fluence(ca.mtimes(r, cos_phi), ca.mtimes(r, sin_phi), u[0], e0, p_u, model.laser)
+    G = c * upright * ca.sum2(ca.mtimes(w_r.T, F_ref))
+    G_uu, G_u = ca.hessian(G, u)
+    size = beam_side(PARAMETERS.get("ring_height", p), focus, p, model.laser)
+    u_of_v = ca.vertcat(size, p[list(design)]) if design else size
+    U = ca.jacobian(u_of_v, v)
+    size_vv, _ = ca.hessian(size, v)
+    d = ca.mtimes(G_u.T, U)
+    dd = ca.mtimes(U.T, ca.mtimes(G_uu, U)) + G_u[0] * size_vv
+    at_v = [ca.substitute(q, u, u_of_v) for q in (G, d, dd)]
+    return at_v[0], at_v[1], at_v[2]
 
 
 def structured_jump_derivatives(
-    model: Model, *, hessian: bool = True
+    model: Model, *, hessian: bool = True, design: tuple[int, ...] = ()
 ) -> tuple[ca.Function, ca.Function | None] | None:
     """``pulse_jump_jacobian(x, pulse, p) -> jac`` and (with ``hessian``)
     ``pulse_jump_hessian(x, pulse, p, adjoint) -> (jac, hess)`` of the jump in v = (x,
-    pulse) (module docstring), as the plain pieces of pulse_map_derivatives.py; None for a
-    model whose impulse model is not SECTOR, or whose optic has fewer than three sectors
-    (three moments need them)."""
+    pulse, p[design]) (module docstring; ``design`` sorted indices into PARAMETERS), as the
+    plain pieces of pulse_map_derivatives.py; None for a model whose impulse model is not
+    SECTOR, whose optic has fewer than three sectors (three moments need them) or whose
+    designed entries include the optic's radii (they move the quadrature's points)."""
     engine = model.craft.engine
     if engine.impulse_model is not ImpulseModel.SECTOR or engine.quadrature_azimuthal < 3:
+        return None
+    if {PARAMETERS.slot(name).start for name in _RADII} & set(design):
         return None
     x = ca.SX.sym("x", STATE.size)
     pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
     p = ca.SX.sym("p", PARAMETERS.size)
-    v = ca.vertcat(x, pulse)
-    n_v = v.numel()
-    i_focus = STATE.size + PULSE_INPUT.slot("focus").start
+    v = ca.vertcat(x, pulse, p[list(design)]) if design else ca.vertcat(x, pulse)
 
-    # the pose y(v) and its Jacobian
+    # the pose y(v), with the designed entries of p the fluence reads, and its Jacobian
     pose = optic_pose(x, pulse, p)
     focus, energy = PULSE_INPUT.get("focus", pulse), PULSE_INPUT.get("energy", pulse)
+    reads = _fluence_reads(model, p, design)
     y_of_v = ca.vertcat(*pose.centre, pose.R_LB[:, 1], pose.R_LB[:, 2], focus, energy)
-    y_of_v = ca.vertcat(y_of_v, pose.projection)
+    y_of_v = ca.vertcat(y_of_v, pose.projection, *(p[i] for i in reads))
     Y = ca.jacobian(y_of_v, v)
 
-    y = ca.SX.sym("y", _NY)
+    y = ca.SX.sym("y", y_of_v.numel())
     beta = ca.SX.sym("beta", 3)  # K_Mᵀ ρ, a symbol until the end
-    M, M_y, hess_M = _quadrature_moments(model, p, y, beta)
-    E_ref, dE_ref, ddE_ref = _reference_energy(model, p, focus)
+    M, M_y, hess_M = _quadrature_moments(model, p, y, beta, reads)
+    E_ref, ref_v, ref_vv = _reference_energy(model, p, focus, v, design)
     phi = optic_quadrature(engine, p)[2]
     harmonic = _harmonics(phi)
 
@@ -243,14 +272,11 @@ def structured_jump_derivatives(
     K_v = ca.jacobian(out, v)
     K_M = ca.jacobian(out, M_sym)
     K_r = ca.jacobian(out, E_ref_sym)
-    e_f = ca.DM.zeros(1, n_v)
-    e_f[i_focus] = 1
     M_v = ca.mtimes(M_y, Y)  # (3, n_v)
-    ref_v = dE_ref * e_f  # (1, n_v)
     jac = K_v + ca.mtimes(K_M, M_v) + ca.mtimes(K_r, ref_v)
 
     def substituted(expr: ca.SX) -> ca.SX:
-        """``expr`` at the point: M = M(y), E_ref = E_ref(focus), then y = y(v)."""
+        """``expr`` at the point: M = M(y), E_ref = E_ref(v), then y = y(v)."""
         at_y = ca.substitute([expr], [M_sym, E_ref_sym], [M, E_ref])[0]
         return ca.substitute(at_y, y, y_of_v)
 
@@ -268,17 +294,17 @@ def structured_jump_derivatives(
     rho = ca.SX.sym("adjoint", out.numel())
     w = ca.vertcat(v, M_sym, E_ref_sym)
     hess_K, _ = ca.hessian(ca.dot(rho, out), w)
-    G = ca.vertcat(ca.DM.eye(n_v), M_v, ref_v)
+    G = ca.vertcat(ca.DM.eye(v.numel()), M_v, ref_v)
     beta_of = ca.mtimes(K_M.T, rho)
     beta_ref = ca.dot(K_r, rho)
-    gamma = ca.SX.sym("gamma", _NY)
+    gamma = ca.SX.sym("gamma", y.numel())
     hess_y, _ = ca.hessian(ca.dot(gamma, y_of_v), v)
     gamma_of = ca.mtimes(M_y.T, beta)
     hess = (
         ca.mtimes(G.T, ca.mtimes(hess_K, G))
         + ca.mtimes(Y.T, ca.mtimes(hess_M, Y))
         + hess_y
-        + beta_ref * ddE_ref * ca.mtimes(e_f.T, e_f)
+        + beta_ref * ref_vv
     )
     hess = ca.substitute(hess, gamma, gamma_of)
     hess = ca.substitute(hess, beta, beta_of)

@@ -212,13 +212,13 @@ def build_derivative_pieces(
     """The derivative Functions of Φ's pieces (casadi's SX AD on each piece alone), those
     that take p also with respect to its entries ``design`` (sorted indices into
     PARAMETERS); the Hessians only with ``hessians``. The jump of a model with the SECTOR
-    impulse model and no design is differentiated through its optic's quadrature point by
-    point (symbolic/maps/jump_derivatives.py): the same derivatives, a fraction of the
-    instructions."""
+    impulse model is differentiated through its optic's quadrature point by point
+    (symbolic/maps/jump_derivatives.py; not when the optic's radii are designed): the same
+    derivatives, a fraction of the instructions."""
     design = check_design(design)
     jump = None
-    if not design and pieces.model is not None:  # through the optic's quadrature
-        jump = structured_jump_derivatives(pieces.model, hessian=hessians)
+    if pieces.model is not None:  # through the optic's quadrature
+        jump = structured_jump_derivatives(pieces.model, hessian=hessians, design=design)
     return DerivativePieces(
         *_piece_derivatives(pieces.normalise, (0,), hessians),
         *(jump or _piece_derivatives(pieces.jump, (0, 1), hessians, design)),
