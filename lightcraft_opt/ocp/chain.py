@@ -119,12 +119,18 @@ def _since(start: float) -> str:
 
 
 def chain_nlp(
-    tr: MultipleShooting, *, upper: bool = True, report: BuildReport | None = None
+    tr: MultipleShooting,
+    *,
+    upper: bool = True,
+    report: BuildReport | None = None,
+    surrogate: Surrogate | None = None,
 ) -> ChainNlp:
     """The NLP of ``tr`` and its derivatives from Φ's explicit chain (module docstring).
     The exact ones equal casadi's AD of the NLP to rounding
     (tests/ocp/test_chain_derivatives.py). ``upper``: the Hessians' upper triangles (IPOPT);
-    ``report`` hears whether the surrogate was built or loaded."""
+    ``report`` hears whether the surrogate was built or loaded; ``surrogate``: the one
+    :func:`build_surrogate` gave for ``tr`` and ``upper`` already (a robust problem's
+    scenarios share it), else built or loaded here."""
     der = tr.derivatives
     if der is None or der.hessian_tape is None or der.jacobian_tape is None:
         raise ParameterError(
@@ -139,7 +145,7 @@ def chain_nlp(
             f"designs {design}",
         )
     w, P = tr.nlp["x"], tr.P
-    s = build_surrogate(tr, upper=upper, report=report)
+    s = surrogate or build_surrogate(tr, upper=upper, report=report)
     # Φ over the horizon, once per point (ocp/evaluation.py), then the surrogate at w̄ = w
     values = SharedEvaluation("ocp_pulse_values", horizon_map(der.values, N, tr.threads))
     # the Jacobians with the forward sweep's tape, which the Hessian's backward sweep reads

@@ -27,7 +27,7 @@ import numpy as np
 
 from lightcraft_opt.compiled.cache import BuildReport
 from lightcraft_opt.errors import OptionError
-from lightcraft_opt.ocp.chain import ChainNlp, chain_nlp
+from lightcraft_opt.ocp.chain import ChainNlp, build_surrogate, chain_nlp
 from lightcraft_opt.ocp.constraint_rows import SCALED, ConstraintRow, entry_rows
 from lightcraft_opt.ocp.nlp_functions import (
     gauss_newton_hessian,
@@ -196,7 +196,9 @@ class ScenarioShooting:
         Lagrangian's Hessian Σ_s E_sᵀ H_s(λ_f w_s or μ_s, λ_g,s) E_s (the upper triangle
         stays upper: E_s keeps the order of w)."""
         base, sc, S = self.base, self.scenarios, self.scenarios.size
-        self.chains = chains = [chain_nlp(base, upper=upper, report=report) for _ in range(S)]
+        # one transcription: its surrogate built or loaded once, its evaluations one per scenario
+        shared = build_surrogate(base, upper=upper, report=report)
+        self.chains = chains = [chain_nlp(base, upper=upper, surrogate=shared) for _ in range(S)]
         w, P = self.nlp["x"], self.P
         E = [self._selection(s) for s in range(S)]
         w_of = [ca.mtimes(E[s], w) for s in range(S)]

@@ -376,7 +376,8 @@ def test_the_scenarios_chain_derivatives_equal_casadi_ad(objective):
     """ScenarioShooting.chain_nlp against casadi's AD of the same NLP, at a point off the
     optimum with random multipliers: the lateral problem of test_ocp.py (slew limits, so
     the previous-input memory) over three scenarios moved in wind, launch offset and lean
-    and coupling, two pulses shared; equal to rounding (1e-12 of the largest entry)."""
+    and coupling, two pulses shared; equal to rounding (1e-12 of the largest entry). The
+    scenarios' chains share one surrogate."""
     problem, options = _lateral()
     phi = build_pulse_map(problem.model, problem.pulse_map_options(options))
     base, w1, P, rng = off_optimum(problem, phi)
@@ -399,7 +400,10 @@ def test_the_scenarios_chain_derivatives_equal_casadi_ad(objective):
     )
     lam_f, lam_g = 0.7, rng.normal(size=tr.lbg.size)
     f, grad, g, jac, hess = ad_derivatives(tr, w, P, lam_f, lam_g)
-    chain = tr.chain_nlp(upper=True)
+    said: list[str] = []
+    chain = tr.chain_nlp(upper=True, report=said.append)
+    # one transcription: the scenarios share its surrogate, built or loaded once
+    assert sum("the NLP's derivatives" in line for line in said) == 1, said
     f_n, g_n = chain.nlp(w, P)
     assert _rel(f_n, f) < RTOL and _rel(g_n, g) < RTOL
     f_c, grad_c = chain.grad_f(w, P)
