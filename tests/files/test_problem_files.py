@@ -478,7 +478,7 @@ def test_the_ready_problems_load_as_their_comments_say() -> None:
     assert c.problem.inputs.slot("rcs_thrust").size == 4
     apogee = load_problem(root / "beam_tracking_apogee.toml")
     assert apogee.problem.horizon == 260 and apogee.options.start is OcpStart.GROWN
-    assert apogee.options.grow_pulses == 26
+    assert apogee.options.grow_pulses == 52
     assert not any(isinstance(k, TerminalAltitude) for k in apogee.problem.constraints)
     assert PARAMETERS.get("wind_speed_ref", apogee.problem.p) == pytest.approx(3.0)
 
