@@ -58,18 +58,24 @@ def camera() -> ca.Function:
 
 
 def estimators(
-    model: PsiEstimationModel, scale: float, names: list[str], relinearize: str = "default"
+    model: PsiEstimationModel,
+    scale: float,
+    names: list[str],
+    relinearize: str = "default",
+    second_order: tuple[str, ...] = (),
 ) -> dict:
     """The estimators named, each with the same prior (the EKF's defaults times ``scale``);
     the MHE relinearises ``relinearize`` stages a pulse ("all", a number, or "default":
-    :class:`MheOptions`')."""
+    :class:`MheOptions`'); the EKF and the MHE keep Ψ's curvature across ``second_order``."""
     ekf = EkfOptions()
     unmatched = prior_sigmas(ekf.prior, model.names, 1.0)[1]  # the MHE refuses those
     prior = tuple((n, scale * s) for n, s in ekf.prior if n not in unmatched)
     made: dict = {}
     for name in names:
         if name == "ekf":
-            options = EkfOptions(prior=prior, prior_default=scale * ekf.prior_default)
+            options = EkfOptions(
+                prior=prior, prior_default=scale * ekf.prior_default, second_order=second_order
+            )
             made[name] = ExtendedKalmanFilter(model, options)
         elif name == "ukf":
             options = UkfOptions(prior=prior, prior_default=scale * ekf.prior_default)
@@ -80,6 +86,7 @@ def estimators(
                 prior_sigma=scale * ekf.prior_default,
                 prior_sigmas=prior,
                 relinearize=int(relinearize) if relinearize.isdigit() else stages,
+                second_order=second_order,
             )
             made[name] = MovingHorizonEstimator(model, options)
         else:
@@ -105,7 +112,14 @@ def main() -> None:
         default="default",
         help="the MHE's stages evaluated afresh a pulse: a number, all, or default (MheOptions')",
     )
+    parser.add_argument(
+        "--second-order",
+        default="",
+        help="the EKF's and the MHE's second-order entries, comma-separated (e.g. "
+        "r_L[east],r_L[north]); empty: first order",
+    )
     args = parser.parse_args()
+    curved = tuple(e for e in args.second_order.split(",") if e)
     model = estimation_model(lc.load_model(ROOT / "models" / "flight5.toml"))
     camera_R = (args.scale * 0.005) ** 2 * np.eye(3)
     psi = PsiEstimationModel(
@@ -115,7 +129,7 @@ def main() -> None:
     u = nominal_inputs(model, psi.psi.inputs)
     sigma0 = args.scale * EkfOptions().prior_sigmas(psi.names)  # the prior both start from
     for name, est in estimators(
-        psi, args.scale, args.estimators.split(","), args.relinearize
+        psi, args.scale, args.estimators.split(","), args.relinearize, curved
     ).items():
         times, nees, nis, errors = [], [], [], []
         linearised = 0

@@ -25,6 +25,7 @@ from __future__ import annotations
 from lightcraft_opt.control.controllers import Controller, LqrController, OpenLoopController
 from lightcraft_opt.control.director import DirectorController
 from lightcraft_opt.control.estimation import (
+    BEAM_OFFSET,
     EkfOptions,
     Estimator,
     ExtendedKalmanFilter,
@@ -154,8 +155,10 @@ def build_estimator(
     ekf = EkfOptions()
     prior = ekf.prior + spec.prior_sigmas()  # later pairs override earlier ones
     scale = float(spec.options.get("noise_scale", ekf.noise_scale))
+    curved = BEAM_OFFSET if spec.options.get("second_order", False) else ()
     if spec.kind is EstimatorKind.EKF:
-        return ExtendedKalmanFilter(psi, EkfOptions(prior=prior, noise_scale=scale))
+        options = EkfOptions(prior=prior, noise_scale=scale, second_order=curved)
+        return ExtendedKalmanFilter(psi, options)
     if spec.kind is EstimatorKind.UKF:
         return UnscentedKalmanFilter(psi, UkfOptions(prior=prior, noise_scale=scale))
     # the MHE starts from the filter's priors: one belief about the launch
@@ -169,6 +172,7 @@ def build_estimator(
             relinearize=int(spec.options.get("relinearize", mhe.relinearize or horizon)),
             prior_sigma=ekf.prior_default,
             prior_sigmas=prior,
+            second_order=curved,
         ),
     )
 

@@ -517,6 +517,7 @@ ESTIMATOR_OPTIONS: Mapping[str, tuple[str, tuple[EstimatorKind, ...]]] = {
     "horizon": ("pulses", (EstimatorKind.MHE,)),
     "max_iter": ("-", (EstimatorKind.MHE,)),
     "relinearize": ("stages", (EstimatorKind.MHE,)),
+    "second_order": ("switch", (EstimatorKind.EKF, EstimatorKind.MHE)),
 }
 #: The prior options and the entries of the estimated state s (Ψ's z and the slow states:
 #: docs/estimation.md) whose prior standard deviation each sets, every axis of the slot.
@@ -551,7 +552,10 @@ class EstimatorSpec:
         UKF's ``noise_scale`` (its process noise times this, > 0); the moving-horizon
         estimator's window ``horizon`` [pulses] (an integer in [1, 260]), its solver's
         ``max_iter`` (>= 1) and ``relinearize`` (stages evaluated afresh a pulse, in [1,
-        the horizon]; the horizon: every stage; :class:`MheOptions`).
+        the horizon]; the horizon: every stage; :class:`MheOptions`); the EKF's and the
+        moving-horizon estimator's ``second_order`` (True or False, default False: the
+        prediction keeps Ψ's curvature across the offset in the beam,
+        control/estimation/curvature.py's ``BEAM_OFFSET``).
     """
 
     kind: EstimatorKind = EstimatorKind.TRUTH
@@ -576,7 +580,10 @@ class EstimatorSpec:
                 raise OptionError(
                     f"EstimatorSpec.{where} is an option of kind {takers}, not {self.kind.value!r}"
                 )
-            if name in _COUNTS:
+            if name == "second_order":
+                if not isinstance(value, bool):
+                    raise OptionError(f"EstimatorSpec.{where} must be true or false, got {value!r}")
+            elif name in _COUNTS:
                 low, high = _COUNTS[name]
                 why = "10 s of pulses; the QP grows with the window and a pulse leaves 38 ms"
                 checked_int("EstimatorSpec", where, value, low, high, why)

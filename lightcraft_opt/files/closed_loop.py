@@ -153,6 +153,7 @@ _ESTIMATOR: dict[str, Spec] = {
     "horizon_pulses": INTEGER,
     "max_iter": INTEGER,
     "relinearize": INTEGER,
+    "second_order": _SWITCH,
 }
 #: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
 #: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).

@@ -95,6 +95,8 @@ prior_wind_kmh = 3.6
     assert ekf == EstimatorSpec(EstimatorKind.EKF, {"noise_scale": 2.0})
     ukf = _load(tmp_path, '[estimator]\nkind = "ukf"\nnoise_scale = 2.0\n')
     assert ukf == EstimatorSpec(EstimatorKind.UKF, {"noise_scale": 2.0})
+    curved = _load(tmp_path, '[estimator]\nkind = "ekf"\nsecond_order = true\n')
+    assert curved == EstimatorSpec(EstimatorKind.EKF, {"second_order": True})
 
 
 @pytest.mark.parametrize(
@@ -108,6 +110,8 @@ prior_wind_kmh = 3.6
         ('kind = "mhe"\nrelinearize = 0', "estimator.relinearize", r">= 1"),
         ('kind = "mhe"\nnoise_scale = 0.5', "estimator.noise_scale", r"kind 'ekf' or 'ukf', not"),
         ('kind = "ekf"\nnoise_scale = 0.0', "estimator.noise_scale", r"> 0"),
+        ('kind = "ukf"\nsecond_order = true', "estimator.second_order", r"'ekf' or 'mhe', not"),
+        ('kind = "ekf"\nsecond_order = 1', "estimator.second_order", r"true or false"),
         ("prior_wind_mps = 1.0", "estimator.prior_wind_mps", r"not 'truth'"),
         ('kind = "ekf"\ngain = 1.0', "estimator.gain", r"kind|unknown|not"),
         ('kind = "ekf"\nprior_position_kg = 1.0', "estimator.prior_position_kg", r"unit|mm"),

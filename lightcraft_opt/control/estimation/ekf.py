@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lightcraft_opt.control.estimation.buffered import Evaluator
+from lightcraft_opt.control.estimation.curvature import curvature_entries, second_order_terms
 from lightcraft_opt.control.estimation.estimate import Estimate
 from lightcraft_opt.control.estimation.kalman import (
     joseph_function,
@@ -54,6 +55,12 @@ class EkfOptions:
     noise_scale : the model's process-noise covariance Q times this, > 0 (tuning).
     history : pulses of history kept for late readings, >= 1; a reading older than that
         is dropped (counted in ``ExtendedKalmanFilter.dropped``).
+    second_order : entries of s (or slot names) across which the prediction keeps the
+        model's curvature: its mean and covariance gain the second-order terms
+        (curvature.py), at 2 evaluations of the model per entry. Empty (the default): the
+        first-order EKF. ``("r_L[east]", "r_L[north]")``: the offset in the beam, where
+        the capture peaks under a beam pointed at the estimate (docs/estimation.md#the-
+        second-order-filter: the NEES on flights of Ψ 142.6 -> 23.6).
     """
 
     prior: tuple[tuple[str, float], ...] = (
@@ -69,6 +76,7 @@ class EkfOptions:
     prior_default: float = 1e-6
     noise_scale: float = 1.0
     history: int = 8
+    second_order: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         for name, value in self.prior:
@@ -80,6 +88,13 @@ class EkfOptions:
             if getattr(self, name) <= 0:
                 raise OptionError(f"EkfOptions.{name} must be > 0, got {getattr(self, name)}")
         checked_int("EkfOptions", "history", self.history, 1)
+        if not isinstance(self.second_order, tuple) or not all(
+            isinstance(name, str) for name in self.second_order
+        ):
+            raise OptionError(
+                "EkfOptions.second_order must be a tuple of entry or slot names, got "
+                f"{self.second_order!r}"
+            )
 
     def prior_sigmas(self, names: Sequence[str]) -> np.ndarray:
         """(len(names),) the prior standard deviation of each entry of s (a pair naming
@@ -142,6 +157,12 @@ class ExtendedKalmanFilter:
         if not isinstance(self.options, EkfOptions):
             raise OptionError(f"options must be EkfOptions, got {self.options!r}")
         self._P0 = np.diag(np.square(self.options.prior_sigmas(model.names)))
+        self._curved = curvature_entries(
+            model.names, self.options.second_order, "EkfOptions.second_order"
+        )
+        prepare = getattr(model, "prepare_many", None)
+        if self._curved and prepare is not None:  # the points' Function now, not at step 1
+            prepare(2 * len(self._curved))
         self.innovations: list[Innovation] = []
         self.dropped = 0
         self._nodes: list[_Node] = []
@@ -198,7 +219,11 @@ class ExtendedKalmanFilter:
     ) -> tuple[np.ndarray, np.ndarray]:
         s_next, F = self.model.predict(s, u, t)
         Q = self.options.noise_scale * self.model.process_noise(s, u, t)
-        return s_next, symmetric(F @ P @ F.T + Q)
+        P_next = F @ P @ F.T + Q
+        if self._curved:
+            shift, spread = second_order_terms(self.model, s, s_next, P, u, t, self._curved)
+            s_next, P_next = s_next + shift, P_next + spread
+        return s_next, symmetric(P_next)
 
     # -- the step --------------------------------------------------------------------------
 

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.curvature import curvature_entries, second_order_terms
 from lightcraft_opt.control.estimation.estimate import Estimate
 from lightcraft_opt.control.estimation.kalman import joseph_update, symmetric
 from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
@@ -56,8 +57,9 @@ _SAME_TIME = 1e-9
 class _Node:
     """One pulse of the window: its time [s], the guess of s, the input fired there, the
     noise Q of the stage it starts and its root L (L Lᵀ = Q; None at the last node), its
-    readings (sensor, y, dt), its f, F (None: to evaluate) and the pulses since they
-    were evaluated at the guess (0: exact; more: f moved to the guess to first order)."""
+    readings (sensor, y, dt), its f, F (None: to evaluate), the pulses since they
+    were evaluated at the guess (0: exact; more: f moved to the guess to first order) and
+    the stage's second-order terms (mean shift, spread; None without ``second_order``)."""
 
     t: float
     s: np.ndarray
@@ -67,6 +69,7 @@ class _Node:
     readings: list[tuple[str, np.ndarray, float]] = field(default_factory=list)
     linear: tuple[np.ndarray, np.ndarray] | None = None
     age: int = 0
+    curvature: tuple[np.ndarray, np.ndarray] | None = None
 
 
 class MovingHorizonEstimator:
@@ -96,6 +99,12 @@ class MovingHorizonEstimator:
         self.options = options if options is not None else MheOptions()
         self.n = n = len(model.names)
         self.prior = self.options.prior_covariance(model.names)
+        self._curved = curvature_entries(
+            model.names, self.options.second_order, "MheOptions.second_order"
+        )
+        prepare = getattr(model, "prepare_many", None)
+        if self._curved and prepare is not None:  # the points' Function now, not at step 1
+            prepare(2 * len(self._curved))
         N = self.options.horizon
         self.qp = mhe_qp_function(n, N, self.options.max_iter, self.options.tol)
         n_w, n_a = mhe_qp_sizes(n, N)
@@ -189,12 +198,9 @@ class MovingHorizonEstimator:
         when the prediction is not finite: the step then falls back)."""
         last = self._nodes[-1]
         last.u = u
-        f, F = self._predict(last.s, u, last.t)
+        f, F = self._linearise(last, self._last_cov)
         finite = bool(np.all(np.isfinite(f)) and np.all(np.isfinite(F)))
         last.linear = (f, F) if finite else None
-        Q = np.asarray(self.model.process_noise(last.s, u, last.t), dtype=float)
-        last.noise_root = _root(Q)
-        last.noise = last.noise_root @ last.noise_root.T
         self._nodes.append(_Node(t, f.copy() if finite else last.s.copy()))
 
     def _move_arrival_cost(self) -> None:
@@ -213,7 +219,7 @@ class MovingHorizonEstimator:
         if node.linear is not None and node.age == 0:
             f, F = node.linear
         else:
-            f, F = self._predict(s_hat, node.u, node.t)
+            f, F = self._linearise(node, P)
         assert node.noise is not None
         mean, P = f + F @ (mean - s_hat), symmetric(F @ P @ F.T + node.noise)
         if np.all(np.isfinite(mean)) and np.all(np.isfinite(P)):
@@ -253,10 +259,7 @@ class MovingHorizonEstimator:
         H[0] = info
         g[:n] = info @ (nodes[0].s - self._mean)
         cov_pred, cov = self._cov, self._cov
-        for i in self._to_relinearize():
-            node = nodes[i]
-            assert node.u is not None
-            node.linear, node.age = self._predict(node.s, node.u, node.t), 0
+        fresh = set(self._to_relinearize())
         linear = self._linearised_readings()
         for i, node in enumerate(nodes):
             j = pad + i
@@ -274,6 +277,8 @@ class MovingHorizonEstimator:
                 cov = symmetric(np.linalg.solve(self._eye + cov @ information, cov))
             if i == m:
                 break
+            if i in fresh:  # at the node's filtered covariance, for the curvature's terms
+                node.linear, node.age = self._linearise(node, cov), 0
             assert node.linear is not None
             f, F = node.linear
             assert node.noise_root is not None and node.noise is not None
@@ -333,6 +338,27 @@ class MovingHorizonEstimator:
         return QpStatus.FAILED, f"hpipm: {raw}", iterations
 
     # ----------------------------------------------------------------- the model
+    def _linearise(self, node: _Node, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(f, F) of the stage ``node`` starts, at its guess. When the stage joins, its noise
+        (Q and its root, on the node) is set and, with ``second_order`` entries, the
+        second-order terms over ``cov`` (the node's filtered covariance then) are kept on
+        it: f gains the mean's at every evaluation, the noise their spread."""
+        assert node.u is not None
+        f, F = self._predict(node.s, node.u, node.t)
+        if self._curved and node.curvature is None and np.all(np.isfinite(f)):
+            node.curvature = second_order_terms(
+                self.model, node.s, f, cov, node.u, node.t, self._curved
+            )
+        if node.noise is None:
+            Q = np.asarray(self.model.process_noise(node.s, node.u, node.t), dtype=float)
+            if node.curvature is not None:
+                Q = Q + node.curvature[1]
+            node.noise_root = _root(Q)
+            node.noise = node.noise_root @ node.noise_root.T
+        if node.curvature is not None:
+            f = f + node.curvature[0]
+        return f, F
+
     def _predict(self, s: np.ndarray, u: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
         f, F = self.model.predict(s, u, t)
         return np.asarray(f, dtype=float).ravel(), np.asarray(F, dtype=float)

@@ -40,6 +40,11 @@ class MheOptions:
         stage, the plain real-time iteration. On 50 flights of Ψ 1 raised the NEES from
         25.5 to 27.4 (default noises; 17.5 to 17.8 at a tenth) and left the RMSE within 6 %
         either way, for a step 1.6 times faster (docs/estimation.md, the step times).
+    second_order : entries of s (or slot names) across which each stage keeps the model's
+        curvature, as the EKF's option of that name (curvature.py): a stage evaluated
+        afresh gains the second-order terms over its node's filtered covariance, its f the
+        mean's and its noise the spread's, at 2 model evaluations an entry. Empty (the
+        default): Gauss-Newton on f alone.
     """
 
     horizon: int = 15
@@ -48,6 +53,7 @@ class MheOptions:
     max_iter: int = 20
     tol: float = 1e-8
     relinearize: int | None = 1
+    second_order: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         checked_int("MheOptions", "horizon", self.horizon, 1, MAX_WINDOW, "10 s of pulses")
@@ -68,6 +74,13 @@ class MheOptions:
         if self.relinearize is not None:
             checked_int(
                 "MheOptions", "relinearize", self.relinearize, 1, self.horizon, "the horizon"
+            )
+        if not isinstance(self.second_order, tuple) or not all(
+            isinstance(name, str) for name in self.second_order
+        ):
+            raise OptionError(
+                "MheOptions.second_order must be a tuple of entry or slot names, got "
+                f"{self.second_order!r}"
             )
 
     def prior_covariance(self, names: Sequence[str]) -> np.ndarray:

@@ -63,6 +63,11 @@ class UkfOptions(EkfOptions):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if self.second_order:
+            raise OptionError(
+                "UkfOptions.second_order must be empty: the unscented transform keeps the "
+                f"model's curvature across every entry already, got {self.second_order!r}"
+            )
         alpha = self.alpha
         if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not 0 < alpha <= 1:
             raise OptionError(f"UkfOptions.alpha must be in (0, 1], got {alpha!r}")

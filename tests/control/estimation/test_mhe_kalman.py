@@ -93,15 +93,25 @@ def kalman(readings: list[Reading], U: np.ndarray, k: int) -> tuple[np.ndarray, 
 
 
 def run_both(
-    pulses: int, seed: int, relinearize: int | None = None, **kwargs
+    pulses: int,
+    seed: int,
+    relinearize: int | None = None,
+    second_order: tuple[str, ...] = (),
+    **kwargs,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The largest difference, pulse by pulse, of the MHE's estimate [m, m/s] and
-    covariance from the filter's that saw the same readings."""
+    covariance from the filter's that saw the same readings (the MHE's stages with the
+    second-order terms across ``second_order``: nothing on this linear model)."""
     _, U, readings = flight(pulses, seed, **kwargs)
     sigmas = (("r_L", 0.02), ("v_L", 0.2))
     mhe = MovingHorizonEstimator(
         ConstantVelocity(),
-        MheOptions(horizon=HORIZON, prior_sigmas=sigmas, relinearize=relinearize),
+        MheOptions(
+            horizon=HORIZON,
+            prior_sigmas=sigmas,
+            relinearize=relinearize,
+            second_order=second_order,
+        ),
     )
     assert isinstance(mhe, Estimator)
     mhe.reset(np.r_[0.0, 0.0, 2.0, 0.0, 0.0, 4.0], 0.0)

@@ -28,6 +28,7 @@ from support.paths import REPO_ROOT
 from lightcraft_opt.control.closed_loop import closed_loop, disperse, measured
 from lightcraft_opt.control.controllers import OpenLoopController
 from lightcraft_opt.control.estimation import (
+    BEAM_OFFSET,
     CameraOptions,
     EkfOptions,
     Estimate,
@@ -426,7 +427,8 @@ def test_what_the_loop_refuses_is_named(phi):
 
 def test_the_factory_builds_the_estimators_and_names_what_is_missing():
     """None for the truth; the UKF with the file's noise scale; the MHE with the file's
-    window and relinearisation (one stage a pulse unless told) over the filter's priors; an
+    window and relinearisation (one stage a pulse unless told) over the filter's priors; the
+    EKF and the MHE with the second-order terms across the offset in the beam when told; an
     estimator without a suite, or a spec that is not one, is named."""
     assert build_estimator(EstimatorSpec(), MODEL, None) is None
     suite = SensorSuite(MODEL, SensorOptions())
@@ -441,6 +443,10 @@ def test_the_factory_builds_the_estimators_and_names_what_is_missing():
     ukf = build_estimator(EstimatorSpec(EstimatorKind.UKF, {"noise_scale": 2.0}), MODEL, suite)
     assert isinstance(ukf, UnscentedKalmanFilter) and ukf.options.noise_scale == 2.0
     assert ukf.options.prior == EkfOptions().prior and ukf.name == "ukf"
+    assert mhe.options.second_order == () and ukf.options.second_order == ()
+    for kind in (EstimatorKind.EKF, EstimatorKind.MHE):  # the curvature across the offset
+        curved = build_estimator(EstimatorSpec(kind, {"second_order": True}), MODEL, suite)
+        assert curved.options.second_order == BEAM_OFFSET == ("r_L[east]", "r_L[north]")
     for kind in (EstimatorKind.EKF, EstimatorKind.UKF, EstimatorKind.MHE):
         with pytest.raises(OptionError, match=r"build_estimator.sensors: .* needs a suite"):
             build_estimator(EstimatorSpec(kind), MODEL, None)

@@ -1,0 +1,85 @@
+"""The second-order terms of a prediction: the model's curvature across the prior.
+
+The EKF predicts the mean as f(ŝ), which is f's mean over the prior only where f is linear
+across it. Ψ is not where the beam is pointed at the estimate: the capture peaks on the
+beam's axis, so the true craft, off the axis by the estimate's error, captures less than
+f(ŝ) says, and a filter that leaves this out puts the missing kick into the coupling
+(docs/estimation.md#the-second-order-filter). The truncated second-order filter (Gelb,
+*Applied Optimal Estimation*, 1974, section 6.1; docs/references.md#gelb) adds f's
+second-order terms for s ~ N(ŝ, P)::
+
+    E[f(s)] ≈ f(ŝ) + ½ Σ_j l_jᵀ ∇²f l_j,         L Lᵀ = P_dd,  l_j its j-th column
+
+over the entries d it is told (the directions where f curves), each term by the central
+second difference f(ŝ + l_j) + f(ŝ - l_j) - 2 f(ŝ) (exact for a quadratic f; Nørgaard,
+Poulsen and Ravn's divided differences, with the points one standard deviation out), and
+to the covariance the spread of those quadratic terms, 2 Σ_j d_j d_jᵀ with d_j = ½ l_jᵀ ∇²f
+l_j (their pairs j ≠ k left out: exact for a single direction, or where ∇²f is diagonal in
+L's columns). 2 |d| evaluations of f, in one call where the model has ``predict_many``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from lightcraft_opt.control.estimation.model import EstimationModel
+from lightcraft_opt.errors import OptionError
+
+__all__ = ["BEAM_OFFSET", "curvature_entries", "second_order_terms"]
+
+#: The offset in the beam (r_L east and north): where Ψ's capture peaks under a beam pointed
+#: at the estimate, the entries a closed-loop file's ``second_order = true`` names.
+BEAM_OFFSET = ("r_L[east]", "r_L[north]")
+
+
+def curvature_entries(names: Sequence[str], wanted: Sequence[str], owner: str) -> tuple[int, ...]:
+    """The indices in s (``names``) of the entries ``wanted`` names, each an entry
+    (``"r_L[east]"``) or a slot (``"r_L"``: all its axes), in s's order; OptionError naming
+    ``owner`` (e.g. ``"EkfOptions.second_order"``) for a name that matches no entry."""
+    chosen: set[int] = set()
+    for key in wanted:
+        hit = [i for i, name in enumerate(names) if key in (name, name.split("[")[0])]
+        if not hit:
+            raise OptionError(
+                f"{owner}: {key!r} names no entry of the estimated state; its entries are "
+                f"{list(names)}"
+            )
+        chosen.update(hit)
+    return tuple(sorted(chosen))
+
+
+def second_order_terms(
+    model: EstimationModel,
+    s: np.ndarray,
+    f_s: np.ndarray,
+    P: np.ndarray,
+    u: np.ndarray,
+    t: float,
+    entries: Sequence[int],
+) -> tuple[np.ndarray, np.ndarray]:
+    """(shift (n,), spread (n, n)): what the module docstring's second-order terms add to
+    the prediction's mean f_s = f(s) and to its covariance, over the ``entries`` of s with
+    covariance P (n, n), u fired at t [s]. Zeros where P's block there has no Cholesky
+    factor (not positive definite to rounding) or a point's image is not finite (outside
+    the model's domain): the first-order prediction stands."""
+    n = s.size
+    idx = list(entries)
+    try:
+        root = np.linalg.cholesky(P[np.ix_(idx, idx)])
+    except np.linalg.LinAlgError:
+        return np.zeros(n), np.zeros((n, n))
+    steps = np.zeros((len(idx), n))
+    steps[:, idx] = root.T  # row j: the column l_j of L, in s
+    points = np.vstack([s + steps, s - steps])
+    many = getattr(model, "predict_many", None)
+    if many is not None:
+        images = np.asarray(many(points, u, t), dtype=float)
+    else:
+        images = np.array([model.predict(p, u, t)[0] for p in points])
+    if not np.all(np.isfinite(images)):
+        return np.zeros(n), np.zeros((n, n))
+    m = len(idx)
+    d = 0.5 * (images[:m] + images[m:] - 2.0 * f_s)  # row j: ½ l_jᵀ ∇²f l_j, each output
+    return d.sum(axis=0), 2.0 * d.T @ d
