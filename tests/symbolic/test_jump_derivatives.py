@@ -25,8 +25,12 @@ from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, STATE, initial_state,
 from lightcraft_opt.model import BeamProfile, BeamSizeModel, Engine, ImpulseModel, Model
 from lightcraft_opt.symbolic.maps.jump_derivatives import structured_jump_derivatives
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
-from lightcraft_opt.symbolic.maps.pulse_map_derivatives import _piece_derivatives
+from lightcraft_opt.symbolic.maps.pulse_map_derivatives import (
+    _piece_derivatives,
+    build_derivative_pieces,
+)
 from lightcraft_opt.symbolic.maps.pulse_map_pieces import build_pulse_map_pieces
+from lightcraft_opt.symbolic.maps.reduced_map import reduced_pulse_map
 
 RTOL = 1e-10
 
@@ -145,3 +149,35 @@ def test_the_kernel_model_two_sectors_and_designed_radii_keep_ad_of_the_whole_ju
     assert structured_jump_derivatives(_optic(_flight5(), 2, 8), design=radius) is None
     pieces = build_pulse_map_pieces(model, PulseMapOptions())
     assert pieces.model is model
+
+
+@pytest.mark.parametrize(
+    ("case", "design"),
+    [("linear-beam", ()), ("waist-beam", ()), ("waist-beam", DESIGNS["waist-beam"])],
+)
+def test_the_reduced_maps_jump_through_its_manifold_equals_ad(case, design):
+    """Ψ's jump is the pulse's at lift(project(x)) (symbolic/maps/reduced_map.py): its
+    derivatives through the cut and the manifold equal casadi's AD of the whole composed
+    jump."""
+    model = CASES[case]()
+    design = _design(design)
+    pieces = reduced_pulse_map(model).pieces
+    assert pieces is not None and pieces.model is model and pieces.manifold is not None
+    plain_jacobian, plain_hessian = _piece_derivatives(pieces.jump, (0, 1), True, design)
+    jacobian, hessian = build_derivative_pieces(pieces, design=design).functions()[2:4]
+    assert jacobian.name() == "reduced_pulse_jump_jacobian" and hessian is not None
+    x, pulse, p, rho = _point(model, 7)
+    rho = rho[: plain_hessian.size1_in(3)]
+    expected_jac = np.array(plain_jacobian(x, pulse, p))
+    np.testing.assert_allclose(
+        np.array(jacobian(x, pulse, p)),
+        expected_jac,
+        rtol=0,
+        atol=RTOL * np.abs(expected_jac).max(),
+    )
+    expected = [np.array(out) for out in plain_hessian(x, pulse, p, rho)]
+    got = [np.array(out) for out in hessian(x, pulse, p, rho)]
+    for g, e in zip(got, expected, strict=True):
+        np.testing.assert_allclose(g, e, rtol=0, atol=RTOL * np.abs(e).max())
+    # the point lies off Ψ's manifold, so the chain through m is exercised
+    assert np.abs(np.array(pieces.manifold(x, p)).ravel() - x).max() > 1e-3

@@ -228,14 +228,79 @@ def _reference_energy(
 
 
 def structured_jump_derivatives(
-    model: Model, *, hessian: bool = True, design: tuple[int, ...] = ()
+    model: Model,
+    *,
+    hessian: bool = True,
+    design: tuple[int, ...] = (),
+    manifold: ca.Function | None = None,
 ) -> tuple[ca.Function, ca.Function | None] | None:
     """``pulse_jump_jacobian(x, pulse, p) -> jac`` and (with ``hessian``)
     ``pulse_jump_hessian(x, pulse, p, adjoint) -> (jac, hess)`` of the jump in v = (x,
     pulse, p[design]) (module docstring; ``design`` sorted indices into PARAMETERS), as the
     plain pieces of pulse_map_derivatives.py; None for a model whose impulse model is not
     SECTOR, whose optic has fewer than three sectors (three moments need them) or whose
-    designed entries include the optic's radii (they move the quadrature's points)."""
+    designed entries include the optic's radii (they move the quadrature's points).
+
+    ``manifold``: ``m(x, p) -> x_m`` (STATE), for a jump that is the pulse's at m(x, p) (the
+    reduced map Ψ's, at lift(project(x)): symbolic/maps/reduced_map.py). Its derivatives
+    are then ``reduced_pulse_jump_jacobian`` and ``reduced_pulse_jump_hessian``, the chain
+    rule through m over the cut: with w(v) = (m(x, p), pulse, p[design]) and W = ∂w/∂v,
+    jac = J(w) W and hess = Wᵀ H(w) W + ∇²(λᵀ m) (λ = J_xᵀ ρ, the jump's adjoint on its
+    state, held fixed)."""
+    jacobian, second = _cut(model, hessian, design) or (None, None)
+    if jacobian is None or manifold is None:
+        return None if jacobian is None else (jacobian, second)
+    return _through_manifold(jacobian, second, manifold, design)
+
+
+def _through_manifold(
+    jacobian: ca.Function,
+    second: ca.Function | None,
+    manifold: ca.Function,
+    design: tuple[int, ...],
+) -> tuple[ca.Function, ca.Function | None]:
+    """The cut's ``jacobian`` and ``second`` composed with x -> ``manifold(x, p)``
+    (:func:`structured_jump_derivatives`)."""
+    x = ca.SX.sym("x", STATE.size)
+    pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
+    p = ca.SX.sym("p", PARAMETERS.size)
+    v = ca.vertcat(x, pulse, p[list(design)]) if design else ca.vertcat(x, pulse)
+    x_m = manifold(x, p)
+    w = ca.vertcat(x_m, pulse, p[list(design)]) if design else ca.vertcat(x_m, pulse)
+    W = ca.jacobian(w, v)
+    jac = ca.densify(ca.mtimes(jacobian(x_m, pulse, p), W))
+    composed = ca.Function(
+        "reduced_pulse_jump_jacobian",
+        [x, pulse, p],
+        [jac],
+        ["x", "pulse", "p"],
+        ["jac"],
+        _SX_OPTIONS,
+    )
+    if second is None:
+        return composed, None
+    rho = ca.SX.sym("adjoint", second.size1_in(3))
+    jac_m, hess_m = second(x_m, pulse, p, rho)
+    lam = ca.SX.sym("lambda", STATE.size)  # J_xᵀ ρ, a symbol until the end
+    curvature, _ = ca.hessian(ca.dot(lam, x_m), v)
+    curvature = ca.substitute(curvature, lam, ca.mtimes(jac_m[:, : STATE.size].T, rho))
+    hess = ca.mtimes(W.T, ca.mtimes(hess_m, W)) + curvature
+    composed_second = ca.Function(
+        "reduced_pulse_jump_hessian",
+        [x, pulse, p, rho],
+        [ca.densify(ca.mtimes(jac_m, W)), ca.densify(hess)],
+        ["x", "pulse", "p", "adjoint"],
+        ["jac", "hess"],
+        _SX_OPTIONS,
+    )
+    return composed, composed_second
+
+
+def _cut(
+    model: Model, hessian: bool, design: tuple[int, ...]
+) -> tuple[ca.Function, ca.Function | None] | None:
+    """The jump's derivatives through the cut (:func:`structured_jump_derivatives` without
+    a manifold)."""
     engine = model.craft.engine
     if engine.impulse_model is not ImpulseModel.SECTOR or engine.quadrature_azimuthal < 3:
         return None

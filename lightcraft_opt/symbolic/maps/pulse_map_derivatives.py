@@ -218,7 +218,9 @@ def build_derivative_pieces(
     design = check_design(design)
     jump = None
     if pieces.model is not None:  # through the optic's quadrature
-        jump = structured_jump_derivatives(pieces.model, hessian=hessians, design=design)
+        jump = structured_jump_derivatives(
+            pieces.model, hessian=hessians, design=design, manifold=pieces.manifold
+        )
     return DerivativePieces(
         *_piece_derivatives(pieces.normalise, (0,), hessians),
         *(jump or _piece_derivatives(pieces.jump, (0, 1), hessians, design)),

@@ -67,7 +67,9 @@ class PulseMapPieces:
     n_thrusters : RCS thrusters of the craft (0: none).
     has_carrier : whether the craft has a despun carrier (a motor torque input).
     model : the model the jump was built from, whose structure the jump's derivatives
-        use (symbolic/maps/jump_derivatives.py); None for pieces of another jump (Ψ's).
+        use (symbolic/maps/jump_derivatives.py); None for pieces of another jump.
+    manifold : ``m(x, p) -> x_m`` where the jump is the pulse's at m(x, p), not at x (the
+        reduced map Ψ's, lift(project(x)): symbolic/maps/reduced_map.py); None for Φ's.
     """
 
     normalise: ca.Function
@@ -80,6 +82,7 @@ class PulseMapPieces:
     n_thrusters: int
     has_carrier: bool
     model: Model | None = None
+    manifold: ca.Function | None = None
 
 
 def build_pulse_map_pieces(model: Model, options: PulseMapOptions) -> PulseMapPieces:

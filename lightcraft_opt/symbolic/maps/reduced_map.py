@@ -286,9 +286,11 @@ def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) ->
     full states: the jump ``reduced_pulse_jump`` = Φ's jump at lift(project(x)), the substep
     ``reduced_coast_substep`` = lift ∘ Ψ's substep ∘ project, and the identity for Φ's
     normalisation; so Φ's explicit-chain derivatives and their compilation
-    (pulse_map_derivatives.py, compiled/) serve it as they are. The states it returns lie on
-    Ψ's manifold: the body's twist about b1 is the smallest rotation from upright, w_B[b1] = 0.
-    Its ``options`` carry the substeps, dense and the HOLD profile (the scheme is not read)."""
+    (pulse_map_derivatives.py, compiled/) serve it as they are, the jump's through the
+    optic's quadrature and the manifold lift ∘ project (jump_derivatives.py). The states
+    it returns lie on Ψ's manifold: the body's twist about b1 is the smallest rotation from
+    upright, w_B[b1] = 0. Its ``options`` carry the substeps, dense and the HOLD profile
+    (the scheme is not read)."""
     psi = build_reduced_map(model, options)
     opts = psi.options
     craft = model.craft
@@ -300,6 +302,7 @@ def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) ->
     w = ca.SX.sym("w", wlay.size)
     pulse = ca.SX.sym("pulse", PULSE_INPUT.size)
     on_manifold = psi.lift(psi.project(x, p), p)
+    manifold = ca.Function("reduced_manifold", [x, p], [on_manifold], ["x", "p"], ["x_m"])
     identity = ca.Function("reduced_identity", [x], [x], ["x"], ["x_unit"])
     x_plus, eng = pulse_jump(on_manifold, pulse, p, model)
     jump = ca.Function(
@@ -331,6 +334,8 @@ def reduced_pulse_map(model: Model, options: ReducedMapOptions | None = None) ->
         wlay,
         n_thr,
         craft.has_carrier,
+        model,  # the jump is Φ's at the manifold: its derivatives take the optic's cut
+        manifold,
     )
     map_options = PulseMapOptions(
         substeps=opts.substeps, dense=opts.dense, rcs_profile=RcsProfile.HOLD
