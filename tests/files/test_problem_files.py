@@ -26,6 +26,7 @@ from lightcraft_opt.ocp.options import (
     OcpOptions,
     OcpSolver,
     OcpStart,
+    PredictionMap,
 )
 from lightcraft_opt.ocp.problem import (
     ControlEffort,
@@ -479,6 +480,9 @@ def test_the_ready_problems_load_as_their_comments_say() -> None:
     apogee = load_problem(root / "beam_tracking_apogee.toml")
     assert apogee.problem.horizon == 260 and apogee.options.start is OcpStart.GROWN
     assert apogee.options.grow_pulses == 52
+    focus = load_problem(root / "beam_tracking_focus.toml")
+    for waist in (focus, apogee):  # Ψ: the plans fly (docs/ocp.md#does-the-plan-fly)
+        assert waist.options.prediction is PredictionMap.REDUCED
     assert not any(isinstance(k, TerminalAltitude) for k in apogee.problem.constraints)
     assert PARAMETERS.get("wind_speed_ref", apogee.problem.p) == pytest.approx(3.0)
 

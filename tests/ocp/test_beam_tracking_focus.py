@@ -4,11 +4,11 @@ without a wind ramp from the director's flight, its optimum flown again by the s
 References:
 
 - the forward simulator at full accuracy (split4, 32 substeps, the model's 8 x 32 optic):
-  the plan flies all 130 pulses in the beam (status duration_reached, the beam axis within
-  0.25 of the capture radius of the optic, planned 0.17), within 15 cm of the prediction
-  and 0.2 m of the planned 50 m at 5 s (measured 2026-12-03: 10.1 cm and 49.90 m; above
-  ~30 m the climb is open-loop unstable and the OCP's Strang map with 2 substeps differs
-  from the simulator's by ~1e-6 m a pulse, which the flight amplifies);
+  the plan flies (``PlanReplay.flies``: all 130 pulses in the beam, within the replay's
+  5 cm of the prediction and of the planned 50 m at 5 s; the beam axis within 0.25 of the
+  capture radius, planned 0.17). Measured 2026-12-07 with the file's reduced map Ψ: 1.13
+  cm and 50.011 m. Above ~30 m the climb is open-loop unstable, and Φ's Strang map with 2
+  substeps, which gets the 216 Hz coning's phase wrong, missed by 10-11 cm;
 - the director's own flight (the start): the optimum is better than the start it came
   from, and keeps the craft nearer the pad (the objective's drift term).
 """
@@ -21,6 +21,7 @@ from support.nlp_points import cost_of
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.files.problem import load_problem
+from lightcraft_opt.ocp.replay import PLAN_GAP_LIMIT
 from lightcraft_opt.ocp.result import OcpStatus
 from lightcraft_opt.ocp.solve import CompiledOcp
 from lightcraft_opt.ocp.start import director_start
@@ -54,8 +55,9 @@ def test_the_plan_flies_in_the_simulator(focus):
     assert replay.status is SimulationStatus.DURATION_REACHED and replay.pulses == 130
     assert replay.quadrature == (8, 32)
     assert replay.max_offset_over_capture_radius < 0.25
-    assert replay.max_position_gap < 0.15
-    assert abs(replay.final_altitude - 50.0) < 0.2
+    assert replay.flies, replay.faults
+    assert replay.max_position_gap < PLAN_GAP_LIMIT
+    assert abs(replay.final_altitude - 50.0) < PLAN_GAP_LIMIT
 
 
 def test_the_optimum_improves_on_the_directors_flight(focus):
