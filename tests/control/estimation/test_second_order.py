@@ -12,7 +12,7 @@ from scipy.stats import chi2
 from test_ekf_filter import DoubleIntegrator, T
 from test_mhe_kalman import run_both
 from test_psi_estimation_model import camera
-from test_ukf_filter import Quadratic, Square
+from test_ukf_filter import QUADRATIC_PRIOR, Quadratic, Square, check_quadratic_means
 
 import lightcraft_opt as lc
 from lightcraft_opt.control.estimation import (
@@ -37,18 +37,8 @@ def test_the_predicted_mean_of_a_quadratic_map_is_exact() -> None:
     """Across every entry the second-order EKF predicts (a b, a², b) from N(m, P) with the
     mean (m_a m_b + P_ab, m_a² + P_aa, m_b) (Isserlis), as the unscented filter does: from
     the diagonal prior, then from the correlated covariance the first prediction leaves."""
-    ekf = ExtendedKalmanFilter(
-        Quadratic(),
-        EkfOptions(prior=(("a", 0.3), ("b", 0.4), ("c", 0.2)), second_order=("a", "b", "c")),
-    )
-    ekf.reset(np.array([0.7, -1.3, 0.2]))
-    m, P = ekf.s.copy(), ekf.P.copy()
-    for k in (1, 2):
-        got = ekf.step([], np.zeros(1), k * T)
-        want = np.array([m[0] * m[1] + P[0, 1], m[0] ** 2 + P[0, 0], m[1]])
-        np.testing.assert_allclose(got.z, want, rtol=1e-14, atol=1e-15)
-        m, P = got.z, got.covariance
-    assert abs(P[0, 1]) > 0.01  # the second prediction started from a correlated P
+    options = EkfOptions(prior=QUADRATIC_PRIOR, second_order=("a", "b", "c"))
+    check_quadratic_means(ExtendedKalmanFilter(Quadratic(), options))
 
 
 def test_the_variance_of_a_square_is_exact() -> None:

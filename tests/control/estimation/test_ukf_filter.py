@@ -52,15 +52,25 @@ def test_the_predicted_mean_of_a_quadratic_map_is_exact() -> None:
     """The prediction of (a b, a², b) from N(m, P) has mean (m_a m_b + P_ab, m_a² + P_aa,
     m_b) exactly (Isserlis), where the EKF's is (m_a m_b, m_a², m_b): from the diagonal
     prior, then from the correlated covariance the first prediction leaves."""
-    ukf = UnscentedKalmanFilter(Quadratic(), UkfOptions(prior=(("a", 0.3), ("b", 0.4), ("c", 0.2))))
+    ukf = UnscentedKalmanFilter(Quadratic(), UkfOptions(prior=QUADRATIC_PRIOR))
     assert isinstance(ukf, Estimator)
-    ukf.reset(np.array([0.7, -1.3, 0.2]))
-    m, P = ukf.s.copy(), ukf.P.copy()
+    check_quadratic_means(ukf)
+
+
+#: The prior of the quadratic map's checks: σ of a, b, c.
+QUADRATIC_PRIOR = (("a", 0.3), ("b", 0.4), ("c", 0.2))
+
+
+def check_quadratic_means(estimator: ExtendedKalmanFilter) -> None:
+    """Two predictions of :class:`Quadratic` by ``estimator`` (the UKF, or the EKF with
+    second-order terms across every entry): the means exact (Isserlis) to 1e-14, the linear
+    entry b's covariance exact at any n (P_bb), the second from a correlated P."""
+    estimator.reset(np.array([0.7, -1.3, 0.2]))
+    m, P = estimator.s.copy(), estimator.P.copy()
     for k in (1, 2):
-        got = ukf.step([], np.zeros(1), k * T)
+        got = estimator.step([], np.zeros(1), k * T)
         want = np.array([m[0] * m[1] + P[0, 1], m[0] ** 2 + P[0, 0], m[1]])
         np.testing.assert_allclose(got.z, want, rtol=1e-14, atol=1e-15)
-        # the covariance of the linear entry b is exact at any n: P_bb
         assert got.covariance[2, 2] == pytest.approx(P[1, 1], rel=1e-14)
         m, P = got.z, got.covariance
     assert abs(P[0, 1]) > 0.01  # the second prediction started from a correlated P
