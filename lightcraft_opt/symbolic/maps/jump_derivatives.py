@@ -40,6 +40,9 @@ join s and y, the rest reach the pose, K and E_ref through casadi's AD as x does
 impulse model only (the KERNEL model evaluates the quadrature twice, at the craft and on the
 axis), and not with the optic's radii designed (they move the quadrature's points):
 :func:`structured_jump_derivatives` returns None, and the chain keeps the whole jump's AD.
+The reduced map Ψ's jump, the pulse's at lift(project(x)) (reduced_map.py), takes the same
+cut and then the chain rule through that manifold (``manifold``): its Hessian at the 8 x 32
+optic under the waist beam is 247k instructions where AD of the composition gives 756k.
 """
 
 from __future__ import annotations
