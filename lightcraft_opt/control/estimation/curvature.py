@@ -61,7 +61,10 @@ def second_order_terms(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(shift (n,), spread (n, n)): what the module docstring's second-order terms add to
     the prediction's mean f_s = f(s) and to its covariance, over the ``entries`` of s with
-    covariance P (n, n), u fired at t [s]. Zeros where P's block there has no Cholesky
+    covariance P (n, n), u fired at t [s]. s is the model's estimated state, each entry in
+    the frame and SI unit its name says (``model.names``: r_L, v_L, H_L in L; the coning
+    offset; the slow states), u its input (pointing in L [m], focus [m], energy [J], ...).
+    Zeros where P's block there has no Cholesky
     factor (not positive definite to rounding) or a point's image is not finite (outside
     the model's domain): the first-order prediction stands."""
     n = s.size
