@@ -24,29 +24,42 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.kalman import entries_named
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.errors import OptionError
 
-__all__ = ["BEAM_OFFSET", "curvature_entries", "second_order_terms"]
+__all__ = ["BEAM_OFFSET", "checked_names", "curvature_entries", "second_order_terms"]
 
 #: The offset in the beam (r_L east and north): where Ψ's capture peaks under a beam pointed
 #: at the estimate, the entries a closed-loop file's ``second_order = true`` names.
 BEAM_OFFSET = ("r_L[east]", "r_L[north]")
 
 
-def curvature_entries(names: Sequence[str], wanted: Sequence[str], owner: str) -> tuple[int, ...]:
-    """The indices in s (``names``) of the entries ``wanted`` names, each an entry
+def checked_names(owner: str, names: object) -> None:
+    """OptionError naming ``owner`` (e.g. ``"EkfOptions.second_order"``) unless ``names``
+    is a tuple of entry or slot names (strings)."""
+    if not isinstance(names, tuple) or not all(isinstance(name, str) for name in names):
+        raise OptionError(f"{owner} must be a tuple of entry or slot names, got {names!r}")
+
+
+def curvature_entries(model: EstimationModel, wanted: Sequence[str], owner: str) -> tuple[int, ...]:
+    """The indices in s (``model.names``) of the entries ``wanted`` names, each an entry
     (``"r_L[east]"``) or a slot (``"r_L"``: all its axes), in s's order; OptionError naming
-    ``owner`` (e.g. ``"EkfOptions.second_order"``) for a name that matches no entry."""
+    ``owner`` (e.g. ``"EkfOptions.second_order"``) for a name that matches no entry. With
+    entries, the model's ``prepare_many`` (if it has one) builds the points' call now, not
+    in the first step's time."""
     chosen: set[int] = set()
     for key in wanted:
-        hit = [i for i, name in enumerate(names) if key in (name, name.split("[")[0])]
+        hit = entries_named(key, model.names)
         if not hit:
             raise OptionError(
                 f"{owner}: {key!r} names no entry of the estimated state; its entries are "
-                f"{list(names)}"
+                f"{list(model.names)}"
             )
         chosen.update(hit)
+    prepare = getattr(model, "prepare_many", None)
+    if chosen and prepare is not None:
+        prepare(2 * len(chosen))
     return tuple(sorted(chosen))
 
 

@@ -20,7 +20,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lightcraft_opt.control.estimation.buffered import Evaluator
-from lightcraft_opt.control.estimation.curvature import curvature_entries, second_order_terms
+from lightcraft_opt.control.estimation.curvature import (
+    checked_names,
+    curvature_entries,
+    second_order_terms,
+)
 from lightcraft_opt.control.estimation.estimate import Estimate
 from lightcraft_opt.control.estimation.kalman import (
     joseph_function,
@@ -88,13 +92,7 @@ class EkfOptions:
             if getattr(self, name) <= 0:
                 raise OptionError(f"EkfOptions.{name} must be > 0, got {getattr(self, name)}")
         checked_int("EkfOptions", "history", self.history, 1)
-        if not isinstance(self.second_order, tuple) or not all(
-            isinstance(name, str) for name in self.second_order
-        ):
-            raise OptionError(
-                "EkfOptions.second_order must be a tuple of entry or slot names, got "
-                f"{self.second_order!r}"
-            )
+        checked_names("EkfOptions.second_order", self.second_order)
 
     def prior_sigmas(self, names: Sequence[str]) -> np.ndarray:
         """(len(names),) the prior standard deviation of each entry of s (a pair naming
@@ -158,11 +156,8 @@ class ExtendedKalmanFilter:
             raise OptionError(f"options must be EkfOptions, got {self.options!r}")
         self._P0 = np.diag(np.square(self.options.prior_sigmas(model.names)))
         self._curved = curvature_entries(
-            model.names, self.options.second_order, "EkfOptions.second_order"
+            model, self.options.second_order, "EkfOptions.second_order"
         )
-        prepare = getattr(model, "prepare_many", None)
-        if self._curved and prepare is not None:  # the points' Function now, not at step 1
-            prepare(2 * len(self._curved))
         self.innovations: list[Innovation] = []
         self.dropped = 0
         self._nodes: list[_Node] = []

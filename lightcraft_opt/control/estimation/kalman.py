@@ -10,7 +10,7 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-__all__ = ["joseph_function", "joseph_update", "prior_sigmas", "symmetric"]
+__all__ = ["entries_named", "joseph_function", "joseph_update", "prior_sigmas", "symmetric"]
 
 
 def prior_sigmas(
@@ -22,11 +22,17 @@ def prior_sigmas(
     sigma = np.full(len(names), float(default))
     unmatched = []
     for key, value in pairs:
-        hit = [i for i, name in enumerate(names) if key in (name, name.split("[")[0])]
+        hit = entries_named(key, names)
         sigma[hit] = value
         if not hit:
             unmatched.append(key)
     return sigma, unmatched
+
+
+def entries_named(key: str, names: Sequence[str]) -> list[int]:
+    """The indices of the entries of s (``names``) that ``key`` names: an entry
+    (``"r_L[east]"``) or the part before its bracket (``"r_L"``: all three)."""
+    return [i for i, name in enumerate(names) if key in (name, name.split("[")[0])]
 
 
 def symmetric(P: np.ndarray) -> np.ndarray:

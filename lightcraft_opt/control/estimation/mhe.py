@@ -100,11 +100,8 @@ class MovingHorizonEstimator:
         self.n = n = len(model.names)
         self.prior = self.options.prior_covariance(model.names)
         self._curved = curvature_entries(
-            model.names, self.options.second_order, "MheOptions.second_order"
+            model, self.options.second_order, "MheOptions.second_order"
         )
-        prepare = getattr(model, "prepare_many", None)
-        if self._curved and prepare is not None:  # the points' Function now, not at step 1
-            prepare(2 * len(self._curved))
         N = self.options.horizon
         self.qp = mhe_qp_function(n, N, self.options.max_iter, self.options.tol)
         n_w, n_a = mhe_qp_sizes(n, N)

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.curvature import checked_names
 from lightcraft_opt.control.estimation.kalman import prior_sigmas
 from lightcraft_opt.control.mpc_qp import QpStatus
 from lightcraft_opt.errors import OptionError
@@ -75,13 +76,7 @@ class MheOptions:
             checked_int(
                 "MheOptions", "relinearize", self.relinearize, 1, self.horizon, "the horizon"
             )
-        if not isinstance(self.second_order, tuple) or not all(
-            isinstance(name, str) for name in self.second_order
-        ):
-            raise OptionError(
-                "MheOptions.second_order must be a tuple of entry or slot names, got "
-                f"{self.second_order!r}"
-            )
+        checked_names("MheOptions.second_order", self.second_order)
 
     def prior_covariance(self, names: Sequence[str]) -> np.ndarray:
         """(n, n) diagonal prior covariance of s whose entries are ``names``; an override
