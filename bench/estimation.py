@@ -116,7 +116,8 @@ def main() -> None:
         "--second-order",
         default="",
         help="the EKF's and the MHE's second-order entries, comma-separated (e.g. "
-        "r_L[east],r_L[north]); empty: first order",
+        "r_L[east],r_L[north], the offset; r_L[east],r_L[north],H_L,coning,wind_L,coupling, "
+        "curvature.PSI_CURVES); empty: first order",
     )
     args = parser.parse_args()
     curved = tuple(e for e in args.second_order.split(",") if e)

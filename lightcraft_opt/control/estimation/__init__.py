@@ -10,7 +10,8 @@
 - :mod:`.kalman`: the algebra both estimators share (the prior by entry name, the
   Joseph-form update);
 - :mod:`.curvature`: a prediction's second-order terms across chosen entries (the EKF's
-  and the MHE's ``second_order``; :data:`BEAM_OFFSET`, the offset in the beam);
+  and the MHE's ``second_order``; :data:`BEAM_OFFSET`, the offset in the beam;
+  :data:`PSI_CURVES`, every direction where Ψ curves);
 - :mod:`.sensor_options`: the sensors' options (:class:`SensorOptions`: a camera, gyros,
   a spin counter; their noise, frame rate, latency, lost frames);
 - :mod:`.sensors`: the :class:`SensorSuite` that draws their readings from the plant, the
@@ -37,7 +38,7 @@ is a plain vector (no quaternion), and the director already predicts with it.
 
 from __future__ import annotations
 
-from lightcraft_opt.control.estimation.curvature import BEAM_OFFSET
+from lightcraft_opt.control.estimation.curvature import BEAM_OFFSET, PSI_CURVES
 from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter, Innovation
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
@@ -64,6 +65,7 @@ from lightcraft_opt.control.estimation.ukf import UkfOptions, UnscentedKalmanFil
 
 __all__ = [
     "BEAM_OFFSET",
+    "PSI_CURVES",
     "SLOW_STATES",
     "CameraKind",
     "CameraOptions",

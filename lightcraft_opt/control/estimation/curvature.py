@@ -6,16 +6,20 @@ beam's axis, so the true craft, off the axis by the estimate's error, captures l
 f(ŝ) says, and a filter that leaves this out puts the missing kick into the coupling
 (docs/estimation.md#the-second-order-filter). The truncated second-order filter (Gelb,
 *Applied Optimal Estimation*, 1974, section 6.1; docs/references.md#gelb) adds f's
-second-order terms for s ~ N(ŝ, P)::
+second-order terms for s ~ N(ŝ, P) over the entries d it is told (the directions where f
+curves), in the columns l_j of L (L Lᵀ = P_dd)::
 
-    E[f(s)] ≈ f(ŝ) + ½ Σ_j l_jᵀ ∇²f l_j,         L Lᵀ = P_dd,  l_j its j-th column
+    E[f(s)] ≈ f(ŝ) + ½ Σ_j l_jᵀ ∇²f l_j,
+    Cov[f(s)] ≈ F P Fᵀ + ½ Σ_j Σ_k b_jk b_jkᵀ,   b_jk = l_jᵀ ∇²f l_k  (one entry per output)
 
-over the entries d it is told (the directions where f curves), each term by the central
-second difference f(ŝ + l_j) + f(ŝ - l_j) - 2 f(ŝ) (exact for a quadratic f; Nørgaard,
-Poulsen and Ravn's divided differences, with the points one standard deviation out), and
-to the covariance the spread of those quadratic terms, 2 Σ_j d_j d_jᵀ with d_j = ½ l_jᵀ ∇²f
-l_j (their pairs j ≠ k left out: exact for a single direction, or where ∇²f is diagonal in
-L's columns). 2 |d| evaluations of f, in one call where the model has ``predict_many``.
+(Isserlis: exact for a quadratic f). The terms come from f at points one standard deviation
+out (Nørgaard, Poulsen and Ravn's divided differences): b_jj = f(ŝ + l_j) + f(ŝ - l_j) -
+2 f(ŝ), and for each pair j < k, 2 b_jk = f(ŝ + l_j + l_k) + f(ŝ - l_j - l_k) - f(ŝ ± l_j)
+- f(ŝ ± l_k) + 2 f(ŝ), all exact for a quadratic f and free of its odd terms. The pairs
+carry the products of two uncertain directions, which the diagonal terms miss: on Ψ the
+cone's turn in |H| (H_L times the coning offset) and the kick's in the offset (the beam
+pointed at the estimate), docs/estimation.md#the-second-order-filter. m entries cost m (m +
+1) evaluations of f, in one call where the model has ``predict_many``.
 """
 
 from __future__ import annotations
@@ -28,11 +32,18 @@ from lightcraft_opt.control.estimation.kalman import entries_named
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.errors import OptionError
 
-__all__ = ["BEAM_OFFSET", "checked_names", "curvature_entries", "second_order_terms"]
+__all__ = ["BEAM_OFFSET", "PSI_CURVES", "checked_names", "curvature_entries", "second_order_terms"]
 
 #: The offset in the beam (r_L east and north): where Ψ's capture peaks under a beam pointed
 #: at the estimate, the entries a closed-loop file's ``second_order = true`` names.
 BEAM_OFFSET = ("r_L[east]", "r_L[north]")
+
+#: Where Ψ curves across a tracked craft's prior: the offset in the beam, the angular
+#: momentum and the coning offset (the cone's turn goes as |H|), the wind and the coupling
+#: (the kick and the drag). Across these the EKF's and the MHE's NEES on flights of Ψ lie in
+#: their band (docs/estimation.md#the-second-order-filter); the estimated state must have
+#: the wind and the coupling among its slow entries.
+PSI_CURVES = (*BEAM_OFFSET, "H_L", "coning", "wind_L", "coupling")
 
 
 def checked_names(owner: str, names: object) -> None:
@@ -59,7 +70,7 @@ def curvature_entries(model: EstimationModel, wanted: Sequence[str], owner: str)
         chosen.update(hit)
     prepare = getattr(model, "prepare_many", None)
     if chosen and prepare is not None:
-        prepare(2 * len(chosen))
+        prepare(len(chosen) * (len(chosen) + 1))
     return tuple(sorted(chosen))
 
 
@@ -86,9 +97,12 @@ def second_order_terms(
         root = np.linalg.cholesky(P[np.ix_(idx, idx)])
     except np.linalg.LinAlgError:
         return np.zeros(n), np.zeros((n, n))
-    steps = np.zeros((len(idx), n))
+    m = len(idx)
+    steps = np.zeros((m, n))
     steps[:, idx] = root.T  # row j: the column l_j of L, in s
-    points = np.vstack([s + steps, s - steps])
+    j, k = np.triu_indices(m, 1)
+    pairs = steps[j] + steps[k]  # row: l_j + l_k, j < k
+    points = np.vstack([s + steps, s - steps, s + pairs, s - pairs])
     many = getattr(model, "predict_many", None)
     if many is not None:
         images = np.asarray(many(points, u, t), dtype=float)
@@ -96,6 +110,9 @@ def second_order_terms(
         images = np.array([model.predict(p, u, t)[0] for p in points])
     if not np.all(np.isfinite(images)):
         return np.zeros(n), np.zeros((n, n))
-    m = len(idx)
-    d = 0.5 * (images[:m] + images[m:] - 2.0 * f_s)  # row j: ½ l_jᵀ ∇²f l_j, each output
-    return d.sum(axis=0), 2.0 * d.T @ d
+    plus, minus = images[:m], images[m : 2 * m]
+    q = j.size
+    b_jj = plus + minus - 2.0 * f_s  # row j: l_jᵀ ∇²f l_j, each output
+    opposite = images[2 * m : 2 * m + q] + images[2 * m + q :]  # f(ŝ + l_j + l_k) + f(ŝ - ...)
+    b_jk = 0.5 * (opposite - b_jj[j] - b_jj[k] - 2.0 * f_s)  # row: l_jᵀ ∇²f l_k, j < k
+    return 0.5 * b_jj.sum(axis=0), 0.5 * b_jj.T @ b_jj + b_jk.T @ b_jk

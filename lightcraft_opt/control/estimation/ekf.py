@@ -61,10 +61,12 @@ class EkfOptions:
         is dropped (counted in ``ExtendedKalmanFilter.dropped``).
     second_order : entries of s (or slot names) across which the prediction keeps the
         model's curvature: its mean and covariance gain the second-order terms
-        (curvature.py), at 2 evaluations of the model per entry. Empty (the default): the
-        first-order EKF. ``("r_L[east]", "r_L[north]")``: the offset in the beam, where
-        the capture peaks under a beam pointed at the estimate (docs/estimation.md#the-
-        second-order-filter: the NEES on flights of Ψ 142.6 -> 23.6).
+        (curvature.py), at m (m + 1) evaluations of the model for m entries. Empty (the
+        default): the first-order EKF. ``curvature.BEAM_OFFSET``: the offset in the beam,
+        where the capture peaks under a beam pointed at the estimate;
+        ``curvature.PSI_CURVES``: every direction where Ψ curves across a tracked craft's
+        prior (docs/estimation.md#the-second-order-filter: on flights of Ψ the NEES is
+        142.6 first order, 23.6 across the offset, 17.85 across these; band 15.4-18.7).
     """
 
     prior: tuple[tuple[str, float], ...] = (

@@ -44,8 +44,8 @@ class MheOptions:
     second_order : entries of s (or slot names) across which each stage keeps the model's
         curvature, as the EKF's option of that name (curvature.py): a stage evaluated
         afresh gains the second-order terms over its node's filtered covariance, its f the
-        mean's and its noise the spread's, at 2 model evaluations an entry. Empty (the
-        default): Gauss-Newton on f alone.
+        mean's and its noise the spread's, at m (m + 1) model evaluations for m entries.
+        Empty (the default): Gauss-Newton on f alone.
     """
 
     horizon: int = 15
