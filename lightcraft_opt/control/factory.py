@@ -155,7 +155,8 @@ def build_estimator(
     ekf = EkfOptions()
     prior = ekf.prior + spec.prior_sigmas()  # later pairs override earlier ones
     scale = float(spec.options.get("noise_scale", ekf.noise_scale))
-    curved = BEAM_OFFSET if spec.options.get("second_order", False) else ()
+    chosen = spec.options.get("second_order", False)
+    curved = tuple(chosen) if isinstance(chosen, tuple) else BEAM_OFFSET if chosen else ()
     if spec.kind is EstimatorKind.EKF:
         options = EkfOptions(prior=prior, noise_scale=scale, second_order=curved)
         return ExtendedKalmanFilter(psi, options)

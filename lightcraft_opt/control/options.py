@@ -7,6 +7,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import Any
 
 from lightcraft_opt.errors import OptionError
 from lightcraft_opt.model import FocusSchedule
@@ -553,13 +554,14 @@ class EstimatorSpec:
         estimator's window ``horizon`` [pulses] (an integer in [1, 260]), its solver's
         ``max_iter`` (>= 1) and ``relinearize`` (stages evaluated afresh a pulse, in [1,
         the horizon]; the horizon: every stage; :class:`MheOptions`); the EKF's and the
-        moving-horizon estimator's ``second_order`` (True or False, default False: the
-        prediction keeps Ψ's curvature across the offset in the beam,
-        control/estimation/curvature.py's ``BEAM_OFFSET``).
+        moving-horizon estimator's ``second_order`` (default False; True: the prediction
+        keeps Ψ's curvature across the offset in the beam, control/estimation/curvature.py's
+        ``BEAM_OFFSET``; a tuple of entry or slot names of the estimated state: across
+        those, e.g. ``PSI_CURVES``, the consistent filter).
     """
 
     kind: EstimatorKind = EstimatorKind.TRUTH
-    options: Mapping[str, float] = field(default_factory=dict)
+    options: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         checked_choice("EstimatorSpec", "kind", self.kind, EstimatorKind)
@@ -581,8 +583,12 @@ class EstimatorSpec:
                     f"EstimatorSpec.{where} is an option of kind {takers}, not {self.kind.value!r}"
                 )
             if name == "second_order":
-                if not isinstance(value, bool):
-                    raise OptionError(f"EstimatorSpec.{where} must be true or false, got {value!r}")
+                named = isinstance(value, tuple) and all(isinstance(v, str) for v in value)
+                if not isinstance(value, bool) and not (named and value):
+                    raise OptionError(
+                        f"EstimatorSpec.{where} must be true, false or a tuple of entry names, "
+                        f"got {value!r}"
+                    )
             elif name in _COUNTS:
                 low, high = _COUNTS[name]
                 why = "10 s of pulses; the QP grows with the window and a pulse leaves 38 ms"

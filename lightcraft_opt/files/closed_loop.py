@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from lightcraft_opt.control.estimation.kalman import entries_named
+from lightcraft_opt.control.estimation.psi_model import estimated_names
 from lightcraft_opt.control.estimation.sensor_options import (
     CameraKind,
     CameraOptions,
@@ -153,7 +155,7 @@ _ESTIMATOR: dict[str, Spec] = {
     "horizon_pulses": INTEGER,
     "max_iter": INTEGER,
     "relinearize": INTEGER,
-    "second_order": _SWITCH,
+    "second_order": Spec("switch or names"),
 }
 #: ``[sensors.camera]``: CameraOptions field -> what the file holds (``lost_percent`` is
 #: lost_rate in percent). A stereo camera's noise is an angle (:data:`_STEREO_NOISE`).
@@ -521,6 +523,17 @@ def _estimator(src: str, raw: Any, plant: Any, sensed: bool) -> EstimatorSpec:
             f'with kind = "{kind.value}" the controller is told the estimate, and the '
             "sensors' noise applies ([sensors]): remove [plant.noise]",
         )
+    curved = options.get("second_order")
+    if isinstance(curved, tuple):
+        names = estimated_names()
+        for entry in curved:
+            if not entries_named(entry, names):
+                raise ProblemFileError(
+                    src,
+                    table.key("second_order"),
+                    f"{entry!r} names no entry of the estimated state; its entries are "
+                    f"{list(names)}",
+                )
     try:
         spec = EstimatorSpec(kind, options)
     except OptionError as err:

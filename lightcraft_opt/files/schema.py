@@ -118,7 +118,8 @@ NOT_SI = {u for units in QUANTITIES.values() for u, factor in units.items() if f
 class Spec:
     """What one dataclass field holds in a file.
 
-    ``kind``: a key of :data:`QUANTITIES`, or "dimensionless", "text", "switch", "choice".
+    ``kind``: a key of :data:`QUANTITIES`, or "dimensionless", "text", "switch", "choice",
+    "switch or names" (true, false or a list of strings: a tuple).
     ``shape``: "scalar", "integer" (a whole dimensionless number, written without a
     decimal point), "list" (of numbers) or "rows" (list of lists of numbers).
     """
@@ -258,7 +259,7 @@ def _spellings(field: str, schema: Mapping[str, Spec]) -> str:
 
 
 def parse_value(src: str, name: str, raw: Any, spec: Spec, unit: str | None) -> Any:
-    """One value converted to SI (numbers) or checked (text, switches, choices)."""
+    """One value converted to SI (numbers) or checked (text, switches, choices, names)."""
     if spec.kind == "text":
         if not isinstance(raw, str):
             raise ModelFileError(src, name, f"must be a string, got {raw!r}")
@@ -267,6 +268,14 @@ def parse_value(src: str, name: str, raw: Any, spec: Spec, unit: str | None) -> 
         if not isinstance(raw, bool):
             raise ModelFileError(src, name, f"must be true or false, got {raw!r}")
         return raw
+    if spec.kind == "switch or names":
+        if isinstance(raw, bool):
+            return raw
+        if isinstance(raw, list) and raw and all(isinstance(v, str) for v in raw):
+            return tuple(raw)
+        raise ModelFileError(
+            src, name, f"must be true, false or a list of names (strings), got {raw!r}"
+        )
     if spec.kind == "choice":
         assert spec.choices is not None
         allowed = [c.value for c in spec.choices]

@@ -22,7 +22,12 @@ from support.paths import REPO_ROOT
 
 from lightcraft_opt.control.closed_loop import closed_loop
 from lightcraft_opt.control.controllers import OpenLoopController
-from lightcraft_opt.control.estimation import CameraOptions, GyroOptions, SensorOptions
+from lightcraft_opt.control.estimation import (
+    PSI_CURVES,
+    CameraOptions,
+    GyroOptions,
+    SensorOptions,
+)
 from lightcraft_opt.control.options import EstimatorKind, EstimatorSpec, MeasurementNoise
 from lightcraft_opt.control.result import ClosedLoopResult, EstimationLog
 from lightcraft_opt.errors import ProblemFileError
@@ -97,6 +102,9 @@ prior_wind_kmh = 3.6
     assert ukf == EstimatorSpec(EstimatorKind.UKF, {"noise_scale": 2.0})
     curved = _load(tmp_path, '[estimator]\nkind = "ekf"\nsecond_order = true\n')
     assert curved == EstimatorSpec(EstimatorKind.EKF, {"second_order": True})
+    listed = '["r_L[east]", "r_L[north]", "H_L", "coning", "wind_L", "coupling"]'
+    named = _load(tmp_path, f'[estimator]\nkind = "mhe"\nsecond_order = {listed}\n')
+    assert named == EstimatorSpec(EstimatorKind.MHE, {"second_order": PSI_CURVES})
 
 
 @pytest.mark.parametrize(
@@ -111,7 +119,14 @@ prior_wind_kmh = 3.6
         ('kind = "mhe"\nnoise_scale = 0.5', "estimator.noise_scale", r"kind 'ekf' or 'ukf', not"),
         ('kind = "ekf"\nnoise_scale = 0.0', "estimator.noise_scale", r"> 0"),
         ('kind = "ukf"\nsecond_order = true', "estimator.second_order", r"'ekf' or 'mhe', not"),
-        ('kind = "ekf"\nsecond_order = 1', "estimator.second_order", r"true or false"),
+        ('kind = "ekf"\nsecond_order = 1', "estimator.second_order", r"true, false or a list"),
+        ('kind = "ekf"\nsecond_order = []', "estimator.second_order", r"true, false or a list"),
+        ('kind = "ekf"\nsecond_order = ["H_L", 2]', "estimator.second_order", r"list of names"),
+        (
+            'kind = "ekf"\nsecond_order = ["r_L", "spin"]',
+            "estimator.second_order",
+            r"'spin' names no entry of the estimated state; its entries are \['r_L\[east\]'",
+        ),
         ("prior_wind_mps = 1.0", "estimator.prior_wind_mps", r"not 'truth'"),
         ('kind = "ekf"\ngain = 1.0', "estimator.gain", r"kind|unknown|not"),
         ('kind = "ekf"\nprior_position_kg = 1.0', "estimator.prior_position_kg", r"unit|mm"),

@@ -141,7 +141,8 @@ def unit_word(spec: Spec) -> str:
         return spec.kind
     if spec.shape == "integer":
         return "integer"
-    return {"text": "text", "switch": "true/false", "choice": "choice"}.get(spec.kind, "—")
+    words = {"text": "text", "switch": "true/false", "choice": "choice"}
+    return {**words, "switch or names": "true/false or names"}.get(spec.kind, "—")
 
 
 def parse_default(cell: str) -> Any:

@@ -45,7 +45,7 @@ covariance R; the model composes it with Ψ's ``lift`` and differentiates the co
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, fields
 
 import casadi as ca
@@ -71,7 +71,13 @@ from lightcraft_opt.model.checks import checked_number
 from lightcraft_opt.symbolic.maps.reduced_map import build_reduced_map
 from lightcraft_opt.symbolic.maps.reduced_map_derivatives import value_stage
 
-__all__ = ["SLOW_STATES", "ProcessNoise", "PsiEstimationModel", "estimation_model"]
+__all__ = [
+    "SLOW_STATES",
+    "ProcessNoise",
+    "PsiEstimationModel",
+    "estimated_names",
+    "estimation_model",
+]
 
 #: The slow states a model can carry, with the entries each adds to s.
 SLOW_STATES: dict[str, tuple[str, ...]] = {
@@ -93,6 +99,12 @@ _H = REDUCED_STATE.index("H_L")
 _CONE = REDUCED_STATE.index("coning")
 _CALM = 1e-9  # m/s: below this the wind's direction is undefined (module docstring)
 _NO_CHART = np.zeros((2, 2))  # the wind chart's stand-in without wind, or in calm air
+
+
+def estimated_names(slow: Iterable[str] = tuple(SLOW_STATES)) -> tuple[str, ...]:
+    """The entries of s, in order: Ψ's state's (``"r_L[east]"``, ...), then those of the
+    ``slow`` slots (keys of :data:`SLOW_STATES`, in the order given)."""
+    return tuple(entry_names(REDUCED_STATE)) + tuple(n for s in slow for n in SLOW_STATES[s])
 
 
 @dataclass(frozen=True)
@@ -232,9 +244,7 @@ class PsiEstimationModel:
         self._compiled = want
         self._values: ca.Function | None = None  # Ψ's value chain, for predict_many
         self._points: dict[int, Evaluator] = {}  # by the number of rows
-        self.names: tuple[str, ...] = tuple(entry_names(REDUCED_STATE)) + tuple(
-            n for s in self.slow for n in SLOW_STATES[s]
-        )
+        self.names: tuple[str, ...] = estimated_names(self.slow)
         self.n = len(self.names)
         self.state_size = _NZ
         self._wind = _NZ if "wind" in self.slow else None

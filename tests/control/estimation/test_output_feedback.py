@@ -447,6 +447,8 @@ def test_the_factory_builds_the_estimators_and_names_what_is_missing():
     for kind in (EstimatorKind.EKF, EstimatorKind.MHE):  # the curvature across the offset
         curved = build_estimator(EstimatorSpec(kind, {"second_order": True}), MODEL, suite)
         assert curved.options.second_order == BEAM_OFFSET == ("r_L[east]", "r_L[north]")
+        named = build_estimator(EstimatorSpec(kind, {"second_order": ("H_L",)}), MODEL, suite)
+        assert named.options.second_order == ("H_L",)
     for kind in (EstimatorKind.EKF, EstimatorKind.UKF, EstimatorKind.MHE):
         with pytest.raises(OptionError, match=r"build_estimator.sensors: .* needs a suite"):
             build_estimator(EstimatorSpec(kind), MODEL, None)
