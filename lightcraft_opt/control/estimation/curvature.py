@@ -17,9 +17,9 @@ out (Nørgaard, Poulsen and Ravn's divided differences): b_jj = f(ŝ + l_j) + f(
 2 f(ŝ), and for each pair j < k, 2 b_jk = f(ŝ + l_j + l_k) + f(ŝ - l_j - l_k) - f(ŝ ± l_j)
 - f(ŝ ± l_k) + 2 f(ŝ), all exact for a quadratic f and free of its odd terms. The pairs
 carry the products of two uncertain directions, which the diagonal terms miss: on Ψ the
-cone's turn in |H| (H_L times the coning offset) and the kick's in the offset (the beam
-pointed at the estimate), docs/estimation.md#the-second-order-filter. m entries cost m (m +
-1) evaluations of f, in one call where the model has ``predict_many``.
+cone's turn, which goes as |H| (H_L times the coning offset),
+docs/estimation.md#the-second-order-filter. m entries cost m (m + 1) evaluations of f, in
+one call where the model has ``predict_many``.
 """
 
 from __future__ import annotations
