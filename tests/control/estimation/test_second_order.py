@@ -134,10 +134,10 @@ def flight5() -> PsiEstimationModel:
 
 
 def _block_nees(model: PsiEstimationModel, make, runs: int, pulses: int) -> dict[str, float]:
-    """{block: NEES per entry of the block under its marginal covariance ("all": the NEES
-    over n)} averaged over
-    ``runs`` seeded flights of Ψ itself (prior draws, the noise Q describes, a 5 mm camera
-    at each node), each pulse pointed at the estimator's estimate."""
+    """{block: NEES per entry of the block under its marginal covariance; "all": every
+    entry, the NEES over n} averaged over ``runs`` seeded flights of Ψ itself (prior draws,
+    the noise Q describes, a 5 mm camera at each node), each pulse pointed at the
+    estimator's estimate."""
     x0 = initial_state(model.model, r_L=(0.0, 0.0, 2.0), v_L=(0.0, 0.0, 4.0))
     u0 = nominal_inputs(model.model, model.psi.inputs)
     sigma0 = EkfOptions().prior_sigmas(model.names)
