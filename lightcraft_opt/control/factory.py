@@ -156,7 +156,7 @@ def build_estimator(
     prior = ekf.prior + spec.prior_sigmas()  # later pairs override earlier ones
     scale = float(spec.options.get("noise_scale", ekf.noise_scale))
     chosen = spec.options.get("second_order", False)
-    curved = tuple(chosen) if isinstance(chosen, tuple) else BEAM_OFFSET if chosen else ()
+    curved = chosen if isinstance(chosen, tuple) else BEAM_OFFSET if chosen else ()
     if spec.kind is EstimatorKind.EKF:
         options = EkfOptions(prior=prior, noise_scale=scale, second_order=curved)
         return ExtendedKalmanFilter(psi, options)

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.control.estimation.kalman import entries_named
+from lightcraft_opt.control.estimation.curvature import entry_indices
 from lightcraft_opt.control.estimation.psi_model import estimated_names
 from lightcraft_opt.control.estimation.sensor_options import (
     CameraKind,
@@ -524,16 +524,11 @@ def _estimator(src: str, raw: Any, plant: Any, sensed: bool) -> EstimatorSpec:
             "sensors' noise applies ([sensors]): remove [plant.noise]",
         )
     curved = options.get("second_order")
-    if isinstance(curved, tuple):
-        names = estimated_names()
-        for entry in curved:
-            if not entries_named(entry, names):
-                raise ProblemFileError(
-                    src,
-                    table.key("second_order"),
-                    f"{entry!r} names no entry of the estimated state; its entries are "
-                    f"{list(names)}",
-                )
+    if isinstance(curved, tuple):  # the names the factory's estimator will match
+        try:
+            entry_indices(estimated_names(), curved, "EstimatorSpec.options[second_order]")
+        except OptionError as err:
+            raise ProblemFileError(src, table.key("second_order"), str(err)) from err
     try:
         spec = EstimatorSpec(kind, options)
     except OptionError as err:

@@ -141,8 +141,13 @@ def unit_word(spec: Spec) -> str:
         return spec.kind
     if spec.shape == "integer":
         return "integer"
-    words = {"text": "text", "switch": "true/false", "choice": "choice"}
-    return {**words, "switch or names": "true/false or names"}.get(spec.kind, "—")
+    words = {
+        "text": "text",
+        "switch": "true/false",
+        "choice": "choice",
+        "switch or names": "true/false or names",
+    }
+    return words.get(spec.kind, "—")
 
 
 def parse_default(cell: str) -> Any:

@@ -32,7 +32,14 @@ from lightcraft_opt.control.estimation.kalman import entries_named
 from lightcraft_opt.control.estimation.model import EstimationModel
 from lightcraft_opt.errors import OptionError
 
-__all__ = ["BEAM_OFFSET", "PSI_CURVES", "checked_names", "curvature_entries", "second_order_terms"]
+__all__ = [
+    "BEAM_OFFSET",
+    "PSI_CURVES",
+    "checked_names",
+    "curvature_entries",
+    "entry_indices",
+    "second_order_terms",
+]
 
 #: The offset in the beam (r_L east and north): where Ψ's capture peaks under a beam pointed
 #: at the estimate, the entries a closed-loop file's ``second_order = true`` names.
@@ -53,25 +60,30 @@ def checked_names(owner: str, names: object) -> None:
         raise OptionError(f"{owner} must be a tuple of entry or slot names, got {names!r}")
 
 
-def curvature_entries(model: EstimationModel, wanted: Sequence[str], owner: str) -> tuple[int, ...]:
-    """The indices in s (``model.names``) of the entries ``wanted`` names, each an entry
+def entry_indices(names: Sequence[str], wanted: Sequence[str], owner: str) -> tuple[int, ...]:
+    """The indices in s (entries ``names``) of the entries ``wanted`` names, each an entry
     (``"r_L[east]"``) or a slot (``"r_L"``: all its axes), in s's order; OptionError naming
-    ``owner`` (e.g. ``"EkfOptions.second_order"``) for a name that matches no entry. With
-    entries, the model's ``prepare_many`` (if it has one) builds the points' call now, not
-    in the first step's time."""
+    ``owner`` (e.g. ``"EkfOptions.second_order"``) for a name that matches no entry."""
     chosen: set[int] = set()
     for key in wanted:
-        hit = entries_named(key, model.names)
+        hit = entries_named(key, names)
         if not hit:
             raise OptionError(
                 f"{owner}: {key!r} names no entry of the estimated state; its entries are "
-                f"{list(model.names)}"
+                f"{list(names)}"
             )
         chosen.update(hit)
+    return tuple(sorted(chosen))
+
+
+def curvature_entries(model: EstimationModel, wanted: Sequence[str], owner: str) -> tuple[int, ...]:
+    """:func:`entry_indices` in ``model.names``; with entries, the model's ``prepare_many``
+    (if it has one) builds the points' call now, not in the first step's time."""
+    chosen = entry_indices(model.names, wanted, owner)
     prepare = getattr(model, "prepare_many", None)
     if chosen and prepare is not None:
         prepare(len(chosen) * (len(chosen) + 1))
-    return tuple(sorted(chosen))
+    return chosen
 
 
 def second_order_terms(
