@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +29,7 @@ from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables
-from lightcraft_opt.files.problem import as_problem_file_errors
+from lightcraft_opt.files.problem import as_problem_file_errors, merge_model_tables
 from lightcraft_opt.files.problem_tables import Table, read_table
 from lightcraft_opt.files.schema import NUMBER, QUANTITIES, TEXT, Spec, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
@@ -59,21 +60,34 @@ _FORMER = {"offset_east": "launch_offset_x", "offset_north": "launch_offset_y"}
 _DISTRIBUTIONS = ("normal", "uniform")
 
 
-def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaign:
+def load_campaign(
+    path: str | Path,
+    *,
+    duration: float | None = None,
+    model_overrides: Mapping[str, Any] | None = None,
+) -> Campaign:
     """Read a campaign file (docs/files/campaign.md) and the model file it names.
 
     Parameters
     ----------
     path : the file.
     duration : replaces the file's ``duration`` [s] of each flight.
+    model_overrides : tables merged into the file's ``[model_overrides]``, keyed as in a
+        file, units in the keys: ``{"craft": {"spin_rpm": 8200.0}}`` flies the campaign at
+        another launch spin (a key replaces the file's key for the same field in any unit).
+        The dispersions are drawn about the overridden values.
 
     Raises
     ------
-    ProblemFileError naming the file and the key as written.
+    ProblemFileError naming the file and the key as written (an override's key as if it
+    were written in the file's ``[model_overrides]``).
     """
     file = Path(path)
     with as_problem_file_errors():
         src, data = schema.read_toml(file)
+        if model_overrides is not None:
+            written = data.get("model_overrides")
+            data["model_overrides"] = _with_overrides(src, written, model_overrides)
         raw_campaign = data.pop("campaign", {})
         raw_dispersions = data.pop("dispersions", {})
         plant = data.get("plant", {})
@@ -111,6 +125,17 @@ def load_campaign(path: str | Path, *, duration: float | None = None) -> Campaig
             estimator=problem.estimator,
             sensors=problem.sensors,
         )
+
+
+def _with_overrides(src: str, written: Any, extra: Mapping[str, Any]) -> dict[str, Any]:
+    """The file's ``[model_overrides]`` table with ``extra`` merged in."""
+    if written is not None and not isinstance(written, dict):
+        raise ProblemFileError(src, "model_overrides", f"must be a table, got {written!r}")
+    if not isinstance(extra, Mapping):
+        raise ParameterError(
+            "model_overrides", f"must be a mapping of model-file tables, got {extra!r}"
+        )
+    return dict(merge_model_tables(written or {}, extra))
 
 
 def _nominal(problem: ClosedLoopProblem) -> dict[str, float]:

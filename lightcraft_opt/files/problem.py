@@ -198,7 +198,7 @@ class ProblemFile:
         if self.model_file is None:
             raise ParameterError("model_file", "this problem was not read from a file")
         _, data = schema.read_toml(self.model_file)
-        return dict(_merge(data, self.model_overrides))
+        return dict(merge_model_tables(data, self.model_overrides))
 
     def initial_guess(self) -> np.ndarray | None:
         """(N, map-input size) inputs to roll out as the initial guess: the problem's
@@ -362,7 +362,7 @@ def model_with_overrides(src: str, file: Path, name: str, overrides: Any) -> Mod
     target = Path(os.path.normpath(file.parent / name))
     try:
         model_src, data = schema.read_toml(target)
-        return mf.model_from_tables(model_src, target, _merge(data, overrides or {}))
+        return mf.model_from_tables(model_src, target, merge_model_tables(data, overrides or {}))
     except ModelFileError as err:
         written = _override_key(err.field, overrides or {}) if err.path == str(target) else None
         if written is not None:
@@ -370,14 +370,17 @@ def model_with_overrides(src: str, file: Path, name: str, overrides: Any) -> Mod
         raise ProblemFileError(src, "model", str(err)) from err
 
 
-def _merge(base: Mapping[str, Any], over: Mapping[str, Any], at: tuple[str, ...] = ()) -> Any:
-    """``base`` with ``over`` merged in, table by table; a key replaces the base's keys for
-    the same field in any unit (``speed_ref_kmh`` replaces ``speed_ref_mps``)."""
+def merge_model_tables(
+    base: Mapping[str, Any], over: Mapping[str, Any], at: tuple[str, ...] = ()
+) -> Any:
+    """``base`` (a model file's tables, or a ``[model_overrides]`` table) with ``over``
+    merged in, table by table; a key replaces the base's keys for the same field in any unit
+    (``speed_ref_kmh`` replaces ``speed_ref_mps``)."""
     out = dict(base)
     schema = mf.SCHEMA.get(_MODEL_TABLES.get(at, ""))
     for key, value in over.items():
         if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value, (*at, key))
+            out[key] = merge_model_tables(out[key], value, (*at, key))
             continue
         field = _model_field(key, schema) if schema else None
         for old in [k for k in out if field and k != key and _model_field(k, schema) == field]:

@@ -23,7 +23,7 @@ from lightcraft_opt.campaign.dispersions import (
     loop_seed,
 )
 from lightcraft_opt.control.options import ControllerKind
-from lightcraft_opt.errors import OptionError, ProblemFileError
+from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files.campaign import load_campaign
 
 ROOT = REPO_ROOT
@@ -253,3 +253,57 @@ def test_the_former_campaign_controller_says_where_it_went(tmp_path):
         'controller = "director" at the top of the file, before the first table (as in a '
         "closed-loop file)"
     )
+
+
+# --------------------------------------------------------------------------- model overrides
+DESIGN = ROOT / "problems" / "montecarlo_design.toml"
+RPM = 2 * math.pi / 60
+
+
+def _design_with_craft_table(tmp_path, craft_table: str):
+    """montecarlo_design.toml written again with a [model_overrides.craft] table."""
+    text = DESIGN.read_text(encoding="utf-8")
+    model = (ROOT / "models" / "flight5.toml").as_posix()
+    text = text.replace('model = "../models/flight5.toml"', f'model = "{model}"', 1)
+    laser = (ROOT / "models" / "plvts-waist.toml").as_posix()
+    text = text.replace('laser = "plvts-waist.toml"', f'laser = "{laser}"', 1)
+    wind = "[model_overrides.environment.wind]"
+    text = text.replace(wind, f"[model_overrides.craft]\n{craft_table}\n\n{wind}", 1)
+    path = tmp_path / "design.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_model_overrides_fly_the_campaign_a_table_would(tmp_path):
+    from lightcraft_opt.campaign.runner import campaign_fingerprint
+
+    craft = {"inertia_transverse_g_cm2": 400.0, "spin_rpm": 8200.0}
+    given = load_campaign(DESIGN, duration=0.5, model_overrides={"craft": craft})
+    path = _design_with_craft_table(tmp_path, "inertia_transverse_g_cm2 = 400.0\nspin_rpm = 8200.0")
+    written = load_campaign(path, duration=0.5)
+    assert campaign_fingerprint(given, 7) == campaign_fingerprint(written, 7)
+    assert given.model.craft.spin == pytest.approx(8200 * RPM, rel=1e-15)
+    assert given.model.craft.inertia_transverse == pytest.approx(4.0e-5, rel=1e-15)
+    # the file's own overrides stay: its waist laser and its crosswind
+    plain = load_campaign(DESIGN, duration=0.5)
+    assert given.model.laser == plain.model.laser
+    assert given.model.environment == plain.model.environment
+    # the dispersions are drawn about the overridden moment (1 % relative in the file)
+    dist = dict(given.dispersions.items)["inertia_transverse"]
+    assert dist.mean == pytest.approx(4.0e-5, rel=1e-12)
+    assert dist.sigma == pytest.approx(4.0e-7, rel=1e-12)
+
+
+def test_a_model_override_replaces_the_file_s_key_in_any_unit(tmp_path):
+    path = _design_with_craft_table(tmp_path, "spin_rpm = 8200.0")
+    c = load_campaign(path, duration=0.5, model_overrides={"craft": {"spin_rad_per_s": 900.0}})
+    assert c.model.craft.spin == 900.0
+
+
+def test_a_bad_model_override_is_named(tmp_path):
+    with pytest.raises(ProblemFileError) as err:
+        load_campaign(DESIGN, model_overrides={"craft": {"spin_rmp": 8200.0}})
+    assert err.value.field == "model_overrides.craft.spin_rmp", str(err.value)
+    with pytest.raises(ParameterError) as err:
+        load_campaign(DESIGN, model_overrides=[("craft", {})])  # type: ignore[arg-type]
+    assert err.value.field == "model_overrides"
