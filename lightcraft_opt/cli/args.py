@@ -12,8 +12,10 @@ from __future__ import annotations
 import argparse
 import math
 import tempfile
-from collections.abc import Callable
+import tomllib
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -21,7 +23,9 @@ from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 __all__ = [
     "finite",
     "integer",
+    "model_override",
     "name_value",
+    "nested_overrides",
     "output_folder",
     "real",
     "substeps",
@@ -125,6 +129,48 @@ def name_value(text: str) -> tuple[str, float]:
     except argparse.ArgumentTypeError as err:
         raise argparse.ArgumentTypeError(f"{name.strip()}: {err}") from None
     return name.strip(), v
+
+
+def model_override(text: str) -> tuple[tuple[str, ...], Any]:
+    """``TABLE.KEY=VALUE``, a key of a model file's tables with its unit and a TOML value,
+    e.g. ``craft.spin_rpm=8200`` -> (("craft", "spin_rpm"), 8200)."""
+    key, eq, value = text.partition("=")
+    path = tuple(part.strip() for part in key.split("."))
+    if not eq or len(path) < 2 or not all(path) or not value.strip():
+        raise argparse.ArgumentTypeError(
+            f"needs TABLE.KEY=VALUE with the unit in the key, e.g. craft.spin_rpm=8200; "
+            f"got {text!r}"
+        )
+    try:
+        parsed = tomllib.loads(f"v = {value.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        raise argparse.ArgumentTypeError(
+            f'{key.strip()}: {value.strip()!r} is not a TOML value (a number, "text" or true/false)'
+        ) from None
+    return path, parsed
+
+
+def nested_overrides(
+    items: Sequence[tuple[tuple[str, ...], Any]], flag: str = "--model-override"
+) -> dict[str, Any]:
+    """:func:`model_override` pairs as nested tables, the last of a repeated key kept.
+
+    Raises
+    ------
+    ParameterError naming ``flag`` where a key is both a value and a table.
+    """
+    out: dict[str, Any] = {}
+    for path, value in items:
+        table = out
+        for i, part in enumerate(path[:-1]):
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                where = ".".join(path[: i + 1])
+                raise ParameterError(flag, f"{where} is given a value and keys below it")
+        if isinstance(table.get(path[-1]), dict):
+            raise ParameterError(flag, f"{'.'.join(path)} is given a value and keys below it")
+        table[path[-1]] = value
+    return out
 
 
 def output_folder(path: str | Path, flag: str = "--out") -> Path:

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from lightcraft_opt.campaign.runner import run_campaign
-from lightcraft_opt.cli.args import integer, output_folder
+from lightcraft_opt.cli.args import integer, model_override, nested_overrides, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import DURATION, RUNS, SEED
 from lightcraft_opt.files.campaign import load_campaign
@@ -17,7 +17,8 @@ def run(args: argparse.Namespace) -> int:
 
     source = Path(args.problem)
     check_kind(source, "montecarlo")
-    campaign = load_campaign(source, duration=args.duration)
+    overrides = nested_overrides(args.model_override) if args.model_override else None
+    campaign = load_campaign(source, duration=args.duration, model_overrides=overrides)
     out = output_folder(args.out or Path("runs") / f"{source.stem}-seed{args.seed}")
     where = f"Dask at {args.scheduler}" if args.scheduler else "local processes"
     print(
@@ -80,6 +81,16 @@ def add(sub: argparse._SubParsersAction) -> None:
     )
     mc.add_argument(
         "--duration", type=DURATION, default=None, help="seconds per flight instead of the file's"
+    )
+    mc.add_argument(
+        "--model-override",
+        type=model_override,
+        action="append",
+        default=None,
+        metavar="TABLE.KEY=VALUE",
+        help="a model-file key merged into the file's [model_overrides], the unit in the key "
+        "(repeatable), e.g. --model-override craft.spin_rpm=8200; the dispersions are drawn "
+        "about it. Use another --out than the file's own campaign's",
     )
     mc.add_argument("--quiet", action="store_true", help="no progress line")
     mc.set_defaults(run=run)

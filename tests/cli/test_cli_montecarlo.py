@@ -68,3 +68,45 @@ def test_cli_bad_campaign_file_exits_2(tmp_path, capsys):
     assert main(["montecarlo", str(bad), "--runs", "2", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "dispersions.dropout_rate.distribution" in err and "unknown distribution" in err
+
+
+DESIGN = ROOT / "problems" / "montecarlo_design.toml"
+
+
+def test_model_overrides_from_the_command_line(tmp_path, capsys):
+    from lightcraft_opt.campaign.runner import campaign_fingerprint
+
+    out = tmp_path / "spun"
+    argv = ["montecarlo", str(DESIGN), "--runs", "1", "--seed", "3", "--out", str(out),
+            "--duration", "0.2", "--workers", "1", "--quiet",
+            "--model-override", "craft.spin_rpm=9000", "--model-override", "craft.spin_rpm=8200",
+            "--model-override", "craft.inertia_transverse_g_cm2=400"]  # fmt: skip
+    assert main(argv) == 0
+    craft = {"spin_rpm": 8200, "inertia_transverse_g_cm2": 400}  # the last of a repeated key
+    campaign = load_campaign(DESIGN, duration=0.2, model_overrides={"craft": craft})
+    manifest = json.loads((out / "campaign.json").read_text())
+    assert manifest["fingerprint"] == campaign_fingerprint(campaign, 3)
+    assert manifest["fingerprint"] != campaign_fingerprint(load_campaign(DESIGN, duration=0.2), 3)
+    # a key the model files do not have exits 2 naming it, no traceback
+    capsys.readouterr()
+    bad = [*argv[:7], str(tmp_path / "bad"), "--model-override", "craft.spin_rmp=8200"]
+    assert main(bad) == 2
+    err = capsys.readouterr().err
+    assert "model_overrides.craft.spin_rmp" in err and "Traceback" not in err
+
+
+def test_an_override_that_is_a_value_and_a_table_is_refused():
+    import pytest
+
+    from lightcraft_opt.cli.args import model_override, nested_overrides
+    from lightcraft_opt.errors import ParameterError
+
+    pairs = [model_override("craft.engine=1"), model_override("craft.engine.shadow_radius_mm=7")]
+    with pytest.raises(ParameterError) as err:
+        nested_overrides(pairs)
+    assert err.value.field == "--model-override" and "craft.engine" in str(err.value)
+    with pytest.raises(ParameterError):
+        nested_overrides(pairs[::-1])
+    assert nested_overrides([model_override("craft.engine.shadow_radius_mm = 7.5")]) == {
+        "craft": {"engine": {"shadow_radius_mm": 7.5}}
+    }
