@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lightcraft_opt.cli.args import output_folder
+from lightcraft_opt.cli.args import model_override, nested_overrides, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import ANIMATE_HELP, BUDGET_MS, DURATION
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
@@ -46,7 +46,8 @@ def run(args: argparse.Namespace) -> int:
     each, plus an overlay (compare.png) in the parent --out when there are several."""
     check_kind(args.problem, "closed-loop")
     source = Path(args.problem)
-    problem = load_closed_loop(source, duration=args.duration)
+    overrides = nested_overrides(args.model_override) if args.model_override else None
+    problem = load_closed_loop(source, duration=args.duration, model_overrides=overrides)
     if args.deterministic or args.time_budget_ms is not None:
         budget = None if args.deterministic else args.time_budget_ms * 1e-3
         problem = dataclasses.replace(
@@ -187,6 +188,15 @@ def add(sub: argparse._SubParsersAction) -> None:
     )
     loop.add_argument(
         "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"
+    )
+    loop.add_argument(
+        "--model-override",
+        type=model_override,
+        action="append",
+        default=None,
+        metavar="TABLE.KEY=VALUE",
+        help="a model-file key merged into the file's [model_overrides], the unit in the key "
+        "(repeatable), e.g. --model-override craft.spin_rpm=8200",
     )
     loop.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     budget = loop.add_mutually_exclusive_group()

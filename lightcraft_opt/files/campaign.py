@@ -29,7 +29,7 @@ from lightcraft_opt.control.options import ControllerKind
 from lightcraft_opt.errors import OptionError, ParameterError, ProblemFileError
 from lightcraft_opt.files import schema
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem, closed_loop_from_tables
-from lightcraft_opt.files.problem import as_problem_file_errors, merge_model_tables
+from lightcraft_opt.files.problem import as_problem_file_errors, with_model_overrides
 from lightcraft_opt.files.problem_tables import Table, read_table
 from lightcraft_opt.files.schema import NUMBER, QUANTITIES, TEXT, Spec, quantity
 from lightcraft_opt.layout import PARAMETERS, parameter_values
@@ -85,9 +85,7 @@ def load_campaign(
     file = Path(path)
     with as_problem_file_errors():
         src, data = schema.read_toml(file)
-        if model_overrides is not None:
-            written = data.get("model_overrides")
-            data["model_overrides"] = _with_overrides(src, written, model_overrides)
+        data = with_model_overrides(src, data, model_overrides)
         raw_campaign = data.pop("campaign", {})
         raw_dispersions = data.pop("dispersions", {})
         plant = data.get("plant", {})
@@ -125,17 +123,6 @@ def load_campaign(
             estimator=problem.estimator,
             sensors=problem.sensors,
         )
-
-
-def _with_overrides(src: str, written: Any, extra: Mapping[str, Any]) -> dict[str, Any]:
-    """The file's ``[model_overrides]`` table with ``extra`` merged in."""
-    if written is not None and not isinstance(written, dict):
-        raise ProblemFileError(src, "model_overrides", f"must be a table, got {written!r}")
-    if not isinstance(extra, Mapping):
-        raise ParameterError(
-            "model_overrides", f"must be a mapping of model-file tables, got {extra!r}"
-        )
-    return dict(merge_model_tables(written or {}, extra))
 
 
 def _nominal(problem: ClosedLoopProblem) -> dict[str, float]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -53,6 +54,7 @@ from lightcraft_opt.files.problem import (
     as_problem_file_errors,
     initial_state_from_table,
     model_with_overrides,
+    with_model_overrides,
 )
 from lightcraft_opt.files.problem_tables import NUMBERS, Table, read_table
 from lightcraft_opt.files.schema import INTEGER, NUMBER, TEXT, Spec, choice, quantity
@@ -242,13 +244,21 @@ class ClosedLoopProblem:
     estimator: EstimatorSpec = dataclasses.field(default_factory=EstimatorSpec)
 
 
-def load_closed_loop(path: str | Path, *, duration: float | None = None) -> ClosedLoopProblem:
+def load_closed_loop(
+    path: str | Path,
+    *,
+    duration: float | None = None,
+    model_overrides: Mapping[str, Any] | None = None,
+) -> ClosedLoopProblem:
     """Read a closed-loop file (docs/files/closed_loop.md) and the model file it names.
 
     Parameters
     ----------
     path : the file.
     duration : replaces the file's ``duration`` [s] (quick runs from the command line).
+    model_overrides : tables merged into the file's ``[model_overrides]``, keyed as in a
+        file, units in the keys: ``{"craft": {"spin_rpm": 8200.0}}`` (a key replaces the
+        file's key for the same field in any unit); a bad key is named as if written there.
 
     Raises
     ------
@@ -258,6 +268,7 @@ def load_closed_loop(path: str | Path, *, duration: float | None = None) -> Clos
     file = Path(path)
     with as_problem_file_errors():
         src, data = schema.read_toml(file)
+        data = with_model_overrides(src, data, model_overrides)
         return closed_loop_from_tables(src, file, data, duration)
 
 

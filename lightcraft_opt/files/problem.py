@@ -389,6 +389,30 @@ def merge_model_tables(
     return out
 
 
+def with_model_overrides(
+    src: str, data: dict[str, Any], extra: Mapping[str, Any] | None
+) -> dict[str, Any]:
+    """A problem file's tables ``data`` with ``extra`` (model-file tables, units in the keys)
+    merged into its ``[model_overrides]`` (:func:`merge_model_tables`); ``data`` itself when
+    ``extra`` is None.
+
+    Raises
+    ------
+    ProblemFileError : the file's ``model_overrides`` is not a table.
+    ParameterError : ``extra`` is not a mapping.
+    """
+    if extra is None:
+        return data
+    written = data.get("model_overrides")
+    if written is not None and not isinstance(written, dict):
+        raise ProblemFileError(src, "model_overrides", f"must be a table, got {written!r}")
+    if not isinstance(extra, Mapping):
+        raise ParameterError(
+            "model_overrides", f"must be a mapping of model-file tables, got {extra!r}"
+        )
+    return {**data, "model_overrides": dict(merge_model_tables(written or {}, extra))}
+
+
 def _model_field(key: str, schema: Any) -> str | None:
     """The model-file field ``key`` stands for (``speed_ref_mps`` -> ``speed_ref``)."""
     if key in schema:

@@ -406,3 +406,31 @@ def test_the_flag_overrides_the_files_controller(tmp_path, monkeypatch):
     out = tmp_path / "runs" / "director_crosswind-none"
     summary = json.loads((out / "summary.json").read_text())
     assert summary["controller"] == "none" and summary["steps_by_status"] == {"open_loop": 3}
+
+
+DIRECTOR = PROBLEMS / "director_crosswind.toml"
+
+
+def test_model_overrides_set_the_craft_a_closed_loop_flies(tmp_path, capsys):
+    rpm = 2 * math.pi / 60
+    plain = load_closed_loop(DIRECTOR)
+    spun = load_closed_loop(DIRECTOR, model_overrides={"craft": {"spin_rpm": 8200.0}})
+    assert spun.model.craft.spin == pytest.approx(8200 * rpm, rel=1e-15)
+    assert spun.x0[STATE.index("spin")][0] == pytest.approx(8200 * rpm, rel=1e-15)
+    # everything else as the file: its laser, wind, mass and the director's settings
+    assert spun.model.laser == plain.model.laser
+    assert spun.model.environment == plain.model.environment
+    assert spun.model.craft.mass == plain.model.craft.mass
+    assert spun.director == plain.director
+    # from the command line, and a key the model files do not have named (exit 2)
+    out = tmp_path / "spun"
+    argv = ["closed-loop", str(DIRECTOR), "--duration", "0.1", "--out", str(out),
+            "--model-override", "craft.spin_rpm=8200"]  # fmt: skip
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "duration_reached"
+    capsys.readouterr()
+    bad = [*argv[:-1], "craft.spin_rmp=8200"]
+    assert main(bad) == 2
+    err = capsys.readouterr().err
+    assert "model_overrides.craft.spin_rmp" in err and "Traceback" not in err
