@@ -21,6 +21,7 @@ from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
 
 __all__ = [
+    "add_model_override",
     "finite",
     "integer",
     "model_override",
@@ -171,6 +172,21 @@ def nested_overrides(
             raise ParameterError(flag, f"{'.'.join(path)} is given a value and keys below it")
         table[path[-1]] = value
     return out
+
+
+def add_model_override(parser: argparse.ArgumentParser, note: str = "") -> None:
+    """Add ``--model-override TABLE.KEY=VALUE`` (repeatable; :func:`model_override`, the
+    command's ``args.model_override``: a list of pairs for :func:`nested_overrides`, or
+    None) to ``parser``; ``note`` ends its help."""
+    parser.add_argument(
+        "--model-override",
+        type=model_override,
+        action="append",
+        default=None,
+        metavar="TABLE.KEY=VALUE",
+        help="a model-file key merged into the file's [model_overrides], the unit in the key "
+        f"(repeatable), e.g. --model-override craft.spin_rpm=8200{note}",
+    )
 
 
 def output_folder(path: str | Path, flag: str = "--out") -> Path:

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lightcraft_opt.cli.args import model_override, nested_overrides, output_folder
+from lightcraft_opt.cli.args import add_model_override, nested_overrides, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import ANIMATE_HELP, BUDGET_MS, DURATION
 from lightcraft_opt.control.closed_loop import closed_loop, plant_options
@@ -189,15 +189,7 @@ def add(sub: argparse._SubParsersAction) -> None:
     loop.add_argument(
         "--duration", type=DURATION, default=None, help="seconds instead of the file's duration"
     )
-    loop.add_argument(
-        "--model-override",
-        type=model_override,
-        action="append",
-        default=None,
-        metavar="TABLE.KEY=VALUE",
-        help="a model-file key merged into the file's [model_overrides], the unit in the key "
-        "(repeatable), e.g. --model-override craft.spin_rpm=8200",
-    )
+    add_model_override(loop)
     loop.add_argument("--animate", action="store_true", help=ANIMATE_HELP)
     budget = loop.add_mutually_exclusive_group()
     budget.add_argument(

@@ -7,7 +7,7 @@ import math
 from pathlib import Path
 
 from lightcraft_opt.campaign.runner import run_campaign
-from lightcraft_opt.cli.args import integer, model_override, nested_overrides, output_folder
+from lightcraft_opt.cli.args import add_model_override, integer, nested_overrides, output_folder
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.cli.flags import DURATION, RUNS, SEED
 from lightcraft_opt.files.campaign import load_campaign
@@ -82,15 +82,8 @@ def add(sub: argparse._SubParsersAction) -> None:
     mc.add_argument(
         "--duration", type=DURATION, default=None, help="seconds per flight instead of the file's"
     )
-    mc.add_argument(
-        "--model-override",
-        type=model_override,
-        action="append",
-        default=None,
-        metavar="TABLE.KEY=VALUE",
-        help="a model-file key merged into the file's [model_overrides], the unit in the key "
-        "(repeatable), e.g. --model-override craft.spin_rpm=8200; the dispersions are drawn "
-        "about it. Use another --out than the file's own campaign's",
+    add_model_override(
+        mc, "; the dispersions are drawn about it. Use another --out than the file's campaign's"
     )
     mc.add_argument("--quiet", action="store_true", help="no progress line")
     mc.set_defaults(run=run)
