@@ -83,7 +83,7 @@ def coning_turns(moment: float, rpm: float, altitude: float = 10.0) -> float:
     """Coning turns J ω / (2π I f) between two pulses at ``altitude`` [m] of a 10 m/s
     climb, the launch spin decayed by the rotor's air friction (linearize.climb_spin)."""
     model = craft_model(moment)
-    spin = climb_spin(model, rpm * 2 * math.pi / 60, altitude, 10.0)
+    spin = climb_spin(model, rpm * RPM, altitude, 10.0)
     rate = model.craft.inertia_axial * spin / model.craft.inertia_transverse
     return rate / (2 * math.pi * model.flight.pulse_rate)
 

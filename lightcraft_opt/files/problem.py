@@ -357,14 +357,13 @@ def _guess_inputs(src: str, problem: OcpProblem, raw: Any) -> dict[str, tuple[fl
 
 def model_with_overrides(src: str, file: Path, name: str, overrides: Any) -> Model:
     """The model file ``name`` (relative to the problem file) with ``overrides`` merged in."""
-    if overrides is not None and not isinstance(overrides, dict):
-        raise ProblemFileError(src, "model_overrides", f"must be a table, got {overrides!r}")
+    overrides = _overrides_table(src, overrides)
     target = Path(os.path.normpath(file.parent / name))
     try:
         model_src, data = schema.read_toml(target)
-        return mf.model_from_tables(model_src, target, merge_model_tables(data, overrides or {}))
+        return mf.model_from_tables(model_src, target, merge_model_tables(data, overrides))
     except ModelFileError as err:
-        written = _override_key(err.field, overrides or {}) if err.path == str(target) else None
+        written = _override_key(err.field, overrides) if err.path == str(target) else None
         if written is not None:
             raise ProblemFileError(src, f"model_overrides.{written}", err.reason) from err
         raise ProblemFileError(src, "model", str(err)) from err
@@ -403,14 +402,22 @@ def with_model_overrides(
     """
     if extra is None:
         return data
-    written = data.get("model_overrides")
-    if written is not None and not isinstance(written, dict):
-        raise ProblemFileError(src, "model_overrides", f"must be a table, got {written!r}")
+    written = _overrides_table(src, data.get("model_overrides"))
     if not isinstance(extra, Mapping):
         raise ParameterError(
             "model_overrides", f"must be a mapping of model-file tables, got {extra!r}"
         )
-    return {**data, "model_overrides": dict(merge_model_tables(written or {}, extra))}
+    return {**data, "model_overrides": dict(merge_model_tables(written, extra))}
+
+
+def _overrides_table(src: str, raw: Any) -> dict[str, Any]:
+    """A problem file's ``[model_overrides]`` as read (absent: empty); ProblemFileError when
+    it is not a table."""
+    if raw is None:
+        return {}
+    if not isinstance(raw, dict):
+        raise ProblemFileError(src, "model_overrides", f"must be a table, got {raw!r}")
+    return raw
 
 
 def _model_field(key: str, schema: Any) -> str | None:

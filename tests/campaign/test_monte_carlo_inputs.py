@@ -307,3 +307,10 @@ def test_a_bad_model_override_is_named(tmp_path):
     with pytest.raises(ParameterError) as err:
         load_campaign(DESIGN, model_overrides=[("craft", {})])  # type: ignore[arg-type]
     assert err.value.field == "model_overrides"
+    # a file whose [model_overrides] is not a table is refused, with overrides or without
+    path = tmp_path / "flat.toml"
+    path.write_text(BASE + "model_overrides = 3\n")
+    for extra in (None, {"craft": {"spin_rpm": 8200.0}}):
+        with pytest.raises(ProblemFileError) as err:
+            load_campaign(path, model_overrides=extra)
+        assert err.value.field == "model_overrides" and "must be a table" in str(err.value)
