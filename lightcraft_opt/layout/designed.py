@@ -22,7 +22,7 @@ from lightcraft_opt.layout.defaults import parameter_values
 from lightcraft_opt.layout.vectors import PARAMETERS
 from lightcraft_opt.model import Model
 
-__all__ = ["DESIGNABLE", "LAUNCH_SPIN", "model_with_parameters"]
+__all__ = ["DESIGNABLE", "LAUNCH_SPIN", "POSITIVE_DESIGN", "model_with_parameters"]
 
 #: The launch state's spin (rotor relative to B) as a design entry [rad/s].
 LAUNCH_SPIN = "launch_spin"
@@ -39,6 +39,11 @@ DESIGNABLE: Mapping[str, tuple[str | None, str]] = {
     "impulse_per_pulse": (None, "N s"),
     LAUNCH_SPIN: (None, "rad/s"),
 }
+
+#: Design entries no body or beam has at zero or below (a mass, a moment, a Rayleigh
+#: range, an impulse, a spin-stabilised craft's launch spin): their lower bounds must be
+#: positive. The liner's offset and the carrier's position are signed.
+POSITIVE_DESIGN = frozenset(DESIGNABLE) - {"liner_offset", "carrier_position_B"}
 
 
 def check_designable(model: Model, name: str, component: int = 0) -> None:

@@ -20,7 +20,12 @@ import numpy as np
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import PARAMETERS, STATE, parameter_values
-from lightcraft_opt.layout.designed import DESIGNABLE, LAUNCH_SPIN, check_designable
+from lightcraft_opt.layout.designed import (
+    DESIGNABLE,
+    LAUNCH_SPIN,
+    POSITIVE_DESIGN,
+    check_designable,
+)
 from lightcraft_opt.model import Model
 from lightcraft_opt.model.checks import number
 
@@ -36,7 +41,7 @@ class DesignVariable:
     name : a PARAMETERS slot (``rotor_mass_dry``, ``carrier_position_B`` ...) or
         ``launch_spin``.
     lower, upper : bounds [the slot's SI unit: kg, kg m^2, m, N s, rad/s], finite,
-        lower < upper.
+        lower < upper; lower > 0 for the entries of :data:`POSITIVE_DESIGN`.
     component : entry of a vector slot, 0-based (``carrier_position_B``: 0 = along b1,
         frame B); 0 for a scalar.
     """
@@ -56,6 +61,11 @@ class DesignVariable:
         if not lo < hi:
             raise ParameterError(
                 f"design[{self.name}].lower", f"must be below upper ({lo:g} >= {hi:g})"
+            )
+        if self.name in POSITIVE_DESIGN and not lo > 0:
+            raise ParameterError(
+                f"design[{self.name}].lower",
+                f"must be positive ({self.name} is, for any craft or beam), got {lo:g}",
             )
 
     @property

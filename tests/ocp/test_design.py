@@ -115,7 +115,7 @@ def test_a_design_the_model_refuses_names_its_field():
     with pytest.raises(ParameterError, match="inertia"):  # J > 2 I: no rigid body
         model_with_parameters(flight5, {"rotor_axial_inertia_dry": 1e-3})
     with pytest.raises(ParameterError, match="carrier"):
-        DesignVariable("carrier_mass", 0.0, 0.01)  # valid alone ...
+        DesignVariable("carrier_mass", 0.001, 0.01)  # valid alone ...
         OcpProblem(
             flight5, 2, (LaserEnergy(),), design=(DesignVariable("carrier_mass", 0.001, 0.01),)
         )  # ... but Flight 5 has no carrier
@@ -123,6 +123,20 @@ def test_a_design_the_model_refuses_names_its_field():
         DesignVariable("rotor_mass_dry", 0.04, 0.03)
     with pytest.raises(ParameterError, match="cannot be designed"):
         DesignVariable("wind_speed_ref", 0.0, 1.0)
+
+
+@pytest.mark.parametrize(
+    "name", ["rotor_mass_dry", "carrier_mass", "beam_rayleigh_range", "launch_spin"]
+)
+def test_a_bound_at_or_below_zero_of_a_positive_entry_is_refused(name: str):
+    """A mass, a moment, a Rayleigh range, an impulse or a launch spin at zero or below is
+    no craft or beam: refused with the bound named. Signed entries keep negative bounds."""
+    for lower in (0.0, -0.01):
+        with pytest.raises(ParameterError, match="positive") as err:
+            DesignVariable(name, lower, 0.02)
+        assert err.value.field == f"design[{name}].lower"
+    assert DesignVariable("liner_offset", -0.01, 0.01).lower == -0.01
+    assert DesignVariable("carrier_position_B", -0.02, -0.01).upper == -0.01
 
 
 DESIGN_PROBLEM = """
@@ -202,6 +216,7 @@ def test_a_problem_files_design_is_solved_written_and_flown_again(tmp_path: Path
         ('parameter = "wind_speed_ref"\nlower_mps = 0.0\nupper_mps = 1.0', "parameter", "cannot"),
         ('parameter = "carrier_mass"\nlower_g = 1.0\nupper_g = 2.0', "parameter", "no carrier"),
         ('parameter = "rotor_mass_dry"\nlower_g = 40.0\nupper_g = 30.0', "lower_g", "below"),
+        ('parameter = "rotor_mass_dry"\nlower_g = 0.0\nupper_g = 30.0', "lower_g", "positive"),
         ('parameter = "rotor_mass_dry"\nlower_g = 30.0', "upper", "missing"),
         ('parameter = "launch_spin"\nlower_mps = 1.0\nupper_rpm = 2.0', "lower_mps", "unit"),
     ],
