@@ -39,8 +39,8 @@ is a plain vector (no quaternion), and the director already predicts with it.
 from __future__ import annotations
 
 from lightcraft_opt.control.estimation.curvature import BEAM_OFFSET, PSI_CURVES
-from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter, Innovation
-from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.ekf import EkfOptions, ExtendedKalmanFilter
+from lightcraft_opt.control.estimation.estimate import Estimate, Estimator, Innovation
 from lightcraft_opt.control.estimation.feedback import OutputFeedback, ReadingSource
 from lightcraft_opt.control.estimation.mhe import MovingHorizonEstimator
 from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats

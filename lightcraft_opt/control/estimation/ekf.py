@@ -25,7 +25,7 @@ from lightcraft_opt.control.estimation.curvature import (
     curvature_entries,
     second_order_terms,
 )
-from lightcraft_opt.control.estimation.estimate import Estimate
+from lightcraft_opt.control.estimation.estimate import Estimate, Innovation
 from lightcraft_opt.control.estimation.kalman import (
     joseph_function,
     joseph_update,
@@ -37,7 +37,7 @@ from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.errors import OptionError, ParameterError
 from lightcraft_opt.model.checks import checked_int, checked_number
 
-__all__ = ["EkfOptions", "ExtendedKalmanFilter", "Innovation"]
+__all__ = ["EkfOptions", "ExtendedKalmanFilter"]
 
 
 @dataclass(frozen=True)
@@ -100,21 +100,6 @@ class EkfOptions:
         """(len(names),) the prior standard deviation of each entry of s (a pair naming
         no entry of this model, such as the moments' on a model without them, is unused)."""
         return prior_sigmas(self.prior, names, self.prior_default)[0]
-
-
-@dataclass(frozen=True)
-class Innovation:
-    """One reading's innovation: ``nu`` (m,) = y - h(s⁻) and its covariance ``S`` (m, m)
-    = H P Hᵀ + R, at the step it arrived in (for the NIS νᵀ S⁻¹ ν ~ χ²(m))."""
-
-    reading: Reading
-    nu: np.ndarray
-    S: np.ndarray
-
-    @property
-    def nis(self) -> float:
-        """The normalised innovation squared νᵀ S⁻¹ ν [-]."""
-        return float(self.nu @ np.linalg.solve(self.S, self.nu))
 
 
 @dataclass

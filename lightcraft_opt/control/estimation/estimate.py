@@ -10,7 +10,7 @@ import numpy as np
 
 from lightcraft_opt.control.estimation.reading import Reading
 
-__all__ = ["Estimate", "Estimator"]
+__all__ = ["Estimate", "Estimator", "Innovation"]
 
 
 @dataclass(frozen=True)
@@ -35,6 +35,21 @@ class Estimate:
     covariance: np.ndarray
     slow: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class Innovation:
+    """One reading's innovation: ``nu`` (m,) = y - h(s⁻) and its covariance ``S`` (m, m)
+    = H P Hᵀ + R, at the step it arrived in (for the NIS νᵀ S⁻¹ ν ~ χ²(m))."""
+
+    reading: Reading
+    nu: np.ndarray
+    S: np.ndarray
+
+    @property
+    def nis(self) -> float:
+        """The normalised innovation squared νᵀ S⁻¹ ν [-]."""
+        return float(self.nu @ np.linalg.solve(self.S, self.nu))
 
 
 @runtime_checkable

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lightcraft_opt.control.estimation.curvature import curvature_entries, second_order_terms
-from lightcraft_opt.control.estimation.estimate import Estimate
+from lightcraft_opt.control.estimation.estimate import Estimate, Innovation
 from lightcraft_opt.control.estimation.kalman import joseph_update, symmetric
 from lightcraft_opt.control.estimation.mhe_options import MheOptions, MheStats
 from lightcraft_opt.control.estimation.mhe_qp import mhe_qp_function, mhe_qp_sizes
@@ -90,6 +90,10 @@ class MovingHorizonEstimator:
     name : "mhe".
     last : :class:`MheStats` of the last step.
     qp : the compiled QP Function (``mhe_qp``), built once.
+    innovations : the :class:`Innovation` of each reading of the latest step taken at its
+        newest node (in time: y - h at the node's prediction, S = H P⁻ Hᵀ + R with P⁻ the
+        last covariance predicted, the EKF's on a linear model); a late reading, fitted
+        at an older node, has none.
     """
 
     name = "mhe"
@@ -125,6 +129,7 @@ class MovingHorizonEstimator:
         self._cov = self.prior.copy()
         self._last_cov = self.prior.copy()  # the covariance last returned
         self.last = MheStats(QpStatus.SOLVED)
+        self.innovations: list[Innovation] = []
 
     # ----------------------------------------------------------------- the protocol
     def reset(self, x0: np.ndarray, t0: float = 0.0) -> None:
@@ -138,6 +143,7 @@ class MovingHorizonEstimator:
         self._nodes = [_Node(float(t0), self._mean.copy())]
         self._pending, self._t_left = [], -math.inf
         self.last = MheStats(QpStatus.SOLVED, nodes=1)
+        self.innovations = []
 
     def step(
         self,
@@ -166,7 +172,14 @@ class MovingHorizonEstimator:
         else:
             self._add_node(np.asarray(u_fired, dtype=float), float(t))
         queue, self._pending = [*self._pending, *readings], []
-        dropped = sum(not self._place(r) for r in queue)
+        newest = self._nodes[-1]
+        dropped, in_time = 0, []
+        for reading in queue:
+            before = len(newest.readings)
+            dropped += not self._place(reading)
+            if len(newest.readings) > before:
+                in_time.append(reading)
+        self.innovations = self._innovations(newest, in_time)
         if len(self._nodes) > self.options.horizon + 1:
             self._move_arrival_cost()
         status, message, iterations, solve_time, cov = self._iterate(fault)
@@ -226,6 +239,26 @@ class MovingHorizonEstimator:
             self._mean = self._nodes[0].s.copy()
             self._cov = grown if np.all(np.isfinite(grown)) else self._cov
         self._t_left = node.t
+
+    def _innovations(self, node: _Node, readings: list[Reading]) -> list[Innovation]:
+        """The innovations of ``readings``, just placed at the newest ``node``, against
+        its prediction: P⁻ = F P Fᵀ + Q of the stage into it from the covariance last
+        returned (the prior at a flight's first node)."""
+        if not readings:
+            return []
+        P = self._cov
+        if len(self._nodes) > 1:
+            stage = self._nodes[-2]
+            if stage.linear is None or stage.noise is None:
+                return []  # no finite prediction: the step falls back
+            F = stage.linear[1]
+            P = symmetric(F @ self._last_cov @ F.T + stage.noise)
+        out = []
+        for reading, (sensor, y, dt) in zip(readings, node.readings[-len(readings) :], strict=True):
+            h, Hm = self._measure(sensor, node.s, dt)
+            S = symmetric(Hm @ P @ Hm.T + self._noise_of(sensor)[0])
+            out.append(Innovation(reading, y - h, S))
+        return out
 
     def _place(self, reading: Reading) -> bool:
         """Put a reading at the node its time belongs to (the first node at or after
