@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.campaign.run_table import read_table
@@ -110,3 +111,27 @@ def test_an_override_that_is_a_value_and_a_table_is_refused():
     assert nested_overrides([model_override("craft.engine.shadow_radius_mm = 7.5")]) == {
         "craft": {"engine": {"shadow_radius_mm": 7.5}}
     }
+
+
+def test_a_campaign_flies_its_estimator_and_summarises_it(tmp_path, capsys):
+    """montecarlo_director_tracked_gyro.toml, 3 runs of 0.5 s (13 pulses): the director
+    told each run's EKF estimate (camera and gyro); runs.csv carries each run's position
+    error RMS and position NEES from its own estimator, and summary.json's estimation
+    block is their statistics, with the 95 % band of the NEES's mean."""
+    out = tmp_path / "tracked"
+    file = ROOT / "problems" / "montecarlo_director_tracked_gyro.toml"
+    argv = ["montecarlo", str(file), "--runs", "3", "--seed", "0", "--out", str(out),
+            "--duration", "0.5", "--workers", "1", "--quiet"]  # fmt: skip
+    assert main(argv) == 0
+    assert "3 runs made" in capsys.readouterr().out
+    t = read_table(out / "runs.csv")
+    rms, nees = t["estimate_position_rms_m"], t["estimate_position_nees"]
+    assert np.all(np.isfinite(rms) & (rms > 0)) and np.all(np.isfinite(nees) & (nees > 0))
+    flown = t["status"] == "duration_reached"  # the 13 pulses; a run may leave the beam
+    assert np.all(t["pulses_commanded"][flown] == 13) and np.all(t["pulses_commanded"] <= 13)
+    estimation = json.loads((out / "summary.json").read_text())["estimation"]
+    assert estimation["position_rms_m"]["n"] == 3
+    assert estimation["position_rms_m"]["mean"] == pytest.approx(np.mean(rms), rel=1e-12)
+    assert estimation["position_nees"]["median"] == pytest.approx(np.median(nees), rel=1e-12)
+    low, high = estimation["position_nees_band_95"]
+    assert 0 < low < 1 < high
