@@ -28,6 +28,7 @@ _READS = {
     "closed-loop": ("closed-loop",),
     "montecarlo": ("campaign",),
     "export-controller": ("closed-loop",),
+    "observability": ("closed-loop",),
 }
 
 

@@ -21,6 +21,7 @@ from lightcraft_opt.cli import (
     closed_loop,
     export_controller,
     montecarlo,
+    observability,
     optimize,
     simulate,
     spin_margin,
@@ -32,7 +33,8 @@ from lightcraft_opt.errors import LightcraftError
 DESCRIPTION = (
     "Laser-propelled lightcraft flight: simulate a flight, solve an optimal control "
     "problem, fly a closed loop under a controller, run a Monte Carlo campaign, fit a "
-    "model to a tracked flight or find the least launch spin for beam riding. Each "
+    "model to a tracked flight, find the least launch spin for beam riding or see what a "
+    "tracker's sensors let it know. Each "
     "command reads one TOML file (models/, problems/) and writes CSV, JSON and figures "
     "to an output folder named after it under runs/. Units "
     "are in the names of flags and columns (degrees, cm, m/s). Exit status 0: done; 1: "
@@ -70,6 +72,7 @@ def build_parser() -> argparse.ArgumentParser:
         montecarlo,
         calibrate,
         spin_margin,
+        observability,
         export_controller,
     ):
         command.add(sub)
