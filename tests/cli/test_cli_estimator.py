@@ -121,3 +121,43 @@ def test_the_mpc_told_the_estimate_holds_the_gust(tmp_path: Path, capsys, kind):
     assert summary["max_tilt_deg"] < 0.4 * uncontrolled["max_tilt_deg"]
     assert summary["coning_final_deg"] < 0.5 < summary["max_coning_deg"]
     assert f"{kind}: position error RMS" in capsys.readouterr().out
+
+
+#: director_tracked_gyro.toml's camera, then three other suites of item 1's sensors.
+TRACKED_CAMERA = """[sensors.camera]                    # a position camera: r_L in L
+noise_mm = 5.0                      # 1-sigma per axis
+latency_pulses = 1                  # a frame reaches the estimator a pulse after it is taken
+lost_percent = 5.0                  # frames lost
+"""
+OTHER_SUITES = {
+    "104 Hz": TRACKED_CAMERA.replace("lost_percent", "frame_rate_hz = 104.0\nlost_percent"),
+    "stereo": '[sensors.camera]\nkind = "stereo"\nnoise_mrad = 0.1\nlatency_pulses = 1\n'
+    "sites_m = [[30.0, 0.0, 0.0], [0.0, 30.0, 0.0]]\n",
+    "spin counter": TRACKED_CAMERA + "\n[sensors.spin]\nnoise_rpm = 10.0\n",
+}
+
+
+@pytest.mark.parametrize("suite", list(OTHER_SUITES))
+def test_the_other_sensors_fly_in_the_loop(tmp_path: Path, suite: str):
+    """The tracked file's first 0.4 s with the EKF reading a camera at four frames a pulse,
+    a stereo pair of angle cameras 30 m out (0.1 mrad: 3 mm at the craft), or the camera
+    and a spin counter beside the gyro: the director flies every pulse, the estimate's
+    error lies within 3 of its own σ on each axis at every pulse, and the readings counted
+    a pulse are the suite's (four frames and a gyro sample at 104 Hz)."""
+    text = (REPO_ROOT / "problems" / "director_tracked_gyro.toml").read_text(encoding="utf-8")
+    text = text.replace('"../models/', f'"{REPO_ROOT / "models"}/')
+    assert TRACKED_CAMERA in text
+    path = tmp_path / "tracked.toml"
+    path.write_text(text.replace(TRACKED_CAMERA, OTHER_SUITES[suite]), encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["closed-loop", str(path), "--out", str(out), "--duration", "0.4"]) == 0
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["status"] == "duration_reached" and summary["estimator"] == "ekf"
+    with (out / "steps.csv").open(encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["error_x_m"]]
+    assert len(rows) >= 10
+    for axis in "xyz":
+        for r in rows:
+            assert abs(float(r[f"error_{axis}_m"])) <= 3 * float(r[f"sigma_{axis}_m"]), (axis, r)
+    if suite == "104 Hz":  # from the second pulse: 4 frames (a pulse late) and the gyro
+        assert max(int(r["readings"]) for r in rows[2:]) == 5
