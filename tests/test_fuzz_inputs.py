@@ -202,6 +202,7 @@ REQUIRED = {
     "calibrate": ["m.toml", "--track", "t.csv", "--fit", "cm"],
     "spin-margin": ["m.toml"],
     "export-controller": ["p.toml"],
+    "observability": ["p.toml"],
 }
 FLAG_VALUES = ("nan", "inf", "-inf", "1e300", "-1e300", "-1", "0", "1.5", "text", "", "0x10")
 
