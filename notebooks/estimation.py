@@ -97,11 +97,11 @@ plant = build_pulse_map(model, plant_options(model))
 director = build_controller(
     problem.controller, model, plant, mpc=problem.mpc, director=problem.director
 )
-runs, recorders = {}, {}
-for kind in (EstimatorKind.TRUTH, EstimatorKind.EKF, EstimatorKind.UKF, EstimatorKind.MHE):
-    suite, estimator = build_tracker(EstimatorSpec(kind, {}), model, problem.sensors)
-    sensors = None if suite is None else Recorder(suite)
-    result = closed_loop(
+
+
+def fly(sensors, estimator):
+    """The file's flight under the director, told what ``estimator`` makes of ``sensors``."""
+    return closed_loop(
         model,
         director,
         problem.duration,
@@ -112,7 +112,13 @@ for kind in (EstimatorKind.TRUTH, EstimatorKind.EKF, EstimatorKind.UKF, Estimato
         sensors=sensors,
         estimator=estimator,
     )
-    runs[kind.value], recorders[kind.value] = result, sensors
+
+
+runs, recorders = {}, {}
+for kind in (EstimatorKind.TRUTH, EstimatorKind.EKF, EstimatorKind.UKF, EstimatorKind.MHE):
+    suite, estimator = build_tracker(EstimatorSpec(kind, {}), model, problem.sensors)
+    sensors = None if suite is None else Recorder(suite)
+    runs[kind.value], recorders[kind.value] = fly(sensors, estimator), sensors
 for name, run in runs.items():
     est = run.estimation
     told = "" if est is None else f", position error RMS {1e3 * est.rms_position_error():.2f} mm"
@@ -327,17 +333,7 @@ class Beside:
 suite, ekf = build_tracker(EstimatorSpec(EstimatorKind.EKF, {}), model, problem.sensors)
 _, mhe = build_tracker(EstimatorSpec(EstimatorKind.MHE, {}), model, problem.sensors)
 both, seen = Beside(ekf, mhe), Recorder(suite)
-one = closed_loop(
-    model,
-    director,
-    problem.duration,
-    x0=problem.x0,
-    parameters=problem.plant_parameters,
-    options=problem.loop,
-    pulse_map=plant,
-    sensors=seen,
-    estimator=both,
-)
+one = fly(seen, both)
 print(f"one flight, the director told the EKF: {one.flight.status.value}, MHE beside it")
 t_k = np.array([e.t for e in both.estimates["ekf"]])
 truth_r = np.array([seen.truth[t][:3] for t in t_k])  # r_L at each pulse [m]
