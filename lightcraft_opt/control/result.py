@@ -23,6 +23,7 @@ from lightcraft_opt.presenters import Presentable
 from lightcraft_opt.simulation.result import SimulationResult
 
 __all__ = [
+    "SLOW_TRUTHS",
     "ClosedLoopResult",
     "ControllerLog",
     "ControllerStatus",
@@ -118,6 +119,11 @@ class ControllerLog:
         }
 
 
+#: The slow states an estimate may carry whose truth the plant's parameters give
+#: (:attr:`EstimationLog.error_slow`).
+SLOW_TRUTHS = ("wind_L[east]", "wind_L[north]", "coupling")
+
+
 @dataclass(frozen=True)
 class EstimationLog:
     """An estimator's estimates against the plant's true state, pulse by pulse: each row
@@ -139,6 +145,11 @@ class EstimationLog:
     restarts : (k,) True where the estimator failed (raised, or returned a non-finite
         estimate) and was restarted from its last finite estimate, which the controller
         was told instead (control/estimation/feedback.py).
+    error_slow : {slow state: (k,) its estimate minus the plant's value}, for the slow
+        states the estimator carries of :data:`SLOW_TRUTHS`: ``wind_L[east]``,
+        ``wind_L[north]`` (the mean wind at the reference height, L [m/s]; a gust is not
+        in it) and ``coupling`` [N s/J]; NaN at a restarted pulse; empty for an estimator
+        without them.
     """
 
     estimator: str
@@ -151,6 +162,7 @@ class EstimationLog:
     seconds: np.ndarray
     readings: np.ndarray
     restarts: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    error_slow: dict[str, np.ndarray] = field(default_factory=dict)
 
     def rms_position_error(self, start: int = 0) -> float:
         """Root mean square of |r̂_L - r_L| from pulse ``start`` [m] (NaN without rows)."""

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from lightcraft_opt.control.result import ClosedLoopResult, ControllerStatus
+from lightcraft_opt.control.result import SLOW_TRUTHS, ClosedLoopResult, ControllerStatus
 from lightcraft_opt.files.closed_loop import ClosedLoopProblem
 from lightcraft_opt.files.result_archive import write_archive
 from lightcraft_opt.files.simulation_outputs import finite_or_none, flight_measures, model_hash
@@ -48,7 +48,9 @@ STEP_COLUMNS = (
 #: steps.csv's columns after :data:`STEP_COLUMNS` when an estimator told the controller
 #: the state (:class:`~lightcraft_opt.control.result.EstimationLog`): the estimate minus the
 #: truth before pulse k (position and velocity in L, tilt, coning, spin), the estimate's
-#: own position standard deviation, the estimator's step time and the readings it got.
+#: own position standard deviation, the estimator's step time and the readings it got,
+#: then the slow states' errors (the mean wind at the reference height in L, the
+#: coupling; nan for an estimator that carries none).
 ESTIMATE_COLUMNS = (
     "error_x_m",
     "error_y_m",
@@ -64,6 +66,9 @@ ESTIMATE_COLUMNS = (
     "sigma_z_m",
     "estimator_time_ms",
     "readings",
+    "error_wind_east_mps",
+    "error_wind_north_mps",
+    "error_coupling_ns_per_j",
 )
 
 
@@ -100,6 +105,7 @@ def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
             *est.sigma_r_L.T,
             1e3 * est.seconds,
             est.readings.astype(int),
+            *(est.error_slow.get(n, np.full(len(est.readings), np.nan)) for n in SLOW_TRUTHS),
         ]
         table.update(zip(ESTIMATE_COLUMNS, estimate, strict=True))
     return table
@@ -107,7 +113,7 @@ def steps_table(result: ClosedLoopResult) -> dict[str, np.ndarray]:
 
 #: How steps.csv writes each column of :func:`steps_table`, in its order.
 _STEP_CELLS = ("{}", "{:.9g}", "{}", "{:.6g}", "{:.6g}", "{}", *["{:.9g}"] * 4, "{}", "{}")
-_ESTIMATE_CELLS = (*["{:.9g}"] * 12, "{:.6g}", "{}")
+_ESTIMATE_CELLS = (*["{:.9g}"] * 12, "{:.6g}", "{}", *["{:.9g}"] * 3)
 
 
 def write_steps_csv(result: ClosedLoopResult, path: Path) -> None:

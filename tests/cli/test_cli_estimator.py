@@ -15,7 +15,11 @@ import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
+from lightcraft_opt.control.estimation.feedback import slow_truths
+from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
+from lightcraft_opt.files.result_archive import read_archive
+from lightcraft_opt.layout import parameter_values
 
 FILE = f'''title = "estimator in the CLI"
 model = "{REPO_ROOT / "models" / "flight5.toml"}"
@@ -47,6 +51,10 @@ def test_the_truth_flies_as_before_and_a_missing_estimator_exits_2(tmp_path: Pat
 
 
 def test_a_tracked_flight_writes_the_estimate(tmp_path: Path, capsys):
+    """The gyro file's first 0.4 s: the estimate's columns and figure. At pulse 0 the
+    filter holds its model's slow states, so their errors are the model's values less the
+    plant's: the wind the same (the plant's differs only by its gust, not in it), the
+    coupling's by the plant's dispersed impulse, read back from result.npz."""
     file = REPO_ROOT / "problems" / "director_tracked_gyro.toml"
     out = tmp_path / "tracked"
     assert main(["closed-loop", str(file), "--out", str(out), "--duration", "0.4"]) == 0
@@ -54,6 +62,17 @@ def test_a_tracked_flight_writes_the_estimate(tmp_path: Path, capsys):
     assert {"error_x_m", "sigma_x_m", "estimator_time_ms", "readings"} <= set(header)
     assert (out / "estimate.png").is_file()
     assert "ekf: position error RMS" in capsys.readouterr().out
+    with (out / "steps.csv").open(encoding="utf-8") as f:
+        first = next(csv.DictReader(f))
+    problem = load_closed_loop(file)
+    model_p = parameter_values(problem.model)
+    plant_p = read_archive(out).p_plant
+    assert float(first["error_wind_east_mps"]) == 0.0  # the model's wind is the plant's
+    assert float(first["error_wind_north_mps"]) == 0.0
+    model_c, plant_c = slow_truths(model_p)["coupling"], slow_truths(plant_p)["coupling"]
+    error = float(first["error_coupling_ns_per_j"])
+    assert error == pytest.approx(model_c - plant_c, rel=1e-8)
+    assert error != 0.0  # the plant's impulse is dispersed
 
 
 def test_the_unscented_filter_flies_from_a_file(tmp_path: Path, capsys):

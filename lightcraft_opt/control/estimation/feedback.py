@@ -26,13 +26,13 @@ import numpy as np
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
 from lightcraft_opt.control.estimation.reading import Reading
-from lightcraft_opt.control.result import EstimationLog
+from lightcraft_opt.control.result import SLOW_TRUTHS, EstimationLog
 from lightcraft_opt.errors import LightcraftError, ParameterError
-from lightcraft_opt.layout import PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
+from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.symbolic.terms.invariants import invariants_map
 
-__all__ = ["OutputFeedback", "ReadingSource", "held_inputs"]
+__all__ = ["OutputFeedback", "ReadingSource", "held_inputs", "slow_truths"]
 
 
 @runtime_checkable
@@ -135,6 +135,7 @@ class OutputFeedback:
         self._seconds: list[float] = []
         self._readings: list[int] = []
         self._restarts: list[bool] = []
+        self._slow: list[dict[str, float]] = []
 
     def told(self, k: int, t: float, x: np.ndarray) -> np.ndarray:
         """The state the controller is told at pulse ``k`` (time ``t`` [s], true state ``x``
@@ -165,13 +166,15 @@ class OutputFeedback:
             # starts again (its own prior covariance)
             told = self._told[-1].copy() if self._told else self._x0.copy()
             self.estimator.reset(told, t)
-            sigma, restarted = np.full(3, np.nan), True
+            sigma, restarted, slow = np.full(3, np.nan), True, {}
         else:
             told = np.array(checked_vector(f"estimate {k}", estimate.x, STATE.size))
             sigma = _position_sigma(estimate.covariance)
+            slow = {n: float(v) for n, v in estimate.slow.items() if n in SLOW_TRUTHS}
         self._truth.append(np.array(x, dtype=float))
         self._told.append(told)
         self._restarts.append(restarted)
+        self._slow.append(slow)
         self._sigma.append(sigma)
         self._seconds.append(seconds)
         self._readings.append(len(readings))
@@ -223,7 +226,29 @@ class OutputFeedback:
             seconds=np.array(self._seconds[:n], dtype=float),
             readings=np.array(self._readings[:n], dtype=int),
             restarts=np.array(self._restarts[:n], dtype=bool),
+            error_slow=_slow_errors(self._slow[:n], p),
         )
+
+
+def slow_truths(p: np.ndarray) -> dict[str, float]:
+    """The plant's values of :data:`SLOW_TRUTHS` in ``p`` (PARAMETERS.size,): the mean
+    wind at the reference height in L, east and north [m/s] (its speed blowing from its
+    direction: -speed sin, -speed cos), and the coupling, the impulse a pulse of the
+    reference energy gives over that energy [N s/J]."""
+    speed = float(PARAMETERS.get("wind_speed_ref", p))
+    origin = float(PARAMETERS.get("wind_direction_from", p))
+    impulse = float(PARAMETERS.get("impulse_per_pulse", p))
+    energy = float(PARAMETERS.get("reference_pulse_energy", p))
+    east, north = -speed * np.sin(origin), -speed * np.cos(origin)
+    return {"wind_L[east]": east, "wind_L[north]": north, "coupling": impulse / energy}
+
+
+def _slow_errors(estimates: list[dict[str, float]], p: np.ndarray) -> dict[str, np.ndarray]:
+    """{slow state: (n,) estimate minus the plant's value} of the slow states any pulse's
+    estimate carried (NaN where one did not: a restarted pulse)."""
+    truth = slow_truths(p)
+    names = [n for n in SLOW_TRUTHS if any(n in e for e in estimates)]
+    return {n: np.array([e.get(n, np.nan) - truth[n] for e in estimates]) for n in names}
 
 
 def _position_sigma(covariance: np.ndarray) -> np.ndarray:
