@@ -30,7 +30,7 @@ from lightcraft_opt.control.estimation import (
     model_observability,
 )
 from lightcraft_opt.control.factory import build_estimator
-from lightcraft_opt.control.options import EstimatorKind, EstimatorSpec
+from lightcraft_opt.control.options import PRIOR_SLOTS, EstimatorKind, EstimatorSpec
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import initial_state, nominal_inputs
 from lightcraft_opt.model import Model
@@ -186,8 +186,8 @@ def observability_study(
     model : the controller's model (what the estimator believes).
     sensors : the suite the closed loop reads (at least a camera).
     pulses : the numbers N of pulses read, each >= 2.
-    estimator : the file's ``[estimator]`` (its prior sigmas scale the study; default the
-        EKF's defaults).
+    estimator : the file's ``[estimator]``, any kind: its prior sigmas scale the study
+        (default the EKF's defaults); its other options do not enter.
     altitude : height of the climb's first pulse above the pad [m], > 0.
     climb_speed : vertical speed there [m/s], >= 0.
     """
@@ -201,8 +201,9 @@ def observability_study(
     if not climb_speed >= 0:
         raise ParameterError("climb_speed", f"needs >= 0 m/s, got {climb_speed!r}")
     calm = _calm(model)
-    options = {} if estimator is None else dict(estimator.options)
-    spec = EstimatorSpec(EstimatorKind.EKF, options)
+    given = {} if estimator is None else estimator.options
+    priors = {k: v for k, v in given.items() if k in PRIOR_SLOTS}  # what scales the study
+    spec = EstimatorSpec(EstimatorKind.EKF, priors)
     suite = SensorSuite(calm, sensors)
     ekf = build_estimator(spec, calm, suite)
     assert isinstance(ekf, ExtendedKalmanFilter)

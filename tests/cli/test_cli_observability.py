@@ -17,6 +17,7 @@ import csv
 import math
 from pathlib import Path
 
+import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
@@ -63,3 +64,24 @@ def test_a_file_without_sensors_or_bad_pulses_exit_2(tmp_path: Path, capsys):
     assert "sensors" in err and "Traceback" not in err and len(err.splitlines()) == 1
     assert main(["observability", str(GYRO), "--pulses", "1", "--out", str(tmp_path / "b")]) == 2
     assert "--pulses" in capsys.readouterr().err
+
+
+def test_a_moving_horizon_files_priors_scale_the_condition_not_the_bounds(tmp_path: Path):
+    """The gyro file with the MHE (its horizon an MHE-only option) and a prior position
+    sigma of 50 mm instead of 5: the study reads the file's priors alone. They scale the
+    Gramian (D W D), which moves its condition number, while each bound, √(W⁻¹)ᵢᵢ of the
+    readings' information alone, stays the same (1e-6 relative)."""
+    text = GYRO.read_text(encoding="utf-8").replace('"../models/', f'"{REPO_ROOT / "models"}/')
+    assert 'kind = "ekf"' in text
+    mhe = 'kind = "mhe"\nhorizon_pulses = 12\nprior_position_mm = 50.0'
+    path = tmp_path / "mhe.toml"
+    path.write_text(text.replace('kind = "ekf"', mhe), encoding="utf-8")
+    assert main(["observability", str(path), "--pulses", "10", "--out", str(tmp_path / "m")]) == 0
+    assert main(["observability", str(GYRO), "--pulses", "10", "--out", str(tmp_path / "e")]) == 0
+    looser = _rows(tmp_path / "m" / "observability.csv")
+    default = _rows(tmp_path / "e" / "observability.csv")
+    for key in default:
+        assert looser[key]["condition"] != pytest.approx(default[key]["condition"], rel=0.01)
+        for column, value in default[key].items():
+            if column.startswith("bound_"):
+                assert looser[key][column] == pytest.approx(value, rel=1e-6), (key, column)
