@@ -15,7 +15,7 @@ import tempfile
 import tomllib
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.symbolic.maps.options import PulseMapOptions
@@ -24,6 +24,7 @@ __all__ = [
     "add_model_override",
     "finite",
     "integer",
+    "list_of",
     "model_override",
     "name_value",
     "nested_overrides",
@@ -31,6 +32,8 @@ __all__ = [
     "real",
     "substeps",
 ]
+
+_T = TypeVar("_T")
 
 #: Dense output samples per pulse of the pulse map the CLI builds (PulseMapOptions' default).
 DENSE = PulseMapOptions().dense
@@ -106,6 +109,20 @@ def integer(low: int, high: int | None = None, *, why: str = "") -> Callable[[st
         return v
 
     check.__name__ = "integer"
+    return check
+
+
+def list_of(convert: Callable[[str], _T], name: str) -> Callable[[str], tuple[_T, ...]]:
+    """A ``type=`` converter for a comma-separated list, each item by ``convert`` (a
+    ``type=`` converter itself); ``name`` says what an item is in the error."""
+
+    def check(text: str) -> tuple[_T, ...]:
+        items = [t for t in text.split(",") if t.strip()]
+        if not items:
+            raise argparse.ArgumentTypeError(f"needs at least one {name}; got {text!r}")
+        return tuple(convert(t) for t in items)
+
+    check.__name__ = "list"
     return check
 
 

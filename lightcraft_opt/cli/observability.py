@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from lightcraft_opt.cli.args import integer, output_folder, real
+from lightcraft_opt.cli.args import integer, list_of, output_folder, real
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.closed_loop import load_closed_loop
@@ -26,17 +26,6 @@ SHOWN = (
 )
 
 PULSES = integer(2, 2000, why="a Gramian of one pulse sees only the first reading")
-
-
-def _pulses(text: str) -> tuple[int, ...]:
-    """``--pulses``: comma-separated numbers of pulses, each by :data:`PULSES`."""
-    items = [t for t in text.split(",") if t.strip()]
-    if not items:
-        raise argparse.ArgumentTypeError(f"needs at least one number of pulses; got {text!r}")
-    return tuple(PULSES(t) for t in items)
-
-
-_pulses.__name__ = "list"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -87,7 +76,7 @@ def add(sub: argparse._SubParsersAction) -> None:
     )
     cmd.add_argument(
         "--pulses",
-        type=_pulses,
+        type=list_of(PULSES, "number of pulses"),
         default=(10, 20, 40),
         help="numbers of pulses read, comma-separated (default 10,20,40)",
     )

@@ -7,10 +7,9 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
-from lightcraft_opt.cli.args import integer, output_folder, real
+from lightcraft_opt.cli.args import integer, list_of, output_folder, real
 from lightcraft_opt.cli.file_kinds import check_kind
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.files.model import load_model
@@ -31,19 +30,6 @@ LIMIT = real(0.0, 2.0, low_open=True, why="a multiplier per pulse: 1 is neutral"
 POSITION_CM = real(-50.0, 50.0, unit="cm", why="along b1 within the craft's size")
 ALTITUDE_M = real(0.0, 1000.0, low_open=True, unit="m", why="above the pad, within the beam")
 OFFSET_CM = real(-100.0, 100.0, unit="cm", why="from the beam axis, inside the beam")
-
-
-def _list_of(convert: Callable[[str], float], name: str) -> Callable[[str], tuple[float, ...]]:
-    """A ``type=`` converter for a comma-separated list, each item by ``convert``."""
-
-    def check(text: str) -> tuple[float, ...]:
-        items = [t for t in text.split(",") if t.strip()]
-        if not items:
-            raise argparse.ArgumentTypeError(f"needs at least one {name}; got {text!r}")
-        return tuple(convert(t) for t in items)
-
-    check.__name__ = "list"
-    return check
 
 
 def run(args: argparse.Namespace) -> int:
@@ -113,7 +99,7 @@ def add(sub: argparse._SubParsersAction) -> None:
     sm.add_argument("model", help="model TOML, e.g. models/flight5.toml")
     sm.add_argument(
         "--positions-cm",
-        type=_list_of(POSITION_CM, "position"),
+        type=list_of(POSITION_CM, "position"),
         default=(-6.0, -4.0, -2.0, 0.0, 2.0, 4.0),
         help="mass centre along b1 from the ring plane, comma-separated [cm] "
         "(default -6,-4,-2,0,2,4; > 0: toward the nose)",
@@ -131,13 +117,13 @@ def add(sub: argparse._SubParsersAction) -> None:
     )
     sm.add_argument(
         "--altitudes-m",
-        type=_list_of(ALTITUDE_M, "altitude"),
+        type=list_of(ALTITUDE_M, "altitude"),
         default=(10.0, 20.0, 30.0),
         help="climb points, comma-separated [m] (default 10,20,30)",
     )
     sm.add_argument(
         "--offsets-cm",
-        type=_list_of(OFFSET_CM, "offset"),
+        type=list_of(OFFSET_CM, "offset"),
         default=(1.0, 3.0),
         help="offsets east of the beam axis at each climb point [cm] (default 1,3)",
     )
