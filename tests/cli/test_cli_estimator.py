@@ -15,7 +15,7 @@ import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.control.estimation.feedback import slow_truths
+from lightcraft_opt.control.estimation.psi_model import slow_truths
 from lightcraft_opt.files.closed_loop import load_closed_loop
 from lightcraft_opt.files.closed_loop_outputs import STEP_COLUMNS
 from lightcraft_opt.files.result_archive import read_archive

@@ -25,14 +25,15 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from lightcraft_opt.control.estimation.estimate import Estimate, Estimator
+from lightcraft_opt.control.estimation.psi_model import slow_truths
 from lightcraft_opt.control.estimation.reading import Reading
 from lightcraft_opt.control.result import SLOW_TRUTHS, EstimationLog
 from lightcraft_opt.errors import LightcraftError, ParameterError
-from lightcraft_opt.layout import PARAMETERS, PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
+from lightcraft_opt.layout import PULSE_INPUT, REDUCED_STATE, STATE, VectorLayout
 from lightcraft_opt.model.checks import checked_vector
 from lightcraft_opt.symbolic.terms.invariants import invariants_map
 
-__all__ = ["OutputFeedback", "ReadingSource", "held_inputs", "slow_truths"]
+__all__ = ["OutputFeedback", "ReadingSource", "held_inputs"]
 
 
 @runtime_checkable
@@ -230,22 +231,10 @@ class OutputFeedback:
         )
 
 
-def slow_truths(p: np.ndarray) -> dict[str, float]:
-    """The plant's values of :data:`SLOW_TRUTHS` in ``p`` (PARAMETERS.size,): the mean
-    wind at the reference height in L, east and north [m/s] (its speed blowing from its
-    direction: -speed sin, -speed cos), and the coupling, the impulse a pulse of the
-    reference energy gives over that energy [N s/J]."""
-    speed = float(PARAMETERS.get("wind_speed_ref", p))
-    origin = float(PARAMETERS.get("wind_direction_from", p))
-    impulse = float(PARAMETERS.get("impulse_per_pulse", p))
-    energy = float(PARAMETERS.get("reference_pulse_energy", p))
-    east, north = -speed * np.sin(origin), -speed * np.cos(origin)
-    return {"wind_L[east]": east, "wind_L[north]": north, "coupling": impulse / energy}
-
-
 def _slow_errors(estimates: list[dict[str, float]], p: np.ndarray) -> dict[str, np.ndarray]:
-    """{slow state: (n,) estimate minus the plant's value} of the slow states any pulse's
-    estimate carried (NaN where one did not: a restarted pulse)."""
+    """{slow state: (n,) estimate minus the plant's value (psi_model.slow_truths of ``p``)}
+    of the slow states any pulse's estimate carried (NaN where one did not: a restarted
+    pulse)."""
     truth = slow_truths(p)
     names = [n for n in SLOW_TRUTHS if any(n in e for e in estimates)]
     return {n: np.array([e.get(n, np.nan) - truth[n] for e in estimates]) for n in names}

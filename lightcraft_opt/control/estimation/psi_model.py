@@ -77,6 +77,7 @@ __all__ = [
     "PsiEstimationModel",
     "estimated_names",
     "estimation_model",
+    "slow_truths",
 ]
 
 #: The slow states a model can carry, with the entries each adds to s.
@@ -99,6 +100,19 @@ _H = REDUCED_STATE.index("H_L")
 _CONE = REDUCED_STATE.index("coning")
 _CALM = 1e-9  # m/s: below this the wind's direction is undefined (module docstring)
 _NO_CHART = np.zeros((2, 2))  # the wind chart's stand-in without wind, or in calm air
+
+
+def slow_truths(p: np.ndarray) -> dict[str, float]:
+    """What the wind and coupling slow states stand for in the parameters ``p``
+    (PARAMETERS.size,): the mean wind at the reference height in L, east and north [m/s]
+    (its speed blowing from its direction: -speed sin, -speed cos), and the coupling, the
+    impulse a pulse of the reference energy gives over that energy [N s/J]."""
+    speed, frm = float(p[_SPEED]), float(p[_DIRECTION])
+    return {
+        "wind_L[east]": -speed * math.sin(frm),
+        "wind_L[north]": -speed * math.cos(frm),
+        "coupling": float(p[_IMPULSE] / p[_REFERENCE_ENERGY]),
+    }
 
 
 def estimated_names(slow: Iterable[str] = tuple(SLOW_STATES)) -> tuple[str, ...]:
@@ -295,12 +309,12 @@ class PsiEstimationModel:
         """The slow states σ that ``p`` (default the model's) holds: the wind at the reference
         height (east, north) [m/s], C [N s/J], the rotor's moments over the model's [-]."""
         p = self.p if p is None else p
+        truth = slow_truths(p)
         out: list[float] = []
         if "wind" in self.slow:
-            speed, frm = p[_SPEED], p[_DIRECTION]
-            out += [-speed * math.sin(frm), -speed * math.cos(frm)]
+            out += [truth["wind_L[east]"], truth["wind_L[north]"]]
         if "coupling" in self.slow:
-            out.append(p[_IMPULSE] / p[_REFERENCE_ENERGY])
+            out.append(truth["coupling"])
         if "inertia" in self.slow:
             out += [p[i] / self.p[i] for i in _INERTIA]
         return np.array(out)
