@@ -29,19 +29,14 @@ from lightcraft_opt.control.estimation import (
     model_flight,
     model_observability,
 )
+from lightcraft_opt.control.estimation.psi_model import estimated_units
 from lightcraft_opt.control.factory import build_estimator
 from lightcraft_opt.control.options import PRIOR_SLOTS, EstimatorKind, EstimatorSpec
 from lightcraft_opt.errors import ParameterError
 from lightcraft_opt.layout import initial_state, nominal_inputs
 from lightcraft_opt.model import Model
 
-__all__ = [
-    "BOOKKEEPING",
-    "ObservabilityRow",
-    "ObservabilityStudy",
-    "bound_key",
-    "observability_study",
-]
+__all__ = ["BOOKKEEPING", "ObservabilityRow", "ObservabilityStudy", "observability_study"]
 
 #: Entries of s the study takes as known: Ψ counts them (the liner, the RCS propellant, the
 #: engine's load), no sensor is needed for them; and the rotor's moments over the model's,
@@ -95,6 +90,7 @@ class ObservabilityStudy:
     prior : {state: the estimator's prior sigma [its SI unit]}.
     rows : one per (N, sensor set), N ascending, the camera alone first.
     climb : how the climb was flown, in words.
+    units : {state: its SI unit} (``"m"``, ``"kg m^2/s"``, ``"-"`` ...).
     """
 
     model: str
@@ -102,20 +98,7 @@ class ObservabilityStudy:
     prior: dict[str, float]
     rows: tuple[ObservabilityRow, ...]
     climb: str
-
-    def rows_table(self) -> list[dict[str, float | int | str]]:
-        """One dict a row for a CSV: ``pulses``, ``sensors`` (joined by +),
-        ``condition``, then ``bound_<state>_<unit>`` [SI] of every state studied."""
-        out: list[dict[str, float | int | str]] = []
-        for row in self.rows:
-            entry: dict[str, float | int | str] = {
-                "pulses": row.pulses,
-                "sensors": "+".join(row.sensors),
-                "condition": row.condition,
-            }
-            entry.update({bound_key(s): row.bounds[s] for s in self.states})
-            out.append(entry)
-        return out
+    units: dict[str, str]
 
     def summary(self, shown: Sequence[str] | None = None) -> str:
         """A table: per row, the condition number and each shown state's bound [SI]."""
@@ -134,30 +117,6 @@ class ObservabilityStudy:
                 + "  ".join(f"{row.bounds[s]:12.3g}" for s in names)
             )
         return "\n".join(lines)
-
-
-#: The SI unit of each estimated quantity in a column key (wind_L and v_L in m/s ...).
-_KEY_UNITS = {
-    "r_L": "m",
-    "v_L": "mps",
-    "H_L": "kg_m2_per_s",
-    "coning": "",
-    "wind_L": "mps",
-    "coupling": "ns_per_j",
-    "inertia": "",
-    "liner_mass": "kg",
-    "rcs_mass": "kg",
-    "engine_load": "",
-}
-
-
-def bound_key(state: str) -> str:
-    """The CSV key of a state's bound, its SI unit last: ``bound_r_L_east_m``,
-    ``bound_coning_e1`` (no unit: a sine), ``bound_coupling_ns_per_j``."""
-    base = state.split("[")[0]
-    part = state.replace("[", "_").replace("]", "")
-    unit = _KEY_UNITS.get(base, "")
-    return f"bound_{part}_{unit}" if unit else f"bound_{part}"
 
 
 def _calm(model: Model) -> Model:
@@ -232,4 +191,6 @@ def observability_study(
         "nominal inputs, calm air"
     )
     sigma = {s: float(prior[names.index(s)]) for s in kept}
-    return ObservabilityStudy(model.name, tuple(kept), sigma, tuple(rows), climb)
+    units = estimated_units(psi.slow)
+    unit = {s: units[s] for s in kept}
+    return ObservabilityStudy(model.name, tuple(kept), sigma, tuple(rows), climb, unit)

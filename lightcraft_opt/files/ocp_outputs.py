@@ -44,6 +44,7 @@ __all__ = [
     "node_flight",
     "node_tilt",
     "offsets_over_capture_radius",
+    "quantity_key",
     "replay_summary",
     "sensitivity_summary",
     "solution_columns",
@@ -288,7 +289,15 @@ _KEY_UNITS: dict[str, str] = {
     "kg m^2": "kg_m2",
     "kg/J": "kg_per_j",
     "N s/J": "ns_per_j",
+    "kg m^2/s": "kg_m2_per_s",
 }
+
+
+def quantity_key(name: str, unit: str) -> str:
+    """A named quantity's key with its SI unit last (docs/files.md#units):
+    ``gust_L[east]``, m/s -> ``gust_L_east_mps``; ``coning[e1]``, - -> ``coning_e1``."""
+    suffix = _KEY_UNITS[unit]
+    return name.replace("[", "_").rstrip("]") + (f"_{suffix}" if suffix else "")
 
 
 def sensitivity_summary(result: OcpResult) -> dict[str, Any] | None:
@@ -303,9 +312,7 @@ def sensitivity_summary(result: OcpResult) -> dict[str, Any] | None:
         return None
     entries: dict[str, dict[str, float]] = {}
     for item in s.ranked():
-        unit = _KEY_UNITS[item.unit]
-        key = item.name.replace("[", "_").rstrip("]") + (f"_{unit}" if unit else "")
-        entries[key] = {
+        entries[quantity_key(item.name, item.unit)] = {
             "value": item.value,
             "derivative": item.derivative,
             "elasticity": item.elasticity,

@@ -25,6 +25,8 @@ class _Row(Protocol):
     @property
     def sensors(self) -> tuple[str, ...]: ...
     @property
+    def condition(self) -> float: ...
+    @property
     def bounds(self) -> dict[str, float]: ...
 
 
@@ -41,6 +43,8 @@ class ObservabilityLike(Protocol):
     def rows(self) -> Sequence[_Row]: ...
     @property
     def climb(self) -> str: ...
+    @property
+    def units(self) -> dict[str, str]: ...
 
 
 def observability_figure(study: ObservabilityLike) -> Figure:
@@ -59,8 +63,9 @@ def observability_figure(study: ObservabilityLike) -> Figure:
             ax.plot(x + 0.12 * (i - (len(rows) - 1) / 2), shown, "o", ms=5,
                     label=f"N = {row.pulses}")  # fmt: skip
             unseen = ~np.isfinite(ratio)
-            if np.any(unseen):
-                ax.plot(x[unseen], np.full(unseen.sum(), 1e2), "x", color="k")
+            if np.any(unseen):  # an x at the panel's top edge
+                top = np.full(unseen.sum(), 0.97)
+                ax.plot(x[unseen], top, "x", color="k", transform=ax.get_xaxis_transform())
         ax.axhline(1.0, color="k", ls="--", lw=0.8, label="the prior")
         ax.set_yscale("log")
         ax.set_ylabel("bound / prior σ")

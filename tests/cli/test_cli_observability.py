@@ -21,7 +21,6 @@ import pytest
 from support.paths import REPO_ROOT
 
 from lightcraft_opt.cli import main
-from lightcraft_opt.control.observability import bound_key
 
 GYRO = REPO_ROOT / "problems" / "director_tracked_gyro.toml"
 
@@ -43,14 +42,14 @@ def test_the_study_adds_information_with_sensors_and_pulses(tmp_path: Path, caps
     rows = _rows(out / "observability.csv")
     assert set(rows) == {(10, "camera"), (10, "camera+gyro"), (40, "camera"), (40, "camera+gyro")}
     keys = [k for k in rows[10, "camera"] if k.startswith("bound_")]
-    assert bound_key("coupling") in keys and "bound_r_L_east_m" in keys
+    assert "bound_coupling_ns_per_j" in keys and "bound_r_L_east_m" in keys
     assert "bound_liner_mass_kg" not in keys  # bookkeeping: known
     for key in keys:
         for n in (10, 40):
             assert rows[n, "camera+gyro"][key] <= rows[n, "camera"][key] * (1 + 1e-6), (n, key)
         for read in ("camera", "camera+gyro"):
             assert rows[40, read][key] <= rows[10, read][key] * (1 + 1e-6), (read, key)
-    spin = bound_key("H_L[up]")
+    spin = "bound_H_L_up_kg_m2_per_s"
     prior = 1e-5  # the EKF's prior sigma of H_L along up [kg m²/s]
     assert rows[40, "camera"][spin] > 100 * prior  # unseen by the camera
     assert rows[40, "camera+gyro"][spin] < prior  # the gyro sees it

@@ -73,9 +73,11 @@ from lightcraft_opt.symbolic.maps.reduced_map_derivatives import value_stage
 
 __all__ = [
     "SLOW_STATES",
+    "SLOW_UNITS",
     "ProcessNoise",
     "PsiEstimationModel",
     "estimated_names",
+    "estimated_units",
     "estimation_model",
     "slow_truths",
 ]
@@ -86,6 +88,9 @@ SLOW_STATES: dict[str, tuple[str, ...]] = {
     "coupling": ("coupling",),
     "inertia": ("inertia[transverse]", "inertia[axial]"),
 }
+#: The SI unit of each slow slot's entries: the wind in L [m/s], the coupling [N s/J], the
+#: moments over the model's [-].
+SLOW_UNITS: dict[str, str] = {"wind": "m/s", "coupling": "N s/J", "inertia": "-"}
 _WIND_P = ("wind_speed_ref", "wind_direction_from")
 _SPEED, _DIRECTION = (PARAMETERS.slot(n).start for n in _WIND_P)
 _IMPULSE = PARAMETERS.slot("impulse_per_pulse").start
@@ -119,6 +124,13 @@ def estimated_names(slow: Iterable[str] = tuple(SLOW_STATES)) -> tuple[str, ...]
     """The entries of s, in order: Ψ's state's (``"r_L[east]"``, ...), then those of the
     ``slow`` slots (keys of :data:`SLOW_STATES`, in the order given)."""
     return tuple(entry_names(REDUCED_STATE)) + tuple(n for s in slow for n in SLOW_STATES[s])
+
+
+def estimated_units(slow: Iterable[str] = tuple(SLOW_STATES)) -> dict[str, str]:
+    """{entry of s: its SI unit} in :func:`estimated_names`' order: Ψ's state's slot
+    units (``"m"``, ``"kg m^2/s"``, ``"-"`` ...), then :data:`SLOW_UNITS`."""
+    units = {n: REDUCED_STATE.slot(n.split("[")[0]).unit for n in entry_names(REDUCED_STATE)}
+    return units | {n: SLOW_UNITS[s] for s in slow for n in SLOW_STATES[s]}
 
 
 @dataclass(frozen=True)
