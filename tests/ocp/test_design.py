@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import json
 import math
-import shutil
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
-from support.design_problem import DESIGN_PROBLEM
+from support.design_problem import DESIGN_PROBLEM, write_design_problem
 from test_ocp import CHEAP_MAP, TOL, _vertical_flow, drag_free_vertical
 
 from lightcraft_opt.cli import main
@@ -155,10 +154,7 @@ def test_a_problem_files_design_is_solved_written_and_flown_again(tmp_path: Path
     """A [[design]] problem file read in SI (g cm^2, rpm, N s), solved, its designed model
     file written and read back: p and the launch spin are the design's. The impulse is at
     its upper bound (more impulse, more altitude: the sign of the physics)."""
-    shutil.copytree(REPO / "models", tmp_path / "models")
-    (tmp_path / "problems").mkdir()
-    source = tmp_path / "problems" / "design.toml"
-    source.write_text(DESIGN_PROBLEM)
+    source = write_design_problem(tmp_path)
     pf = load_problem(source)
     labels = [v.label for v in pf.problem.design]
     assert labels == ["impulse_per_pulse", "rotor_transverse_inertia_dry", "launch_spin"]
@@ -178,24 +174,28 @@ def test_a_problem_files_design_is_solved_written_and_flown_again(tmp_path: Path
     assert result.replay is not None and result.replay.flies
 
 
+@pytest.fixture(scope="module")
+def tight_design(tmp_path_factory):
+    """(problem file, compiled problem, result): the design problem solved to a KKT
+    tolerance of 1e-10 with its sensitivities."""
+    pf = load_problem(write_design_problem(tmp_path_factory.mktemp("tight")))
+    options = replace(pf.options, tol=1e-10, replay=False, sensitivities=True)
+    compiled = CompiledOcp(pf.problem, options)
+    result = compiled.solve()
+    assert result.status is OcpStatus.SOLVED, result.message
+    return pf, compiled, result
+
+
 @pytest.mark.parametrize(
     "name", ["rotor_mass_dry", "cd_scale", "reference_pulse_energy", "launch_v_L[up]"]
 )
-def test_a_designs_sensitivities_are_central_differences_of_re_solves(tmp_path: Path, name):
+def test_a_designs_sensitivities_are_central_differences_of_re_solves(tight_design, name):
     """The design problem solved to a KKT tolerance of 1e-10 with its sensitivities: each
     held parameter's dJ*/dθ against (J*(θ + h) - J*(θ - h)) / 2h, h = 1e-4 |θ| (1e-4 for
     a launch speed of 0), the design chosen again in every re-solve (the spin and the
     moment inside their bounds, the impulse on its upper one). Agreement 1e-4 relative,
     the issue's demand (measured 4e-12 to 8e-9); the designed entries have none."""
-    shutil.copytree(REPO / "models", tmp_path / "models")
-    (tmp_path / "problems").mkdir()
-    source = tmp_path / "problems" / "design.toml"
-    source.write_text(DESIGN_PROBLEM)
-    pf = load_problem(source)
-    options = replace(pf.options, tol=1e-10, replay=False, sensitivities=True)
-    compiled = CompiledOcp(pf.problem, options)
-    result = compiled.solve()
-    assert result.status is OcpStatus.SOLVED, result.message
+    pf, compiled, result = tight_design
     spin = result.design["launch_spin"]
     assert 6000.0 * math.pi / 30.0 < spin < 12000.0 * math.pi / 30.0  # chosen inside
     sens = result.sensitivities
@@ -229,10 +229,7 @@ def test_lightcraft_optimize_writes_a_design_that_lightcraft_simulate_flies(tmp_
     m over these 10 pulses when written. The craft as the model file built it (0.0637 N s
     an impulse, not the design's 0.07) ends 31 cm lower on the same plan (asserted: more
     than 10 cm): the file carries the design."""
-    shutil.copytree(REPO / "models", tmp_path / "models")
-    (tmp_path / "problems").mkdir()
-    source = tmp_path / "problems" / "design.toml"
-    source.write_text(DESIGN_PROBLEM)
+    source = write_design_problem(tmp_path)
     out = tmp_path / "out"
     assert main(["optimize", str(source), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
@@ -278,11 +275,8 @@ def test_lightcraft_optimize_writes_a_design_that_lightcraft_simulate_flies(tmp_
     ],
 )
 def test_bad_design_tables_name_the_key(tmp_path: Path, table: str, key: str, match: str):
-    shutil.copytree(REPO / "models", tmp_path / "models")
-    (tmp_path / "problems").mkdir()
-    source = tmp_path / "problems" / "bad.toml"
     head = DESIGN_PROBLEM.split("[[design]]")[0]
-    source.write_text(head + "[[design]]\n" + table + "\n")
+    source = write_design_problem(tmp_path, head + "[[design]]\n" + table + "\n", "bad")
     with pytest.raises(ProblemFileError, match=match) as err:
         load_problem(source)
     assert f"design[0].{key}" in str(err.value)

@@ -1,7 +1,15 @@
 """A small design problem file (tests/ocp/test_design.py, tests/cli/test_cli_design.py):
 Flight 5 on a 4 x 16 optic, 10 pulses at 420 J straight up, the impulse per pulse, the
 transverse moment and the launch spin free, the altitude after the 10 pulses rewarded.
-Written into a ``problems/`` folder beside a copy of the repository's ``models/``."""
+Written into a ``problems/`` folder beside a copy of the repository's ``models/``
+(:func:`write_design_problem`)."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from support.paths import MODELS
 
 DESIGN_PROBLEM = """
 title = "most altitude in 10 pulses, spin, moments and impulse free"
@@ -45,3 +53,13 @@ scheme = "split"
 substeps = 1
 dense = 1
 """
+
+
+def write_design_problem(folder: Path, text: str = DESIGN_PROBLEM, name: str = "design") -> Path:
+    """``folder``/problems/``name``.toml holding ``text``, beside a copy of models/ (the
+    file's ``../models/flight5.toml``); returns its path."""
+    shutil.copytree(MODELS, folder / "models")
+    (folder / "problems").mkdir()
+    source = folder / "problems" / f"{name}.toml"
+    source.write_text(text)
+    return source
