@@ -1,4 +1,4 @@
-"""A small design problem file (tests/ocp/test_design.py, tests/cli/test_cli_design.py):
+"""A small design problem file (tests/ocp/test_design.py, its Python and command-line tests):
 Flight 5 on a 4 x 16 optic, 10 pulses at 420 J straight up, the impulse per pulse, the
 transverse moment and the launch spin free, the altitude after the 10 pulses rewarded.
 Written into a ``problems/`` folder beside a copy of the repository's ``models/``
